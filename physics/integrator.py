@@ -1,0 +1,153 @@
+"""Structure-preserving integrator for a rigid body under torques (Lie–Poisson splitting).
+
+The body's motion splits into the free rigid body, whose flow is computed exactly
+(`free_flow.drift`: keeps E, |L| and the spatial L to round-off), and the torques, which enter
+as kicks L ← L + τ·δt with the attitude frozen (Touma & Wisdom 1994). For torques that depend
+on the attitude only (a gravity gradient) the kick is the exact flow of the potential, so the
+composition is symplectic:
+  - "strang":   kick(h/2) · free(h) · kick(h/2), second order;
+  - "yoshida4": Yoshida's triple jump of it, fourth order.
+The error is proportional to the torque: a free body is integrated exactly at any step.
+
+Torques supported in the compiled loop: a constant body-frame torque (P, Q, R) and the
+first-order gravity gradient of point masses (Euler §815, MacCullagh):
+    τ_body = 3GM/s⁵ · (s × I s),   s the body-frame vector from the centre to the mass.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numba as nb
+import numpy as np
+
+from . import quaternion as quat
+from .free_flow import drift, prepare, rotate_inverse
+from .inertia import validate_moments
+from .params import ParameterError
+
+_W1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
+_W0 = -(2.0 ** (1.0 / 3.0)) * _W1
+
+# stage j: kick by kick[j]·h at time t + at[j]·h, then drift by drift[j]·h
+SCHEMES = {
+    "strang": dict(kick=np.array([0.5, 0.5]), drift=np.array([1.0, 0.0]), at=np.array([0.0, 1.0]), order=2),
+    "yoshida4": dict(
+        kick=np.array([_W1 / 2, (_W1 + _W0) / 2, (_W0 + _W1) / 2, _W1 / 2]),
+        drift=np.array([_W1, _W0, _W1, 0.0]),
+        at=np.array([0.0, _W1, _W1 + _W0, 1.0]),
+        order=4,
+    ),
+}
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """A mass pulling on the body: gm = G·M, position(t) → (N,3) inertial vector from the
+    body's centre to the mass at the times t (N,)."""
+
+    gm: float
+    position: Callable[[np.ndarray], np.ndarray]
+
+
+@nb.njit(cache=True)
+def _torque(L, q, I, tq, pos, gm):
+    t = tq.copy()
+    for p in range(gm.shape[0]):
+        s = rotate_inverse(q, pos[p])
+        r2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2]
+        f = 3.0 * gm[p] / (r2 * r2 * np.sqrt(r2))
+        Is0, Is1, Is2 = I[0] * s[0], I[1] * s[1], I[2] * s[2]
+        t[0] += f * (s[1] * Is2 - s[2] * Is1)
+        t[1] += f * (s[2] * Is0 - s[0] * Is2)
+        t[2] += f * (s[0] * Is1 - s[1] * Is0)
+    return t
+
+
+@nb.njit(cache=True)
+def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, out_L, out_q):
+    """n_steps steps of the splitting; every `stride` steps the state goes to out_L, out_q
+    (row 0 is the initial state). pos: (n_steps, n_stages, n_masses, 3)."""
+    out_L[0] = L
+    out_q[0] = q
+    free = (not has_tq) and gm.shape[0] == 0
+    ip, c, tab = prepare(L, I, h)
+    row = 1
+    for k in range(n_steps):
+        if free:
+            L, q = drift(L, q, I, h, ip, c, tab)
+        else:
+            for j in range(kick.shape[0]):
+                L = L + (kick[j] * h) * _torque(L, q, I, tq, pos[k, j], gm)
+                if drift_c[j] != 0.0:
+                    ipj, cj, tabj = prepare(L, I, drift_c[j] * h)
+                    L, q = drift(L, q, I, drift_c[j] * h, ipj, cj, tabj)
+        if (k + 1) % stride == 0:
+            out_L[row] = L
+            out_q[row] = q
+            row += 1
+    return L, q
+
+
+def integrate(
+    inertia,
+    omega0,
+    duration: float,
+    step: float,
+    q0=quat.IDENTITY,
+    torque_body: Sequence[float] | None = None,
+    masses: Sequence[PointMass] = (),
+    scheme: str = "strang",
+    stride: int = 1,
+    t0: float = 0.0,
+    progress: Callable[[float], None] | None = None,
+    chunk_steps: int = 20000,
+):
+    """Integrate from t0 over `duration` in steps of (at most) `step`.
+
+    Returns (t, L_body, q): the states every `stride` steps (the last state always included).
+    The step is shortened so that a whole number of steps fills the duration.
+    """
+    I = validate_moments(inertia)
+    if not (np.isfinite(step) and step > 0):
+        raise ParameterError("step", step, "a finite step > 0")
+    if not (np.isfinite(duration) and duration >= 0):
+        raise ParameterError("duration", duration, "a finite duration >= 0")
+    w0 = np.asarray(omega0, float)
+    if w0.shape != (3,) or not np.all(np.isfinite(w0)):
+        raise ParameterError("omega0", omega0, "three finite numbers")
+    sch = SCHEMES[scheme]
+    n_steps = max(1, int(np.ceil(duration / step - 1e-9))) if duration > 0 else 0
+    h = duration / n_steps if n_steps else step
+    stride = max(1, int(stride))
+    tq = np.zeros(3) if torque_body is None else np.asarray(torque_body, float)
+    has_tq = torque_body is not None and bool(np.any(tq != 0))
+    gm = np.array([m.gm for m in masses], float)
+    L = I * w0
+    q = quat.normalize(np.asarray(q0, float))
+    t_out = [np.array([t0])]
+    L_out = [L[None]]
+    q_out = [q[None]]
+    done = 0
+    while done < n_steps:
+        n = min(chunk_steps - chunk_steps % stride or stride, n_steps - done)
+        if masses:
+            tk = t0 + h * (done + np.arange(n)[:, None] + sch["at"][None, :])
+            pos = np.stack([np.asarray(m.position(tk.ravel()), float).reshape(n, len(sch["at"]), 3) for m in masses], axis=2)
+        else:
+            pos = np.zeros((1, 1, 1, 3))
+        rows = n // stride
+        oL = np.empty((rows + 1, 3))
+        oq = np.empty((rows + 1, 4))
+        L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, oL, oq)
+        t_out.append(t0 + h * (done + stride * np.arange(1, rows + 1)))
+        L_out.append(oL[1:])
+        q_out.append(oq[1:])
+        done += n
+        if n % stride:  # the last, unaligned state
+            t_out.append(np.array([t0 + h * done]))
+            L_out.append(L[None])
+            q_out.append(q[None])
+        if progress is not None:
+            progress(done / n_steps)
+    return np.concatenate(t_out), np.concatenate(L_out), np.concatenate(q_out)

@@ -1,0 +1,2 @@
+"""Imports every scenario module so that the registry is complete. Add new modules here."""
+from . import free_body  # noqa: F401
