@@ -1,2 +1,3 @@
 """Imports every scenario module so that the registry is complete. Add new modules here."""
 from . import free_body  # noqa: F401
+from . import three_body  # noqa: F401
