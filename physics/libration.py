@@ -1,0 +1,346 @@
+"""Libration of a body spinning about its C axis while F moves in the plane normal to C
+(Euler ch. 16, Problems 93–94, §825–838), and spin–orbit chaos (Hyperion).
+
+Planar equations (derived again; modern units). Let λ be the angle of the body's A axis and
+f the angle of F, both in the orbital plane from a fixed direction; ζ = f − λ is Euler's arc
+AF. The §815 torque about C is R = 3GM/s³·(B−A)·cos ζ sin ζ, so
+    C λ̈ = (3GM/2s³)(B−A) sin 2ζ,      ζ̈ = f̈ − (3GM/2s³)·γ·sin 2ζ,    γ = (B−A)/C.
+For the circular orbit (§825) f̈ = 0 and Euler's equation dd ζ + N dt² sin 2ζ = 0 holds with
+    N = 3GM(B−A)/(2Cs³)    (Euler writes 3gee(bb−aa)/(cc s³): his 2g is our 1, his Mbb our B).
+With a Keplerian F, GM/s³ = n² (n the orbital rate δ), so N = (3/2)γn².
+
+§831 small oscillations: ζ̈ + 2Nζ = 0, angular frequency √(2N) = n√(3γ), period π/… — Euler's
+"time of one oscillation π/√(2n)" is the half period (there and back is 2π/√(2n)); his n is
+our N. With θ = 2ζ this is a pendulum θ̈ + 2N sin θ = 0: the finite-amplitude period is
+4K(k)/√(2N) with k = sin ζ_max (complete elliptic integral, modulus k).
+
+Case II (B < A, §827): the equilibrium is ζ = 90° (the B axis toward F); everything holds
+with φ = ζ − 90° and |N|. Below, φ = ζ − ζ_eq is the offset from the stable equilibrium.
+"""
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.special import ellipk
+
+from .params import ParameterError
+
+CASES = ("locked", "librating", "separatrix", "circulating")
+
+
+def euler_N(gamma, gm, s):
+    """§825: N = 3GM(B−A)/(2Cs³) (Euler's n in §826, our units)."""
+    return 1.5 * gm * gamma / s**3
+
+
+def equilibrium_zeta(gamma):
+    """Stable ζ: 0 (A axis toward F) for B > A (§826); π/2 (B axis toward F) for B < A (§827)."""
+    return 0.0 if gamma >= 0 else 0.5 * np.pi
+
+
+def small_oscillation_omega(gamma, gm, s):
+    """§831: angular frequency √(2N) = √(3GM|γ|/s³) (= n√(3γ) on a Kepler circle)."""
+    return np.sqrt(2.0 * abs(euler_N(gamma, gm, s)))
+
+
+def small_oscillation_period(gamma, gm, s):
+    """§831: full libration period 2π/√(2N). (Euler's π/√(2n) is the half swing there and back
+    to F once; his n is our N.)"""
+    return 2.0 * np.pi / small_oscillation_omega(gamma, gm, s)
+
+
+def pendulum_modulus_sq(phi0, phidot0, omega0):
+    """k² = sin²φ₀ + (φ̇₀/ω₀)² for φ̈ = −(ω₀²/2) sin 2φ; k < 1 libration, k > 1 circulation."""
+    return np.sin(phi0) ** 2 + (phidot0 / omega0) ** 2
+
+
+def pendulum_period(phi0, phidot0, omega0):
+    """Exact period of φ̈ = −(ω₀²/2) sin 2φ. Libration (k < 1): 4K(k)/ω₀ — the time to come back
+    to the same state. Circulation (k > 1): 2K(1/k)/(k ω₀) — the time for φ to advance by π (the
+    body turns half a turn relative to F; ζ and ζ+π are the same face pair). Separatrix: inf."""
+    k2 = pendulum_modulus_sq(phi0, phidot0, omega0)
+    if k2 < 1.0:
+        return 4.0 * ellipk(k2) / omega0
+    if k2 > 1.0:
+        return 2.0 * ellipk(1.0 / k2) / (np.sqrt(k2) * omega0)
+    return np.inf
+
+
+def libration_amplitude(phi0, phidot0, omega0):
+    """Largest |φ| of a libration: arcsin k (π/2 at and above the separatrix)."""
+    k2 = pendulum_modulus_sq(phi0, phidot0, omega0)
+    return float(np.arcsin(np.sqrt(k2))) if k2 < 1 else 0.5 * np.pi
+
+
+def classify(phi0, phidot0, omega0, tol=1e-9):
+    """Euler's four cases (§826): C = −n locked, −n < C < n librating (1st–2nd), C = n
+    separatrix (3rd: 90° reached after infinite time), C > n circulating (4th)."""
+    k2 = pendulum_modulus_sq(phi0, phidot0, omega0)
+    if k2 < tol:
+        return "locked"
+    if abs(k2 - 1.0) < tol:
+        return "separatrix"
+    return "librating" if k2 < 1 else "circulating"
+
+
+def separatrix_rate(phi, omega0):
+    """The separatrix φ̇ = ±ω₀ cos φ (§826 3rd: dζ/dt = √(2n)·cos ζ)."""
+    return omega0 * np.cos(phi)
+
+
+def separatrix_time_euler(phi, omega0):
+    """§826 3rd: t = ln tan(45° + φ/2)/√(2n) on the separatrix from φ = 0."""
+    return np.log(np.tan(0.25 * np.pi + 0.5 * np.asarray(phi))) / omega0
+
+
+def measured_period(t, phi, circulating=False):
+    """Period from a sampled φ(t): libration — mean spacing of upward zero crossings (linear
+    interpolation of the crossing times; needs ≥ 2 crossings); circulation — time for the
+    unwrapped φ to advance by π (fit of the crossing times of multiples of π)."""
+    t = np.asarray(t, float)
+    x = np.asarray(phi, float)
+    if circulating:
+        x = x / np.pi
+        s = np.sign(x[-1] - x[0]) or 1.0
+        x = s * x
+        k = np.floor(x)
+        idx = np.nonzero(k[1:] > k[:-1])[0]
+    else:
+        idx = np.nonzero((x[:-1] < 0) & (x[1:] >= 0))[0]
+        k = None
+    if len(idx) < 2:
+        return np.nan
+    if circulating:
+        lev = np.floor(x[idx + 1])
+        tc = t[idx] + (lev - x[idx]) / (x[idx + 1] - x[idx]) * (t[idx + 1] - t[idx])
+    else:
+        tc = t[idx] - x[idx] / (x[idx + 1] - x[idx]) * (t[idx + 1] - t[idx])
+    return float((tc[-1] - tc[0]) / (len(tc) - 1))
+
+
+# ---------------------------------------------------------------- §833–838, eccentric orbit
+
+def forced_amplitude_euler(alpha, A, N):
+    """§833: ζ = A²α/(A² − 2N)·sin At (first harmonic). On a Kepler ellipse α = 2e, A = δ = n,
+    2N = 3γn², so ζ = 2e/(1 − 3γ) sin M. Resonance (failure) at A² = 2N."""
+    return A * A * alpha / (A * A - 2.0 * N)
+
+
+def second_order_euler(alpha, beta, A, N):
+    """§835 (Euler, with N ≪ A²): coefficient of sin 2At, nαβ/(4(A² − 2n)).
+    Rederived without N ≪ A²: N β A² α /((A² − 2N)(4A² − 2N)). On a real ellipse the true
+    anomaly also has (5/4)e² sin 2M, which adds 5e²A²/(4A² − 2N) to the sin 2At term (not in
+    Euler's parametrisation XF = δt + α sin At, which stops at first order)."""
+    return N * alpha * beta / (4.0 * (A * A - 2.0 * N))
+
+
+def second_order_full(alpha, beta, A, N):
+    m = forced_amplitude_euler(alpha, A, N)
+    return N * beta * m / (4.0 * A * A - 2.0 * N)
+
+
+def planar_rhs(orbit, gamma, gm):
+    """y = (λ, λ̇): C λ̈ = (3GM/2r³)(B−A) sin 2(f − λ) for an orbit with anomalies(t)."""
+
+    def rhs(t, y):
+        f, r = orbit.anomalies(np.array([t]))
+        f, r = f[0], r[0]
+        return [y[1], 1.5 * gm * gamma / r**3 * np.sin(2.0 * (f - y[0]))]
+
+    return rhs
+
+
+def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-13, iters=20):
+    """§838's forced libration: the solution with the orbit's period (free part zero), by
+    Newton shooting on (λ(0), λ̇(0)) − the orbit starts at periapse (t_peri = 0). Returns
+    (λ0, λ̇0, P) with P the orbital period. Fails (ParameterError) near resonance."""
+    P = 2.0 * np.pi / orbit.n
+    rhs = planar_rhs(orbit, gamma, gm)
+    y = np.array([guess[0], orbit.true_anomaly_rate(np.array([0.0]))[0] if guess[1] is None else guess[1]])
+
+    def F(y):
+        sol = solve_ivp(rhs, (0.0, P), y, method="DOP853", rtol=rtol, atol=atol)
+        return sol.y[:, -1] - y - np.array([2.0 * np.pi, 0.0])
+
+    for _ in range(iters):
+        r = F(y)
+        if np.max(np.abs(r)) < 1e-11:
+            return y[0], y[1], P
+        J = np.empty((2, 2))
+        for j in range(2):
+            d = np.zeros(2)
+            d[j] = 1e-6
+            J[:, j] = (F(y + d) - F(y - d)) / 2e-6
+        y = y - np.linalg.solve(J, r)
+    raise ParameterError("eccentricity", orbit.e, "no forced (periodic) libration found near these values")
+
+
+def harmonics(t, x, omega, k_max=3):
+    """Least-squares amplitudes of x(t) ≈ c + Σ_k a_k sin kωt + b_k cos kωt, returns
+    (a, b) arrays of length k_max (index 0 ↔ k = 1)."""
+    cols = [np.ones_like(t)]
+    for k in range(1, k_max + 1):
+        cols += [np.sin(k * omega * t), np.cos(k * omega * t)]
+    coef, *_ = np.linalg.lstsq(np.stack(cols, 1), x, rcond=None)
+    return coef[1::2], coef[2::2]
+
+
+# ---------------------------------------------------------------- spin–orbit chaos (Hyperion)
+
+def goldreich_peale_H(p, e):
+    """Goldreich & Peale (1966) coefficients H(p, e) for the spin–orbit resonance θ̇ = p·n
+    (expansion in e; Wisdom, Peale & Mignard 1984, eq. 4)."""
+    table = {
+        0.5: -e / 2 + e**3 / 16,
+        1.0: 1 - 5 * e**2 / 2 + 13 * e**4 / 16,
+        1.5: 7 * e / 2 - 123 * e**3 / 16,
+        2.0: 17 * e**2 / 2 - 115 * e**4 / 6,
+        2.5: 845 * e**3 / 48 - 32525 * e**5 / 768,
+    }
+    return table[float(p)]
+
+
+def resonance_half_width(p, e, omega0):
+    """Half-width in θ̇/n of the p resonance: ω₀√|H(p,e)|, ω₀² = 3(B−A)/C (the averaged
+    pendulum γ̈ = −(ω₀²/2)H sin 2γ, γ = θ − pM, has separatrix |γ̇| ≤ ω₀√|H|)."""
+    return omega0 * np.sqrt(abs(goldreich_peale_H(p, e)))
+
+
+def resonance_centre_angle(p, e):
+    """θ mod π of the island centre at periapse: 0 if H > 0 (long axis to the planet), π/2 if
+    H < 0 (the 1/2 resonance)."""
+    return 0.0 if goldreich_peale_H(p, e) > 0 else 0.5 * np.pi
+
+
+_W1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
+_W0 = -(2.0 ** (1.0 / 3.0)) * _W1
+# Yoshida triple jump of kick–drift–kick: kicks c_j at stage times, drifts d_j
+_YK = np.array([_W1 / 2, (_W1 + _W0) / 2, (_W0 + _W1) / 2, _W1 / 2])
+_YD = np.array([_W1, _W0, _W1, 0.0])
+_YAT = np.array([0.0, _W1, _W1 + _W0, 1.0])
+
+
+def _orbit_table(e, steps_per_orbit):
+    """(a/r)³, sin 2f, cos 2f at every kick time of one orbit (n = 1, periapse at t = 0). The
+    table is periodic, so it is computed once for the whole run."""
+    from .orbits import KeplerOrbit
+
+    h = 2.0 * np.pi / steps_per_orbit
+    tk = h * (np.arange(steps_per_orbit)[:, None] + _YAT[None, :])
+    f, r = KeplerOrbit(a=1.0, e=e, n=1.0).anomalies(tk.ravel())
+    return ((1.0 / r**3).reshape(tk.shape), np.sin(2 * f).reshape(tk.shape), np.cos(2 * f).reshape(tk.shape))
+
+
+@nb.njit(cache=True, fastmath=False)
+def _section_run(theta, thetadot, k, s2f, c2f, h, n_orbits, out_theta, out_dot, lyap_on, dth, ddot, lyap_sum):
+    n = theta.shape[0]
+    m = s2f.shape[0]
+    for i in range(n):
+        th = theta[i]
+        w = thetadot[i]
+        a = dth[i]
+        b = ddot[i]
+        for orb in range(n_orbits):
+            for s in range(m):
+                for j in range(4):
+                    sn = np.sin(2.0 * th)
+                    cs = np.cos(2.0 * th)
+                    g = k[s, j] * _YK[j] * h
+                    # θ̈ = −(ω0²/2)(a/r)³ sin 2(θ − f); k carries ω0²/2·(a/r)³
+                    w -= g * (sn * c2f[s, j] - cs * s2f[s, j])
+                    if lyap_on:
+                        b -= 2.0 * g * (cs * c2f[s, j] + sn * s2f[s, j]) * a
+                    d = _YD[j] * h
+                    if d != 0.0:
+                        th += d * w
+                        if lyap_on:
+                            a += d * b
+            out_theta[i, orb] = th
+            out_dot[i, orb] = w
+            if lyap_on:
+                nrm = np.sqrt(a * a + b * b)
+                lyap_sum[i] += np.log(nrm)
+                a /= nrm
+                b /= nrm
+        theta[i] = th
+        thetadot[i] = w
+        dth[i] = a
+        ddot[i] = b
+
+
+def spin_orbit_section(theta0, thetadot0, e, omega0, n_orbits, steps_per_orbit=256, lyapunov=False):
+    """Surface of section of the planar spin–orbit problem θ̈ = −(ω₀²/2)(a/r)³ sin 2(θ − f)
+    (time unit 1/n, periapse at t = 0, 2π, …), for an ensemble of starts at periapse.
+
+    Fixed-step 4th-order symplectic (Yoshida) kick–drift with the orbit tabulated once per
+    period; compiled with numba, one loop over the ensemble. Returns (θ, θ̇) of shape
+    (N, n_orbits) at the periapse passages 1..n_orbits (θ unwrapped; take mod π to plot) and,
+    if `lyapunov`, the largest Lyapunov exponent per start (per unit time, n = 1) from the
+    tangent map renormalised every orbit."""
+    th = np.array(theta0, float).ravel().copy()
+    wd = np.broadcast_to(np.asarray(thetadot0, float), th.shape).astype(float).copy()
+    rr, s2f, c2f = _orbit_table(e, steps_per_orbit)
+    k = 0.5 * omega0**2 * rr
+    h = 2.0 * np.pi / steps_per_orbit
+    N = th.shape[0]
+    out_t = np.empty((N, n_orbits))
+    out_w = np.empty((N, n_orbits))
+    a = np.ones(N)
+    b = np.zeros(N)
+    lsum = np.zeros(N)
+    _section_run(th, wd, k, s2f, c2f, h, int(n_orbits), out_t, out_w, bool(lyapunov), a, b, lsum)
+    if lyapunov:
+        return out_t, out_w, lsum / (2.0 * np.pi * n_orbits)
+    return out_t, out_w
+
+
+def spin_orbit_rhs_vectorised(e, omega0):
+    """scipy reference/baseline: y = (θ₁..θ_N, θ̇₁..θ̇_N), the whole ensemble in one state."""
+    from .orbits import KeplerOrbit
+
+    orb = KeplerOrbit(a=1.0, e=e, n=1.0)
+
+    def rhs(t, y):
+        f, r = orb.anomalies(np.array([t]))
+        N = y.shape[0] // 2
+        out = np.empty_like(y)
+        out[:N] = y[N:]
+        out[N:] = -0.5 * omega0**2 / r[0] ** 3 * np.sin(2.0 * (y[:N] - f[0]))
+        return out
+
+    return rhs
+
+
+def spin_orbit_section_scipy(theta0, thetadot0, e, omega0, n_orbits, rtol=1e-10, atol=1e-12):
+    """The same section with scipy DOP853 (ensemble in one state vector), sampled at periapse."""
+    th = np.array(theta0, float).ravel()
+    wd = np.broadcast_to(np.asarray(thetadot0, float), th.shape).astype(float)
+    T = 2.0 * np.pi * np.arange(1, n_orbits + 1)
+    sol = solve_ivp(spin_orbit_rhs_vectorised(e, omega0), (0.0, T[-1]), np.concatenate([th, wd]),
+                    method="DOP853", rtol=rtol, atol=atol, t_eval=T)
+    N = th.shape[0]
+    return sol.y[:N], sol.y[N:]
+
+
+def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=512, iters=30):
+    """A fixed point of the periapse map (θ mod π, θ̇): Newton on one orbit's map with finite
+    differences. Returns (θ, θ̇) or raises ParameterError if Newton does not converge."""
+    y = np.array([theta_guess, dot_guess], float)
+
+    def F(y):
+        t, w = spin_orbit_section(np.array([y[0]]), np.array([y[1]]), e, omega0, 1, steps_per_orbit)
+        dt = t[0, 0] - y[0]
+        return np.array([dt - np.pi * np.round(dt / np.pi), w[0, 0] - y[1]])
+
+    for _ in range(iters):
+        r = F(y)
+        if np.max(np.abs(r)) < 1e-10:
+            return float(np.remainder(y[0] + 0.5 * np.pi, np.pi) - 0.5 * np.pi), float(y[1])
+        J = np.empty((2, 2))
+        for j in range(2):
+            d = np.zeros(2)
+            d[j] = 1e-6
+            J[:, j] = (F(y + d) - F(y - d)) / 2e-6
+        y = y - np.linalg.solve(J, r)
+    raise ParameterError("omega0", omega0, "no periodic spin state found near this start")
