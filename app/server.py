@@ -1,0 +1,379 @@
+"""`theoria serve`: the viser web app.
+
+Each browser gets its own `ClientSession` (built in `on_client_connect`): its own scenario,
+parameters, simulation result, scene nodes and playback clock, so two people on one server do
+not disturb each other.
+
+Responsiveness (issue 3): a parameter change posts a request to the session's worker thread;
+the worker always takes the newest request, simulates off the event thread, and drops a result
+when a newer request arrived meanwhile (a running integration is aborted from its progress
+callback). The scene update is batched in `client.atomic()`. Playback runs in its own thread at
+display rate and moves only poses, two short arrows and chunk visibility.
+
+Bad input: `Scenario.resolve` raises ParameterError (one line naming the parameter and the allowed
+range); the browser gets a notification and the scene keeps the last good result. Any other
+exception in a scenario is reported the same way and never reaches the server loop.
+"""
+from __future__ import annotations
+
+import threading
+import time
+import traceback
+from typing import Any
+
+import numpy as np
+import viser
+
+from physics.params import ParameterError
+from physics.scenarios import all_scenarios, get
+
+from .controls import ParamControls
+from .scene import OVERLAYS, SceneView
+
+PLAY_HZ = 60.0  # playback tick (the client renders at display rate; messages go out each 1/60 s)
+RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
+UPLOT_POINTS = 2000
+
+
+class _Stale(Exception):
+    """A newer request arrived: abandon this simulation."""
+
+
+def scenario_label(spec) -> str:
+    return f"[{spec.group}] {spec.name}: {spec.title}"
+
+
+def _fmt(x) -> str:
+    if x is None:
+        return "–"
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return str(x)
+    if not np.isfinite(x):
+        return "–"
+    return f"{x:.6g}"
+
+
+def info_markdown(spec, result=None) -> str:
+    lines = [f"### {spec.title}", f"**{spec.section}** · {spec.group} · `{spec.name}`", "", spec.summary, ""]
+    if spec.euler_formula:
+        # viser's markdown renders no TeX: show the formula as source
+        lines += ["**Euler:** `" + spec.euler_formula.replace("`", "'") + "`", ""]
+    return "\n".join(lines)
+
+
+def comparison_markdown(result) -> str:
+    if result is None:
+        return ""
+    lines = []
+    if result.comparisons:
+        lines += ["| | Euler says | simulated | modern | unit |", "|---|---|---|---|---|"]
+        for c in result.comparisons:
+            note = f" ({c.note})" if c.note else ""
+            lines.append(f"| {c.label}{note} | {_fmt(c.euler)} | {_fmt(c.simulated)} | {_fmt(c.modern)} | {c.unit} |")
+        lines.append("")
+    if result.metrics:
+        lines.append("**Metrics:** " + ", ".join(f"{k} = {_fmt(v)}" for k, v in result.metrics.items()))
+    for n in result.notes:
+        lines.append(f"\n*{n}*")
+    return "\n".join(lines)
+
+
+class ClientSession:
+    """GUI, scene, worker and playback of one browser."""
+
+    def __init__(self, server: viser.ViserServer, client: viser.ClientHandle, scenario: str | None):
+        self.server, self.client = server, client
+        self.scenarios = {s.name: s for s in all_scenarios()}
+        self.spec = get(scenario) if scenario else self.scenarios.get("free-tumble") or next(iter(self.scenarios.values()))
+        self.view = SceneView(client.scene, "/world")
+        self.result = None
+        self.good_values: dict[str, Any] | None = None
+        self.playing = True
+        self.clock = 0.0  # playback time as a fraction of the run, 0..1
+        self._guard = False  # set while the code itself moves the scrubber
+        self._lock = threading.Lock()
+        self._cv = threading.Condition(self._lock)
+        self._request: tuple[int, str, dict] | None = None
+        self._gen = 0
+        self._closed = False
+        self.updates = 0  # scene rebuilds done (tests and bench read it)
+        self._build_gui()
+        self._worker = threading.Thread(target=self._work, daemon=True, name=f"sim-{client.client_id}")
+        self._worker.start()
+        self._player = threading.Thread(target=self._play, daemon=True, name=f"play-{client.client_id}")
+        self._player.start()
+        self.request()
+
+    # ---- GUI -------------------------------------------------------------------------------
+    def _build_gui(self) -> None:
+        gui = self.client.gui
+        client = self.client
+        client.scene.set_up_direction("+z")
+        client.camera.position = (3.6, 2.8, 2.2)
+        client.camera.look_at = (0.0, 0.0, 0.0)
+        client.camera.up_direction = (0.0, 0.0, 1.0)
+        gui.configure_theme(control_width="large", show_share_button=False)
+        order = sorted(self.scenarios.values(), key=lambda s: (s.group, s.name))
+        self._labels = {scenario_label(s): s.name for s in order}
+        self.dd = gui.add_dropdown("Scenario", list(self._labels), initial_value=scenario_label(self.spec),
+                                   hint="grouped by chapter / paper")
+        self.dd.on_update(lambda e: self._safe(self._on_scenario))
+        self.info = gui.add_markdown(info_markdown(self.spec))
+        self.table = gui.add_markdown("")
+        self.status = gui.add_markdown("*simulating…*")
+        with gui.add_folder("Playback"):
+            self.play_btn = gui.add_button("Pause")
+            self.play_btn.on_click(lambda e: self._safe(self._toggle_play))
+            self.reset_btn = gui.add_button("Reset")
+            self.reset_btn.on_click(lambda e: self._safe(self._reset))
+            self.speed = gui.add_slider("speed", min=0.1, max=10.0, step=0.1, initial_value=1.0,
+                                        hint=f"1 = the whole run in {RUN_SECONDS:g} s")
+            self.scrub = gui.add_slider("time (% of run)", min=0.0, max=100.0, step=0.1, initial_value=0.0)
+            self.scrub.on_update(lambda e: self._safe(self._on_scrub))
+            self.time_md = gui.add_markdown("t = 0")
+        self.params_parent = gui.add_folder("Parameters (§)")
+        with self.params_parent:
+            self.controls = ParamControls(gui, self.spec, on_change=lambda name: self.request())
+        with gui.add_folder("Overlays", expand_by_default=False):
+            self.exag = gui.add_slider("exaggerate shape", min=1.0, max=20.0, step=0.5, initial_value=1.0,
+                                       hint="multiplies the departures of the semi-axes from their mean")
+            self.exag.on_update(lambda e: self._safe(self._on_exaggerate))
+            self.toggles = {}
+            for key, (label, _, _) in OVERLAYS.items():
+                cb = gui.add_checkbox(label, initial_value=True)
+                cb.on_update(lambda e, key=key: self._safe(self._on_toggle, key))
+                self.toggles[key] = cb
+        self.plot_folder = gui.add_folder("Plot")
+        self.plot = None
+
+    def notify(self, title: str, body: str, color: str = "red") -> None:
+        try:
+            self.client.add_notification(title, body, auto_close_seconds=8.0, color=color)
+        except Exception:
+            pass
+
+    def _safe(self, fn, *args) -> None:
+        """Run a callback; no exception reaches viser's loop."""
+        try:
+            fn(*args)
+        except ParameterError as e:
+            self.notify(f"Bad value for {e.name}", str(e))
+        except Exception as e:  # a bug in a scenario or the scene must not kill the server
+            traceback.print_exc()
+            self.notify("Error", f"{type(e).__name__}: {e}")
+
+    def _on_scenario(self) -> None:
+        name = self._labels[self.dd.value]
+        if name == self.spec.name:
+            return
+        self.spec = self.scenarios[name]
+        self.controls.remove()
+        with self.params_parent:
+            self.controls = ParamControls(self.client.gui, self.spec, on_change=lambda n: self.request())
+        self.info.content = info_markdown(self.spec)
+        self.good_values = None
+        self.view.overlays = {}
+        self.request()
+
+    def _toggle_play(self) -> None:
+        self.playing = not self.playing
+        self.play_btn.label = "Pause" if self.playing else "Play"
+
+    def _reset(self) -> None:
+        self.clock = 0.0
+        self._show_clock(force=True)
+
+    def _on_scrub(self) -> None:
+        if self._guard:
+            return
+        self.clock = float(self.scrub.value) / 100.0
+        self._show_clock()
+
+    def _on_exaggerate(self) -> None:
+        if self.result is None:
+            return
+        with self.client.atomic():
+            self.view.set_exaggerate(self.exag.value)
+            self.view.set_frame(self._frame_index())
+
+    def _on_toggle(self, key: str) -> None:
+        with self.client.atomic():
+            self.view.set_overlay(key, self.toggles[key].value)
+
+    # ---- simulation worker -----------------------------------------------------------------
+    def request(self, given: dict | None = None) -> None:
+        """Post (scenario, raw values) for simulation; only the newest request is kept."""
+        given = self.controls.values() if given is None else given
+        with self._cv:
+            self._gen += 1
+            self._request = (self._gen, self.spec.name, given)
+            self._cv.notify()
+
+    def _work(self) -> None:
+        while True:
+            with self._cv:
+                while self._request is None and not self._closed:
+                    self._cv.wait()
+                if self._closed:
+                    return
+                gen, name, given = self._request
+                self._request = None
+            try:
+                self._simulate(gen, name, given)
+            except _Stale:
+                continue
+            except ParameterError as e:
+                self.notify(f"Bad value for {e.name}", f"{e} — keeping the last good state")
+                self._status("bad value: " + str(e))
+            except Exception as e:
+                traceback.print_exc()
+                self.notify(f"Error in {name}", f"{type(e).__name__}: {e} — keeping the last good state")
+                self._status(f"error: {type(e).__name__}: {e}")
+
+    def _status(self, text: str) -> None:
+        try:
+            self.status.content = f"*{text}*"
+        except Exception:
+            pass
+
+    def _simulate(self, gen: int, name: str, given: dict) -> None:
+        spec = self.scenarios[name]
+        values = spec.resolve(given)
+
+        def progress(_frac):
+            if self._gen != gen or self._closed:
+                raise _Stale()
+
+        t0 = time.perf_counter()
+        try:
+            result = spec.simulate_fn(values, progress=progress)
+        except TypeError as e:  # a simulate_fn without the progress keyword
+            if "progress" not in str(e):
+                raise
+            result = spec.simulate_fn(values)
+        t_sim = time.perf_counter() - t0
+        if self._gen != gen:
+            raise _Stale()
+        with self.client.atomic():
+            if self._gen != gen or spec.name != self.spec.name:
+                raise _Stale()
+            overlays = None
+            if not self.view.overlays or self.view._spec is None or self.view._spec.name != spec.name:
+                overlays = self.view.default_overlays(spec)
+                for k, cb in self.toggles.items():
+                    self._guard = True
+                    try:
+                        cb.value = overlays.get(k, True)
+                    finally:
+                        self._guard = False
+            self.view.show(result, spec, overlays=overlays, exaggerate=self.exag.value)
+            self.result, self.good_values = result, values
+            self.table.content = comparison_markdown(result)
+            self._update_plot(result)
+            self.view.set_frame(self._frame_index())
+            self.updates += 1
+            self._status(f"simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
+                         f"(update #{self.updates})")
+
+    def _update_plot(self, result) -> None:
+        traj = result.trajectory
+        series = dict(result.plot_series) or {"energy": traj.energy}
+        idx = np.unique(np.linspace(0, len(traj.t) - 1, min(UPLOT_POINTS, len(traj.t))).round().astype(int))
+        data = (np.asarray(traj.t)[idx],) + tuple(np.asarray(v, float)[idx] for v in series.values())
+        from .scene import palette
+
+        ser = ({"label": f"t [{traj.time_unit}]"},) + tuple(
+            {"label": k, "stroke": "rgb(%d,%d,%d)" % palette(i), "width": 1.5} for i, k in enumerate(series))
+        if self.plot is not None:
+            self.plot.remove()
+        with self.plot_folder:
+            self.plot = self.client.gui.add_uplot(data, ser, title=result.scenario, aspect=1.6)
+
+    # ---- playback ----------------------------------------------------------------------------
+    def _frame_index(self) -> int:
+        if self.result is None:
+            return 0
+        t = self.result.trajectory.t
+        target = t[0] + self.clock * (t[-1] - t[0])
+        return int(np.clip(np.searchsorted(t, target), 0, len(t) - 1))
+
+    def _show_clock(self, force: bool = False) -> None:
+        if self.result is None:
+            return
+        i = self._frame_index()
+        if force or i != self.view.frame:
+            with self.client.atomic():
+                self.view.set_frame(i)
+
+    def _play(self) -> None:
+        last = time.perf_counter()
+        last_gui = 0.0
+        while not self._closed:
+            now = time.perf_counter()
+            dt, last = now - last, now
+            try:
+                if self.playing and self.result is not None:
+                    self.clock = (self.clock + dt * float(self.speed.value) / RUN_SECONDS) % 1.0
+                    self._show_clock()
+                    if now - last_gui > 0.25:
+                        last_gui = now
+                        t = self.result.trajectory
+                        self._guard = True
+                        try:
+                            self.scrub.value = round(100 * self.clock, 1)
+                        finally:
+                            self._guard = False
+                        self.time_md.content = f"t = {t.t[self.view.frame]:.4g} {t.time_unit}"
+            except Exception:
+                if self._closed:
+                    return
+                traceback.print_exc()
+            time.sleep(max(0.0, 1.0 / PLAY_HZ - (time.perf_counter() - now)))
+
+    def close(self) -> None:
+        self._closed = True
+        with self._cv:
+            self._cv.notify()
+
+
+def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None, verbose: bool = True):
+    """A running viser server with one ClientSession per browser; returns (server, sessions)."""
+    if scenario is not None:
+        get(scenario)  # a bad name raises ParameterError before the server starts
+    server = viser.ViserServer(host=host, port=port, verbose=verbose)
+    sessions: dict[int, ClientSession] = {}
+
+    @server.on_client_connect
+    def _(client: viser.ClientHandle) -> None:
+        try:
+            sessions[client.client_id] = ClientSession(server, client, scenario)
+        except Exception as e:
+            traceback.print_exc()
+            try:
+                client.add_notification("Error", f"{type(e).__name__}: {e}", color="red")
+            except Exception:
+                pass
+
+    @server.on_client_disconnect
+    def _(client: viser.ClientHandle) -> None:
+        s = sessions.pop(client.client_id, None)
+        if s is not None:
+            s.close()
+
+    return server, sessions
+
+
+def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None) -> None:
+    """Run the web app until interrupted, printing the URL to open."""
+    server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False)
+    shown = "127.0.0.1" if host in ("127.0.0.1", "localhost") else host
+    print(f"theoria: open http://{shown}:{server.get_port()}/ in a browser (Ctrl-C to stop)", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
