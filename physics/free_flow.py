@@ -28,7 +28,7 @@ _MACHEP = 1.11022302462515654042e-16
 
 @nb.njit(cache=True, fastmath=False)
 def ellipj(u, m):
-    """Jacobi sn, cn, dn of argument u and parameter m = k² ∈ [0, 1].
+    """Jacobi sn, cn, dn (u real, any sign; dn > 0) of argument u and parameter m = k² ∈ [0, 1].
 
     Arithmetic–geometric mean and descending Landen transformation (Abramowitz & Stegun
     16.4; the algorithm of Cephes `ellpj`), with its series for m near 0 and near 1.
@@ -75,7 +75,9 @@ def ellipj(u, m):
         i -= 1
     sn = math.sin(phi)
     cn = math.cos(phi)
-    return sn, cn, cn / math.cos(phi - bb)
+    # dn² = 1 − m sn² = (1 − m) + m cn²: a sum of positive terms, accurate where Cephes'
+    # cn/cos(φ − b) divides two small numbers
+    return sn, cn, math.sqrt((1.0 - m) + m * cn * cn)
 
 
 @nb.njit(cache=True)

@@ -145,7 +145,9 @@ def exact_free_motion(inertia, omega0, t, q0=quat.IDENTITY):
     Lp = W * fm.J / fm.L_norm
     Pi = Rotation.from_matrix(_perm_matrix(fm.axes, fm.sign))
     Pt = _nutation_rotation(Lp)
-    P0 = Pt[0]
+    w0 = np.asarray(omega0, float)
+    W0 = np.array([w0[fm.axes[0]], w0[fm.axes[1]], fm.sign * w0[fm.axes[2]]])
+    P0 = _nutation_rotation((W0 * fm.J / fm.L_norm)[None])[0]  # at t = 0, whatever t holds
     R0 = Rotation.from_quat(quat.to_xyzw(q0))
     R = R0 * Pi.inv() * P0.inv() * Rotation.from_rotvec(np.outer(psi, [0.0, 0.0, 1.0])) * Pt * Pi
     omega = np.empty_like(W)

@@ -1,0 +1,254 @@
+"""The `theoria` command (design.md, "Command line").
+
+Exit status 2 with one line naming the key, the value and the allowed range for any bad input.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+from physics.params import ParameterError
+
+
+class Progress:
+    """Progress on stderr for runs that take longer than a second (throttled)."""
+
+    def __init__(self, label: str, quiet: bool = False):
+        self.label = label
+        self.t0 = time.perf_counter()
+        self.last = 0.0
+        self.quiet = quiet
+        self.shown = False
+
+    def __call__(self, fraction: float) -> None:
+        now = time.perf_counter()
+        if self.quiet or now - self.t0 < 1.0 or (now - self.last < 0.5 and fraction < 1):
+            return
+        self.last = now
+        self.shown = True
+        sys.stderr.write(f"\r{self.label}: {100 * fraction:5.1f}%  ({now - self.t0:.1f} s)")
+        sys.stderr.flush()
+
+    def done(self) -> None:
+        if self.shown:
+            sys.stderr.write("\n")
+
+
+def _parse_sets(items: list[str] | None) -> dict[str, str]:
+    out = {}
+    for item in items or []:
+        if "=" not in item:
+            raise ParameterError("--set", item, "key=value")
+        k, v = item.split("=", 1)
+        out[k.strip()] = v.strip()
+    return out
+
+
+def _scenario_values(name: str, sets: list[str] | None, duration: float | None):
+    from physics.scenarios import get
+
+    sc = get(name)
+    given = _parse_sets(sets)
+    if duration is not None:
+        if not any(p.name == "duration" for p in sc.params):
+            raise ParameterError("--duration", duration, f"not a parameter of {name}")
+        given["duration"] = duration
+    return sc, sc.resolve(given)
+
+
+def _fmt(x) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, (tuple, list)):
+        return ",".join(_fmt(v) for v in x)
+    if isinstance(x, float):
+        return f"{x:.10g}"
+    return str(x)
+
+
+def cmd_list(args) -> int:
+    from physics.scenarios import all_scenarios
+
+    items = all_scenarios()
+    if args.json:
+        print(json.dumps({"scenarios": [
+            {"name": s.name, "title": s.title, "section": s.section, "group": s.group, "kind": s.kind,
+             "summary": s.summary,
+             "params": [{"name": p.name, "default": p.default, "min": p.minimum, "max": p.maximum,
+                         "unit": p.unit, "kind": p.kind, "help": p.help} for p in s.params]}
+            for s in items]}, indent=2))
+    else:
+        for s in items:
+            print(f"{s.name:<22} {s.group:<13} {s.section:<18} {s.title}")
+    return 0
+
+
+def cmd_run(args) -> int:
+    sc, values = _scenario_values(args.name, args.set, args.duration)
+    prog = Progress(f"run {sc.name}", quiet=False)
+    result = sc.simulate_fn(values, progress=prog)
+    prog.done()
+    out = result.to_json(sc)
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return 0
+    print(f"{sc.title} ({sc.name}, {sc.section})")
+    print("parameters:")
+    for p in sc.params:
+        print(f"  {p.name:<24} {_fmt(values[p.name])} {p.unit}")
+    print("metrics:")
+    for k, v in out["metrics"].items():
+        print(f"  {k:<40} {_fmt(v)}")
+    if result.comparisons:
+        print("Euler / simulated / modern:")
+        for c in result.comparisons:
+            print(f"  {c.label}: Euler {_fmt(c.euler)}  simulated {_fmt(c.simulated)}  modern {_fmt(c.modern)} {c.unit}"
+                  + (f"  ({c.note})" if c.note else ""))
+    for n in result.notes:
+        print("note:", n)
+    if "final_state" in out:
+        fs = out["final_state"]
+        print(f"final state at t={_fmt(fs['t'])}: q_wxyz={_fmt(fs['quaternion_wxyz'])} omega_body={_fmt(fs['omega_body'])}")
+    return 0
+
+
+def check_table(rows) -> str:
+    head = f"{'id':<22} {'section':<16} {'Euler':>14} {'simulated':>14} {'modern':>14} {'rel.error':>10} {'tol':>8}  verdict"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(
+            f"{r.id:<22} {r.section:<16} {_fmt3(r.euler):>14} {_fmt3(r.simulated):>14} {_fmt3(r.modern):>14} "
+            f"{_fmt3(r.rel_error, 2):>10} {r.tolerance:>8.1g}  {'pass' if r.passed else 'FAIL'}  {r.title}"
+            + (f" [{r.unit}]" if r.unit else "")
+        )
+    return "\n".join(lines)
+
+
+def _fmt3(x, digits: int = 9) -> str:
+    if x is None:
+        return "-"
+    return f"{x:.{digits}g}"
+
+
+def cmd_check(args) -> int:
+    from physics.checks import run_checks
+
+    t0 = time.perf_counter()
+
+    def progress(cid):
+        sys.stderr.write(f"\rcheck {cid:<24} ({time.perf_counter() - t0:.0f} s)")
+        sys.stderr.flush()
+
+    rows = run_checks(args.ids or None, progress=None if args.json else progress)
+    if not args.json:
+        sys.stderr.write("\r" + " " * 50 + "\r")
+    if args.json:
+        print(json.dumps({"results": [r.to_json() for r in rows]}, indent=2))
+    else:
+        print(check_table(rows))
+        for r in rows:
+            if r.note:
+                print(f"  {r.id}: {r.note}")
+        print(f"{sum(r.passed for r in rows)} passed, {sum(not r.passed for r in rows)} failed")
+    return 0 if all(r.passed for r in rows) else 1
+
+
+def cmd_bench(args) -> int:
+    from app.bench import format_table, run_benches
+
+    rows = run_benches(args.names or None, progress=None if args.json else (lambda n: sys.stderr.write(f"bench {n}\n")))
+    if args.json:
+        print(json.dumps({"benchmarks": rows}, indent=2, default=float))
+    else:
+        print(format_table(rows))
+    return 0
+
+
+def cmd_serve(args) -> int:
+    from app.server import serve
+
+    if args.scenario is not None:
+        from physics.scenarios import get
+
+        get(args.scenario)  # unknown name: exit 2 before the server starts
+    serve(port=args.port, host=args.host, scenario=args.scenario)
+    return 0
+
+
+def cmd_record(args) -> int:
+    from app.record import record
+
+    sc, values = _scenario_values(args.name, args.set, args.duration)
+    record(sc.name, args.out, values)
+    return 0
+
+
+def cmd_export(args) -> int:
+    from app.export_html import export
+
+    sc, values = _scenario_values(args.name, args.set, args.duration)
+    export(sc.name, args.out, values)
+    return 0
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # argparse's usage errors also exit 2, in one line
+        sys.stderr.write(f"theoria: error: {message}\n")
+        raise SystemExit(2)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="theoria", description="A browser laboratory of Euler's rotational celestial mechanics.")
+    sub = p.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
+
+    s = sub.add_parser("serve", help="the web app")
+    s.add_argument("--port", type=int, default=8080)
+    s.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1; 0.0.0.0 for a classroom)")
+    s.add_argument("--scenario", default=None)
+    s.set_defaults(fn=cmd_serve)
+
+    s = sub.add_parser("list", help="scenarios, one line each")
+    s.add_argument("--json", action="store_true")
+    s.set_defaults(fn=cmd_list)
+
+    for name, fn, hlp in (("run", cmd_run, "headless run; prints metrics"),
+                          ("record", cmd_record, "a rerun recording of the run"),
+                          ("export", cmd_export, "a standalone HTML replay")):
+        s = sub.add_parser(name, help=hlp)
+        s.add_argument("name")
+        s.add_argument("--set", action="append", metavar="KEY=VALUE")
+        s.add_argument("--duration", type=float, default=None)
+        if name == "run":
+            s.add_argument("--json", action="store_true")
+        else:
+            s.add_argument("--out", required=True)
+        s.set_defaults(fn=fn)
+
+    s = sub.add_parser("check", help="every result of Euler's: Euler / simulated / modern")
+    s.add_argument("ids", nargs="*")
+    s.add_argument("--json", action="store_true")
+    s.set_defaults(fn=cmd_check)
+
+    s = sub.add_parser("bench", help="benchmarks as ratios against a baseline in the same run")
+    s.add_argument("names", nargs="*")
+    s.add_argument("--json", action="store_true")
+    s.set_defaults(fn=cmd_bench)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.fn(args)
+    except ParameterError as e:
+        sys.stderr.write(f"theoria: error: {e}\n")
+        return 2
+    except KeyboardInterrupt:
+        sys.stderr.write("theoria: interrupted\n")
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,2 @@
+"""Every module that registers check rows. Add new modules here."""
+from . import free_body  # noqa: F401

@@ -1,0 +1,101 @@
+"""The command line and parameter validation: bad input exits 2 with one clear line."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from physics.inertia import validate_moments
+from physics.params import Param, ParameterError
+
+
+def run_cli(*args):
+    p = subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, timeout=300)
+    return p.returncode, p.stdout, p.stderr
+
+
+@pytest.mark.parametrize("moments,needle", [((-1, 2, 3), "> 0"), ((0, 2, 3), "> 0"), ((1, 2, 5), "A+B >= C"),
+                                            ((1, np.nan, 3), "finite"), ((10, 2, 3), "B+C >= A")])
+def test_impossible_moments_rejected(moments, needle):
+    with pytest.raises(ParameterError) as e:
+        validate_moments(moments)
+    assert needle in str(e.value) and "inertia" in str(e.value)
+
+
+def test_flat_disc_is_a_real_body():
+    validate_moments((1, 1, 2))
+
+
+def test_param_parse_errors():
+    p = Param("step", 0.01, 0.0, 10.0, "s", exclusive_min=True)
+    for bad in ["nan", "inf", "abc", "0", "-1", "11"]:
+        with pytest.raises(ParameterError) as e:
+            p.parse(bad)
+        msg = str(e.value)
+        assert msg.startswith("step=") and "(0, 10] s" in msg and "\n" not in msg
+    v = Param("omega0", (1, 2, 3), -50, 50, "rad/s", kind="vec3")
+    assert v.parse("1,2,3") == (1.0, 2.0, 3.0)
+    for bad in ["1,2", "1,2,x", "1,2,99"]:
+        with pytest.raises(ParameterError):
+            v.parse(bad)
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["run", "free-tumble", "--set", "inertia=1,2,5"], "inertia=1,2,5"),
+    (["run", "free-tumble", "--set", "inertia=-1,2,3"], "inertia="),
+    (["run", "free-tumble", "--set", "omega0=0,0,0"], "omega0=0,0,0"),
+    (["run", "free-tumble", "--set", "step=nan"], "step=nan"),
+    (["run", "free-tumble", "--set", "nosuchkey=1"], "nosuchkey=1"),
+    (["run", "free-tumble", "--set", "duration=-5"], "duration=-5"),
+    (["run", "free-tumble", "--set", "inertia"], "key=value"),
+    (["run", "no-such-scenario"], "scenario=no-such-scenario"),
+    (["run", "middle-axis-flip", "--set", "inertia=1,1,2"], "three different moments"),
+    (["run", "initial-axis", "--set", "torque=0,0,0"], "torque=0,0,0"),
+])
+def test_bad_set_exits_2_with_one_line(args, needle, capsys):
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and needle in err, err
+
+
+def test_run_json_shape():
+    code, out, err = run_cli("run", "middle-axis-flip", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["scenario"] == "middle-axis-flip"
+    assert d["params"]["spin"] == {"value": 6.0, "unit": "rad/s"}
+    for k in ("energy_rel_drift", "momentum_rel_drift", "flip_interval", "flip_interval_exact"):
+        assert k in d["metrics"]
+    assert abs(d["metrics"]["flip_interval"] / d["metrics"]["flip_interval_exact"] - 1) < 1e-9
+    fs = d["final_state"]
+    assert len(fs["quaternion_wxyz"]) == 4 and len(fs["omega_body"]) == 3
+    assert abs(np.linalg.norm(fs["quaternion_wxyz"]) - 1) < 1e-12
+
+
+def test_run_duration_flag_and_final_state_matches_exact():
+    from physics.torque_free_exact import exact_free_motion
+    code, out, err = run_cli("run", "free-tumble", "--duration", "7.5", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    w, q = exact_free_motion((2, 3, 4), (1.0, 0.5, 1.5), [7.5])
+    assert np.allclose(d["final_state"]["omega_body"], w[0], atol=1e-11)
+    from physics.quaternion import angle_between
+    assert angle_between(np.array(d["final_state"]["quaternion_wxyz"]), q[0]) < 1e-10  # q and −q: one attitude
+
+
+def test_list_json_has_every_scenario():
+    code, out, _ = run_cli("list", "--json")
+    names = {s["name"] for s in json.loads(out)["scenarios"]}
+    assert {"free-tumble", "middle-axis-flip", "initial-axis"} <= names
+
+
+def test_check_json_rows_e1_to_e4():
+    code, out, err = run_cli("check", "E1", "E2", "E3", "E4", "--json")
+    rows = json.loads(out)["results"]
+    assert [r["id"] for r in rows] == ["E1", "E2", "E3", "E4"]
+    for r in rows:
+        assert set(r) >= {"id", "title", "section", "euler", "simulated", "modern", "rel_error", "pass"}
+        assert r["pass"], r
+    assert code == 0
