@@ -84,8 +84,8 @@ def shape_semi_axes(inertia, exaggerate: float = 1.0) -> np.ndarray:
     ax = ax / ax.max()
     mean = ax.mean()
     ax = mean + exaggerate * (ax - mean)
-    ax = np.clip(ax, 0.08 * mean, None)
-    return ax / ax.max()
+    ax = ax / ax.max()
+    return np.clip(ax, 0.12, None)  # a flat body (A + B = C) keeps a visible thickness
 
 
 def banded_ellipsoid(semi_axes, base=(200, 190, 170)) -> trimesh.Trimesh:
