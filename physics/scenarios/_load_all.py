@@ -1,3 +1,4 @@
 """Imports every scenario module so that the registry is complete. Add new modules here."""
 from . import free_body  # noqa: F401
 from . import three_body  # noqa: F401
+from . import precession  # noqa: F401
