@@ -139,3 +139,129 @@ register(Scenario(
                    r" Case II: $p\propto\cos^2\varphi$, $t=n^3a^2(\varphi+\sin\varphi\cos\varphi)$"),
     kind="orbit",
 ))
+
+
+# --- syzygy (1766) -------------------------------------------------------------------------
+
+def _syzygy(values, progress=None):
+    from ..three_body import syzygy as sz
+
+    m, n = values["mass_ratio"], values["moon_revolutions_per_year"]
+    side, A = values["side"], math.radians(values["amplitude_deg"])
+    if side == "conjunction":
+        alpha = sz.equilibrium_conjunction(m)
+        series_e, series_c = sz.euler_series_conjunction(m), sz.series_conjunction(m)
+    else:
+        alpha = sz.equilibrium_opposition(m)
+        series_e, series_c = sz.euler_series_opposition(m), sz.series_opposition(m)
+    scale = sz.lunar_units_per_sun_distance(m, n)  # a/c: lunar distances per Sun distance
+    modes = sz.linear_modes(m, side)
+    # the displayed run: Euler's start (or the exact linear mode) + optional seed of the escape
+    s0 = sz.initial_state(m, A, side, values["start"], values["escape_seed"])
+    t, S, _ = sz.integrate(m, s0, 2 * math.pi * values["duration_yr"], n_samples=4000)
+    eta, v = sz.eta_and_distance(S, side)
+    left = t[-1] < 2 * math.pi * values["duration_yr"] * (1 - 1e-9)
+    # a clean measurement: the exact linear mode at a tiny amplitude plus a tinier seed of the
+    # escape; fit η = a cos ωt + b sin ωt + c e^{λt} + d e^{−λt} in the linear regime
+    A_meas = 1e-6
+    tm, Sm, _ = sz.integrate(m, sz.initial_state(m, A_meas, side, "linear-mode", 1e-9), 2 * math.pi * 2.0,
+                             n_samples=8000)
+    etam, _ = sz.eta_and_distance(Sm, side)
+    w_meas, lam_meas, fit_res = sz.fit_swing_and_escape(tm, etam, A_meas)
+    w_run, n_half_run = sz.measured_frequency(t, eta, 1.5 * A)
+    # amplitude relation of §16 on the displayed run's first swing
+    first = t <= (2 * math.pi / sz.HILL_FREQUENCY)
+    ratio = float((v[first].max() - v[first].min()) / (2 * alpha * max(np.abs(eta[first]).max(), 1e-300)))
+    Vo = modes["osc_vector"]
+    ratio_linear = float(abs(Vo[0]) / abs(Vo[1]))
+    b_lunar = alpha * scale
+    eta_e, v_e = sz.euler_oscillation(alpha, A, t, side)
+    metrics = {
+        "syzygy_distance_lunar_units": b_lunar,
+        "syzygy_distance_lunar_units_euler": (EULER_N2 / 3.0) ** (1.0 / 3.0),
+        "alpha_sun_distance": alpha,
+        "oscillation_frequency": w_meas,
+        "oscillation_frequency_euler": sz.HILL_FREQUENCY,
+        "oscillation_frequency_linear": modes["frequency"],
+        "oscillation_frequency_run": w_run,
+        "escape_exponent": lam_meas,
+        "escape_exponent_linear": modes["escape_exponent"],
+        "escape_exponent_hill": sz.HILL_ESCAPE_EXPONENT,
+        "amplitude_ratio": ratio,
+        "amplitude_ratio_euler": sz.AMPLITUDE_COEFFICIENT,
+        "amplitude_ratio_linear": ratio_linear,
+        "fit_rms_residual_rel": fit_res,
+        "escape_time_yr": float(t[-1] / (2 * math.pi)) if left else float("nan"),
+        "swings_before_escape": float(n_half_run) / 2.0,
+    }
+    comps = [
+        Comparison("syzygy distance (lunar distances)", (EULER_N2 / 3.0) ** (1.0 / 3.0), b_lunar, None, "c",
+                   "Euler: v ≈ c·(n²/3)^{1/3} with n² = 175, 'about four'; simulated: root of §7/§9 with today's n, m"),
+        Comparison("α = v/a: Euler's 4-term series vs root", series_e, alpha, series_c, "",
+                   "modern column: the series with the 4th coefficient corrected (4/243, not 1/81)"),
+        Comparison("oscillation frequency (Sun's mean motion = 1)", sz.HILL_FREQUENCY, w_meas, modes["frequency"], "",
+                   "Euler/Hill √(√28 − 1); simulated from zero crossings of η; modern: linearised full problem"),
+        Comparison("v = b(1 − k·A cos ω): k", sz.AMPLITUDE_COEFFICIENT, ratio, ratio_linear, "",
+                   "half the swing of v/b over the η amplitude on the first swing; modern: centre eigenvector"),
+        Comparison("escape exponent (real root Euler missed)", None, lam_meas, modes["escape_exponent"], "",
+                   f"Hill limit √(√28 + 1) = {sz.HILL_ESCAPE_EXPONENT:.4f}; e-folding every "
+                   f"{1 / lam_meas / (2 * math.pi) * 365.25:.1f} days"),
+    ]
+    notes = [
+        "Euler linearised about syzygy and assumed an oscillation; the same characteristic equation "
+        "λ⁴ − 2λ² − 27 = 0 has the real root λ² = 1 + √28: the Moon leaves after a few swings.",
+        "§7's substitution '2 − α = x' should read x = 1 − α; §9 prints (1−α)³ for (1+α)³; the 4th term of "
+        "the series (§8, §9) should be 4mε/243, not mε/81.",
+        "Sun drawn at 3 syzygy distances along its true direction (true distance "
+        f"{scale:.0f} lunar distances).",
+    ]
+    # bodies: Earth-centred inertial frame, lunar distances (the Sun turns at rate 1)
+    sgn = 1.0 if side == "conjunction" else -1.0
+    c, s = np.cos(t), np.sin(t)
+    xr, yr = S[:, 0] * scale, S[:, 1] * scale
+    moon = np.stack([c * xr - s * yr, s * xr + c * yr, np.zeros_like(t)], axis=1)
+    sun = 3.0 * b_lunar * np.stack([c, s, np.zeros_like(t)], axis=1)
+    traj = orbit_trajectory(t / (2 * math.pi), {"sun": sun, "earth": np.zeros_like(moon), "moon": moon}, "yr",
+                            series={"moon_corotating_x": xr, "moon_corotating_y": yr,
+                                    "eta_deg": np.degrees(eta), "distance_over_b": v / alpha})
+    return Result("syzygy", values, traj, metrics, comps, notes, plot_series={
+        "η simulated (deg)": np.degrees(eta), "η Euler A sin αζ (deg)": np.degrees(eta_e),
+        "v/b simulated": v / alpha, "v/b Euler 1 − 0.3117 A cos αζ": v_e / alpha})
+
+
+EULER_N2 = 175.0
+
+
+def _syzygy_params():
+    from ..three_body import syzygy as sz
+
+    return (
+        Param("side", "conjunction", kind="choice", choices=("conjunction", "opposition"),
+              help="Moon between Earth and Sun (§7) or beyond the Earth (§9)"),
+        Param("amplitude_deg", 0.05, 0.0, 20.0, "deg", "A: amplitude of η, the Moon's angle from the Sun line"),
+        Param("start", "linear-mode", kind="choice", choices=("euler", "linear-mode"),
+              help="Euler's first-order solution at ω = 0, or the exact linear centre mode"),
+        Param("escape_seed", 0.0, 0.0, 0.1, "b", "extra displacement along the unstable direction"),
+        Param("duration_yr", 3.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)"),
+        Param("mass_ratio", sz.EARTH_SUN_MASS_RATIO, 1e-9, 1e-2, "1",
+              "m = n²c³/a³ = M_earth/M_sun (IAU 2009: 3.0035e-6)"),
+        Param("moon_revolutions_per_year", sz.MOON_REVOLUTIONS_PER_YEAR, 1.0, 100.0, "1/yr",
+              "n: sidereal months per sidereal year (13.369; Euler: √175 = 13.23); sets the lunar unit"),
+    )
+
+
+register(Scenario(
+    name="syzygy",
+    title="The Moon kept in syzygy with the Sun",
+    section="Euler 1766, §5–§16",
+    group=GROUP,
+    summary=("Four times farther out, the Moon could stay in line with the Sun (today's Sun–Earth L1/L2). "
+             "Euler found its swing about that line, frequency √(√28 − 1) ≈ 2.07 times the Sun's motion "
+             "(Hill's, a century early). The same equation has a real root: watch the Moon leave after a few swings."),
+    params=_syzygy_params(),
+    simulate_fn=_syzygy,
+    euler_formula=(r"$m(1-\alpha)^2=\alpha^2-\alpha^2(1-\alpha)^3$ (§7); "
+                   r"$\eta=A\sin\omega,\ v=b(1-0.3117A\cos\omega)$, $\omega=\alpha\zeta$, "
+                   r"$\alpha^4+2\alpha^2=27$ (§16)"),
+    kind="orbit",
+))

@@ -1,0 +1,252 @@
+"""Euler 1766, *Considerationes de motu corporum coelestium* (seed 003, §5–§16).
+
+The Moon kept in perpetual conjunction (or opposition) with the Sun. Units: the Sun's mean
+distance a = 1 and mean motion 1 (time unit = 1/2π year), Earth at rest at the origin, the Sun
+on a circle (Euler: u = a, θ = ζ, §11). The Moon is massless; the Earth's attraction is
+m = n²c³/a³ (§7), which by Kepler's third law is the Earth/Sun mass ratio.
+
+In the frame turning with the Sun (Sun fixed at (1, 0)) Euler's equations of §5 read
+
+    ẍ − 2ẏ − x = −m x/r³ + (1 − x)/ρ³ − 1,   ÿ + 2ẋ − y = −m y/r³ − y/ρ³,
+
+r = |(x, y)|, ρ = |(1 − x, −y)|; the "−1" is the Sun's pull on the Earth (the indirect term).
+
+Results and the text's errors:
+- §7: conjunction at v = αa with m(1−α)² = α² − α²(1−α)³ (re-derived, correct). The
+  substitution printed as "2 − α = x, mx² = (1−x³)(1−x)²" must be x = 1 − α.
+- §8: Euler's series α = ε − ⅓ε² − m/27 + mε/81, ε = (m/3)^{1/3}. The first three terms are
+  right (m/27 = ε³/9); the fourth is not: expanding the equation gives
+  α = ε − ε²/3 − ε³/9 + 4ε⁴/81 + 16ε⁵/243 …, i.e. the last term must be 4mε/243, not
+  mε/81 = 3mε/243 (`series_conjunction` has the corrected coefficients; tests check both
+  against the root: the printed 4-term series errs by ≈ ε⁴/81).
+- §9: opposition: m(1+α)² = α²(1+α)³ − α² (the text prints (1−α)³, a typo; its own remark
+  "take m and α negative" gives (1+α)³); series α = ε + ε²/3 − ε³/9 − 4ε⁴/81 (the text's
+  "m³" in the last term is m, and its coefficient 1/81 is again 4/243).
+- §12–16: Hill's approximation (u ≫ v) linearised about v = b, η = 0 gives
+  η̈ + 2ẋ + 3η = 0, ẍ − 9x − 2η̇ = 0 (x = v/b − 1, m = 3 at equilibrium), whose characteristic
+  equation is λ⁴ − 2λ² − 27 = 0. Euler takes λ = iα: α⁴ + 2α² = 27, α² = √28 − 1,
+  α = 2.071594 and v = b(1 − 0.311717 A cos ω). The other pair, λ² = 1 + √28, is real:
+  λ = ±2.5083 — the equilibrium is unstable and the Moon leaves after a few swings. Euler,
+  having assumed an oscillation, did not see it.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+# Euler's numbers (1766 §8, §16)
+EULER_N_SQUARED = 175.0  # "n² = 175": (lunar revolutions per year)²
+HILL_FREQUENCY = math.sqrt(math.sqrt(28.0) - 1.0)  # α of §16, 2.0715939...
+HILL_ESCAPE_EXPONENT = math.sqrt(math.sqrt(28.0) + 1.0)  # the real root Euler missed, 2.5083...
+AMPLITUDE_COEFFICIENT = (HILL_FREQUENCY**2 - 3.0) / (2.0 * HILL_FREQUENCY)  # 0.311717 (§16)
+
+# Earth/Sun mass ratio GM_earth/GM_sun = 398600.4418 / 1.32712440018e11 (IAU 2009 / IERS 2010)
+EARTH_SUN_MASS_RATIO = 398600.4418 / 1.32712440018e11
+# sidereal year 365.256363 d / sidereal month 27.321662 d (Astronomical Almanac)
+MOON_REVOLUTIONS_PER_YEAR = 365.256363 / 27.321662
+
+
+def equilibrium_conjunction(m: float) -> float:
+    """α = v/a for the Moon between Earth and Sun: root in (0, 1) of
+    m(1−α)² = α² − α²(1−α)³ (1766 §7)."""
+    f = lambda a: m * (1 - a) ** 2 - a * a + a * a * (1 - a) ** 3  # noqa: E731
+    return float(brentq(f, 1e-12, 1 - 1e-12, xtol=1e-16, rtol=1e-15))
+
+
+def equilibrium_opposition(m: float) -> float:
+    """α = v/a for the Moon beyond the Earth: root of m(1+α)² = α²(1+α)³ − α² (1766 §9,
+    corrected: the text prints (1−α)³)."""
+    f = lambda a: m * (1 + a) ** 2 - a * a * (1 + a) ** 3 + a * a  # noqa: E731
+    return float(brentq(f, 1e-12, 2.0, xtol=1e-16, rtol=1e-15))
+
+
+def euler_series_conjunction(m: float, terms: int = 4) -> float:
+    """Euler's series (1766 §8): α = (m/3)^{1/3} − ⅓(m²/9)^{1/3} − m/27 + m(m/3)^{1/3}/81."""
+    e = (m / 3.0) ** (1.0 / 3.0)
+    parts = [e, -(m * m / 9.0) ** (1.0 / 3.0) / 3.0, -m / 27.0, m * e / 81.0]
+    return float(sum(parts[:terms]))
+
+
+def euler_series_opposition(m: float, terms: int = 4) -> float:
+    """Euler's series (1766 §9): α = (m/3)^{1/3} + ⅓(m²/9)^{1/3} − m/27 − m(m/3)^{1/3}/81
+    (the text's "m³" in the last term read as m)."""
+    e = (m / 3.0) ** (1.0 / 3.0)
+    parts = [e, (m * m / 9.0) ** (1.0 / 3.0) / 3.0, -m / 27.0, -m * e / 81.0]
+    return float(sum(parts[:terms]))
+
+
+def series_conjunction(m: float) -> float:
+    """The series of §8 with the fourth coefficient corrected: ε − ε²/3 − ε³/9 + 4ε⁴/81 + 16ε⁵/243."""
+    e = (m / 3.0) ** (1.0 / 3.0)
+    return e - e**2 / 3 - e**3 / 9 + 4 * e**4 / 81 + 16 * e**5 / 243
+
+
+def series_opposition(m: float) -> float:
+    """The series of §9 (α → −α, m → −m in §8), corrected: ε + ε²/3 − ε³/9 − 4ε⁴/81 + 16ε⁵/243."""
+    e = (m / 3.0) ** (1.0 / 3.0)
+    return e + e**2 / 3 - e**3 / 9 - 4 * e**4 / 81 + 16 * e**5 / 243
+
+
+def lunar_units_per_sun_distance(m: float, n: float) -> float:
+    """a/c from m = n²c³/a³ (1766 §7): a/c = (n²/m)^{1/3}."""
+    return (n * n / m) ** (1.0 / 3.0)
+
+
+def rhs_rotating(t, s, m):
+    """Euler's planar Sun–Earth–Moon equations in the frame turning with the Sun (see module)."""
+    x, y, vx, vy = s
+    r3 = (x * x + y * y) ** 1.5
+    dx = 1.0 - x
+    rho3 = (dx * dx + y * y) ** 1.5
+    ax = 2 * vy + x - m * x / r3 + dx / rho3 - 1.0
+    ay = -2 * vx + y - m * y / r3 - y / rho3
+    return np.array([vx, vy, ax, ay])
+
+
+def jacobian(m: float, x0: float, h: float | None = None) -> np.ndarray:
+    """Jacobian of `rhs_rotating` at the equilibrium (x0, 0, 0, 0), central differences."""
+    h = h or 1e-6 * abs(x0)
+    s0 = np.array([x0, 0.0, 0.0, 0.0])
+    J = np.empty((4, 4))
+    for k in range(4):
+        d = np.zeros(4)
+        d[k] = h
+        J[:, k] = (rhs_rotating(0, s0 + d, m) - rhs_rotating(0, s0 - d, m)) / (2 * h)
+    return J
+
+
+def linear_modes(m: float, side: str = "conjunction") -> dict:
+    """Eigen-analysis of the linearised (full, not Hill-approximated) problem at the syzygy
+    point: oscillation frequency, real (escape) exponent, and the eigenvectors."""
+    a = equilibrium_conjunction(m) if side == "conjunction" else -equilibrium_opposition(m)
+    J = jacobian(m, a)
+    w, V = np.linalg.eig(J)
+    k_osc = int(np.argmax(np.where(np.abs(w.real) < 1e-6 * np.abs(w), w.imag, -np.inf)))
+    k_esc = int(np.argmax(w.real))
+    return {"x0": a, "frequency": float(w[k_osc].imag), "escape_exponent": float(w[k_esc].real),
+            "osc_vector": V[:, k_osc], "escape_vector": np.real(V[:, k_esc]), "eigenvalues": w}
+
+
+def hill_frequencies() -> tuple[float, float]:
+    """Roots of Euler's characteristic equation λ⁴ − 2λ² − 27 = 0 (1766 §16, Hill's limit):
+    (oscillation frequency √(√28−1), escape exponent √(√28+1))."""
+    return HILL_FREQUENCY, HILL_ESCAPE_EXPONENT
+
+
+def euler_oscillation(b: float, amplitude: float, t, side: str = "conjunction"):
+    """Euler's first-order solution (1766 §16): η = A sin αt, v = b(1 − 0.311717·A cos αt)."""
+    t = np.asarray(t, float)
+    w = HILL_FREQUENCY
+    return amplitude * np.sin(w * t), b * (1.0 + AMPLITUDE_COEFFICIENT * -amplitude * np.cos(w * t))
+
+
+def initial_state(m: float, amplitude: float, side: str = "conjunction", start: str = "euler",
+                  escape_seed: float = 0.0) -> np.ndarray:
+    """Rotating-frame state (x, y, ẋ, ẏ) at ω = 0 of Euler's oscillation: η = 0, η̇ = αA,
+    v = b(1 − 0.3117 A) ("euler"), or on the exact linear centre mode with the same η̇
+    ("linear-mode"); plus `escape_seed`·b along the unstable eigenvector."""
+    modes = linear_modes(m, side)
+    x0 = modes["x0"]
+    b = abs(x0)
+    sgn = 1.0 if side == "conjunction" else -1.0
+    if start == "euler":
+        v = b * (1.0 - AMPLITUDE_COEFFICIENT * amplitude)
+        etadot = HILL_FREQUENCY * amplitude
+        # η measured from the Sun line (conjunction) or from its prolongation (opposition)
+        s = np.array([sgn * v, 0.0, 0.0, sgn * v * etadot])
+    else:
+        # the centre mode: real part of c·V e^{iωt}; choose the phase where y = 0, ẏ = v·η̇ > 0
+        V = modes["osc_vector"]
+        c = 1.0 / V[1] if abs(V[1]) > 0 else 1.0
+        Vr = c * V  # y component = 1 (real) → at t = π/(2ω) later y = 0 ...
+        # state at the phase where y = 0: take Im part (quarter period) scaled to η̇ = ωA
+        s_mode = np.imag(Vr)  # y = 0 here
+        scale = sgn * b * modes["frequency"] * amplitude / s_mode[3] if s_mode[3] != 0 else 0.0
+        s = np.array([x0, 0.0, 0.0, 0.0]) + scale * s_mode
+        s[3] = abs(s[3]) * sgn
+    if escape_seed:
+        e = modes["escape_vector"]
+        s = s + escape_seed * b * e / np.linalg.norm(e[:2])
+    return s
+
+
+def integrate(m: float, s0, t_end: float, n_samples: int = 2000, rtol: float = 1e-12, atol: float = 1e-15,
+              leave_factor: float = 3.0):
+    """Integrate the rotating-frame equations (DOP853) until t_end or until the Moon leaves
+    (distance outside [b/leave_factor, b·leave_factor] or |η| > 90°). Returns t, states (N,4)."""
+    b = math.hypot(s0[0], s0[1])
+    sgn = np.sign(s0[0])
+
+    def leave(t, s, *_):
+        r = math.hypot(s[0], s[1])
+        eta = math.atan2(sgn * s[1], sgn * s[0])
+        return min(r / b - 1.0 / leave_factor, leave_factor - r / b, math.pi / 2 - abs(eta))
+
+    leave.terminal = True
+    t_eval = np.linspace(0.0, t_end, n_samples)
+    sol = solve_ivp(rhs_rotating, (0.0, t_end), np.asarray(s0, float), method="DOP853", t_eval=t_eval,
+                    args=(m,), rtol=rtol, atol=atol, events=leave, dense_output=True)
+    return sol.t, sol.y.T, sol
+
+
+def eta_and_distance(states: np.ndarray, side: str = "conjunction"):
+    """Euler's variables: η (angle of the Moon from the Sun line, from its prolongation for
+    opposition) and v (distance from the Earth)."""
+    x, y = states[:, 0], states[:, 1]
+    if side != "conjunction":
+        x, y = -x, -y
+    return np.arctan2(y, x), np.hypot(x, y)
+
+
+def measured_frequency(t, eta, max_eta: float) -> tuple[float, int]:
+    """Frequency from the zero crossings of η while |η| ≤ max_eta (before the escape):
+    ω = π·(number of half periods)/(time between first and last crossing)."""
+    ok = np.abs(eta) <= max_eta
+    stop = np.argmin(ok) if not np.all(ok) else len(eta)
+    t, eta = t[:stop], eta[:stop]
+    s = np.sign(eta)
+    idx = np.nonzero(s[:-1] * s[1:] < 0)[0]
+    tc = t[idx] - eta[idx] * (t[idx + 1] - t[idx]) / (eta[idx + 1] - eta[idx])
+    if len(tc) < 2:
+        return float("nan"), 0
+    return float(math.pi * (len(tc) - 1) / (tc[-1] - tc[0])), len(tc) - 1
+
+
+def measured_escape_exponent(m: float, side: str = "conjunction", seed: float = 1e-9,
+                             lo: float = 1e-7, hi: float = 1e-3) -> float:
+    """The real exponent measured on the nonlinear equations: start `seed`·b along the unstable
+    eigenvector, fit log(|r − r_eq|/b) against t while it grows from `lo` to `hi`."""
+    modes = linear_modes(m, side)
+    x0 = modes["x0"]
+    b = abs(x0)
+    e = modes["escape_vector"]
+    s0 = np.array([x0, 0.0, 0.0, 0.0]) + seed * b * e / np.linalg.norm(e[:2])
+    t_end = 1.5 * math.log(hi / seed) / max(modes["escape_exponent"], 1e-3)
+    t = np.linspace(0.0, t_end, 3000)
+    sol = solve_ivp(rhs_rotating, (0.0, t_end), s0, method="DOP853", t_eval=t, args=(m,), rtol=1e-12, atol=1e-16)
+    d = np.hypot(sol.y[0] - x0, sol.y[1]) / b
+    ok = (d > lo) & (d < hi)
+    return float(np.polyfit(sol.t[ok], np.log(d[ok]), 1)[0])
+
+
+def fit_swing_and_escape(t, eta, amplitude: float, window: float = 20.0):
+    """Measure the frequency ω and the real exponent λ on a run: least-squares fit of
+    η(t) = a cos ωt + b sin ωt + c e^{λt} + d e^{−λt} while |η| ≤ window·amplitude (the linear
+    regime). Starting guesses are Hill's values; returns (ω, λ, rms residual / amplitude)."""
+    from scipy.optimize import least_squares
+
+    ok = np.abs(eta) <= window * amplitude
+    stop = int(np.argmin(ok)) if not np.all(ok) else len(eta)
+    t, eta = t[:stop], eta[:stop]
+
+    def model(p):
+        w, lam, a, b, c, d = p
+        return a * np.cos(w * t) + b * np.sin(w * t) + c * np.exp(lam * t) + d * np.exp(-lam * t)
+
+    p0 = [HILL_FREQUENCY, HILL_ESCAPE_EXPONENT, 0.0, amplitude, amplitude * 1e-3, 0.0]
+    sol = least_squares(lambda p: (model(p) - eta) / amplitude, p0, xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    res = float(np.sqrt(np.mean(sol.fun**2)))
+    return float(sol.x[0]), float(abs(sol.x[1])), res
