@@ -1,2 +1,3 @@
 """Every module that registers benchmarks. Add new modules here."""
 from . import bench_free_body  # noqa: F401
+from . import bench_libration  # noqa: F401

@@ -1,0 +1,109 @@
+"""Spin–orbit chaos: Hyperion (Wisdom, Peale & Mignard 1984, Icarus 58, 137).
+
+Beyond Euler: his Problem 94 equation (§833) without the small-ζ and small-e approximations,
+    θ̈ = −(ω₀²/2)(a/r)³ sin 2(θ − f),   ω₀² = 3(B − A)/C,  time in 1/n,
+(θ the angle of the long axis, f the true anomaly; ζ = f − θ). Hyperion: e = 0.1, ω₀ ≈ 0.89
+(WPM 1984). The surface of section plots θ mod π against θ̇/n at every periapse passage.
+Resonance half-widths (Goldreich & Peale 1966) ω₀√|H(p,e)|: the 1:1 and 3:2 zones overlap for
+Hyperion, hence the large chaotic sea.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import libration as lib
+from .. import quaternion as quat
+from ..integrator import PointMass, integrate
+from ..orbits import KeplerOrbit
+from ..trajectory import Trajectory
+from ..params import Param
+from .base import Comparison, Result, Scenario, register
+from .libration import planar_moments, zeta_of
+
+RESONANCES = (0.5, 1.0, 1.5, 2.0, 2.5)
+
+
+def ensemble_starts(n_starts, max_rate=3.0):
+    """Starts at periapse: half at θ = 0, half at θ = π/2, θ̇/n evenly in (0, max_rate]."""
+    k = max(1, n_starts // 2)
+    w = np.linspace(max_rate / k, max_rate, k)
+    th = np.concatenate([np.zeros(k), np.full(n_starts - k, 0.5 * np.pi)])
+    wd = np.concatenate([w, np.linspace(max_rate / (n_starts - k), max_rate, n_starts - k)])
+    return th, wd
+
+
+def _hyperion(values, progress=None):
+    e, w0 = values["eccentricity"], values["omega0"]
+    ns, no = values["n_starts"], values["n_orbits"]
+    th0, wd0 = ensemble_starts(ns)
+    T, W, lyap = lib.spin_orbit_section(th0, wd0, e, w0, no, steps_per_orbit=values["steps_per_orbit"], lyapunov=True)
+    # the probe start, as a full rigid body (the integrator of physics.integrator)
+    gamma = w0**2 / 3.0
+    I = planar_moments(gamma)
+    orbit = KeplerOrbit(a=1.0, e=e, n=1.0)
+    P = 2 * np.pi
+    S = ns * no
+    probe_orbits = values["probe_orbits"]
+    n_steps = S * max(1, int(np.ceil(64 * probe_orbits / S)))
+    t, L, q = integrate(I, [0, 0, values["probe_rate"]], probe_orbits * P, probe_orbits * P / n_steps,
+                        q0=quat.from_axis_angle([0, 0, 1], values["probe_theta_deg"] * np.pi / 180),
+                        masses=[PointMass(1.0, orbit.position)], scheme="yoshida4",
+                        stride=n_steps // S, progress=progress)
+    pos = orbit.position(t)
+    traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
+    zeta = zeta_of(q, pos)
+    _, _, lp = lib.spin_orbit_section([values["probe_theta_deg"] * np.pi / 180], [values["probe_rate"]], e, w0,
+                                      max(no, 100), values["steps_per_orbit"], lyapunov=True)
+    m = {
+        "lyapunov_probe_per_unit_time": float(lp[0]),
+        "lyapunov_probe_per_orbit": float(lp[0] * P),
+        "chaotic_fraction": float(np.mean(lyap * P > 0.05)),
+        "lyapunov_max_per_orbit": float(np.max(lyap) * P),
+    }
+    for p in RESONANCES:
+        m[f"gp_half_width_{p:g}"] = float(lib.resonance_half_width(p, e, w0))
+    m["overlap_1_and_1.5"] = float((m["gp_half_width_1"] + m["gp_half_width_1.5"]) / 0.5)
+    # Euler's §833 first-order forced libration ζ = 2e/(1 − ω₀²)·sin M (fails here: ω₀ ~ 1, e = 0.1)
+    z_euler = 2 * e / (1 - w0**2) * np.sin(t) if abs(1 - w0**2) > 1e-9 else np.full_like(t, np.nan)
+    nan = np.array([np.nan])
+    sec_th = np.concatenate([np.remainder(T, np.pi).ravel(), nan])
+    sec_w = np.concatenate([W.ravel(), nan])
+    series = {"zeta_rad": zeta, "zeta_euler_rad": z_euler,
+              "section_theta_mod_pi": sec_th, "section_theta_dot": sec_w,
+              "section_start_index": np.concatenate([np.repeat(np.arange(ns, dtype=float), no), nan]),
+              "section_lyapunov_per_orbit": np.concatenate([np.repeat(lyap * P, no), nan])}
+    traj.series.update({"zeta_rad": zeta})
+    comps = [Comparison(f"resonance θ̇/n = {p:g}: half-width ω₀√|H(p,e)|", None, None,
+                        m[f"gp_half_width_{p:g}"], "n", "Goldreich & Peale 1966") for p in RESONANCES]
+    comps.append(Comparison("Lyapunov exponent of the probe start", None, m["lyapunov_probe_per_orbit"], None,
+                            "1/orbit", "WPM 1984 found Lyapunov times of a few orbits in the chaotic zone"))
+    notes = ["section_* series are a point cloud (n_starts × n_orbits points at periapse, then one NaN), "
+             "not a time series: plot section_theta_dot against section_theta_mod_pi, coloured by "
+             "section_lyapunov_per_orbit. Draw the resonance zones θ̇/n = p ± gp_half_width_p.",
+             "Euler's linear forced libration (§833) is drawn as zeta_euler_rad: for Hyperion it fails "
+             "completely (ω₀ ≈ 1 is near his resonance A² = 2N, and ζ is not small)."]
+    return Result("hyperion", values, traj, m, comps, notes, plot_series=series)
+
+
+register(Scenario(
+    name="hyperion",
+    title="Hyperion: chaotic tumbling (spin–orbit surface of section)",
+    section="§833 (beyond Euler)",
+    group="ch. 16",
+    summary=("Euler's libration equation without his approximations, for an elongated moon on an "
+             "eccentric orbit. Each start is marked at every periapse passage: smooth curves and "
+             "islands (the synchronous, 1:2, 3:2, 2:1 resonances) are regular motion, the scattered "
+             "sea is chaos (Wisdom, Peale & Mignard 1984)."),
+    params=(
+        Param("eccentricity", 0.1, 0.0, 0.5, "", "orbital eccentricity (Hyperion 0.1)"),
+        Param("omega0", 0.89, 0.0, 1.5, "", "ω₀ = √(3(B−A)/C) (Hyperion ≈ 0.89, WPM 1984)", exclusive_min=True),
+        Param("n_starts", 60, 2, 400, "", "starts in the ensemble", kind="int"),
+        Param("n_orbits", 300, 10, 3000, "", "periapse passages per start", kind="int"),
+        Param("steps_per_orbit", 48, 16, 2048, "", "integrator steps per orbit (4th-order Blanes–Moan)", kind="int"),
+        Param("probe_theta_deg", 0.0, -90.0, 90.0, "deg", "the drawn body: θ at periapse"),
+        Param("probe_rate", 1.4, -1.0, 4.0, "n", "the drawn body: θ̇/n at periapse"),
+        Param("probe_orbits", 20.0, 1.0, 200.0, "", "orbits drawn"),
+    ),
+    simulate_fn=_hyperion,
+    euler_formula=r"$\ddot\theta = -\frac{\omega_0^2}{2}\left(\frac{a}{r}\right)^3\sin 2(\theta - f)$",
+))
