@@ -1,0 +1,301 @@
+"""Euler's three papers on three bodies (seed 003): each result against an independent reference
+(direct N-body integration with REBOUND or DOP853, the restricted problem's effective potential,
+published values with their source)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from physics.params import ParameterError
+from physics.scenarios.base import get
+from physics.three_body import collinear as col
+from physics.three_body import lunar_elements as le
+from physics.three_body import syzygy as sz
+from physics.three_body.nbody import integrate_dop853, integrate_rebound
+
+
+# --- 1767: collinear -------------------------------------------------------------------------
+
+def test_equal_masses_alpha_is_one():
+    assert col.quintic_root(1, 1, 1) == pytest.approx(1.0, abs=1e-14)
+    assert np.polyval(col.quintic_coefficients(1, 1, 1), 1.0) == 0.0
+
+
+@pytest.mark.parametrize("masses", [(3.0, 1.0, 2.0), (1.0, 1e-3, 5.0), (0.2, 7.0, 0.9)])
+def test_quintic_root_is_a_central_configuration(masses):
+    """Independent of the quintic's coefficients: with q = αp the accelerations from Euler's
+    Eqs. (1)–(3) (re-derived, B + C not B ∓ C) are proportional to the positions about the
+    centre of mass, so the line can turn rigidly; one sign change → one positive root."""
+    A, B, C = masses
+    assert col.sign_changes(col.quintic_coefficients(A, B, C)) == 1
+    roots = np.roots(col.quintic_coefficients(A, B, C))
+    pos_real = [r.real for r in roots if abs(r.imag) < 1e-9 and r.real > 0]
+    assert len(pos_real) == 1
+    a = col.quintic_root(A, B, C)
+    x, y, z = col.positions_on_line(A, B, C, a, 1.0)
+    acc = np.array([B / (y - x) ** 2 + C / (z - x) ** 2,
+                    -A / (y - x) ** 2 + C / (z - y) ** 2,
+                    -A / (z - x) ** 2 - B / (z - y) ** 2])
+    k = acc / np.array([x, y, z])
+    assert np.ptp(k) < 1e-12 * abs(k[0])
+    assert k[0] == pytest.approx(-col.kepler_constant(A, B, C, a), rel=1e-12)  # p̈ = −(D/2)/p²
+
+
+def test_earth_moon_alpha_held_by_rebound():
+    """Earth, Moon and a massless body at each collinear point (the translator's application of
+    Eq. 33) turned rigidly: REBOUND IAS15 keeps the spacing ratio for a quarter turn (the points
+    are unstable, e-folding ≈ 0.4 of a radian of turn, so short runs only)."""
+    mr = col.MOON_EARTH_MASS_RATIO
+    for masses, a in zip([(1.0, 0.0, mr), (1.0, mr, 0.0), (0.0, 1.0, mr)], col.lagrange_alphas(mr)):
+        A, B, C = masses
+        x = col.positions_on_line(A, B, C, a, 1.0)
+        Om = col.rotation_rate(A, B, C, a, 1.0)
+        pos = np.zeros((3, 3))
+        pos[:, 0] = x
+        vel = np.zeros((3, 3))
+        vel[:, 1] = Om * x
+        t = np.linspace(0, 0.5 * math.pi / Om, 20)
+        _, P, _ = integrate_rebound([A, B, C], pos, vel, t)
+        d1 = np.linalg.norm(P[:, 1] - P[:, 0], axis=1)
+        d2 = np.linalg.norm(P[:, 2] - P[:, 1], axis=1)
+        assert np.max(np.abs(d2 / d1 / a - 1)) < 1e-8
+        assert np.max(np.abs(d1 - 1)) < 1e-8
+
+
+def test_lagrange_points_vs_restricted_problem_and_published():
+    L = col.lagrange_distances(col.MOON_EARTH_MASS_RATIO, col.EARTH_MOON_DISTANCE_KM)
+    Lm = col.lagrange_distances_cr3bp(col.MOON_EARTH_MASS_RATIO, col.EARTH_MOON_DISTANCE_KM)
+    assert np.allclose(L, Lm, rtol=1e-12)
+    # Koon, Lo, Marsden & Ross (2011), Earth–Moon μ = 0.01215: x of L1, L2, L3 from the barycentre
+    mu = 0.01215
+    L = col.lagrange_distances(mu / (1 - mu), 1.0)
+    assert L[0] - mu == pytest.approx(0.836915, abs=5e-6)
+    assert L[1] - mu == pytest.approx(1.155682, abs=5e-6)
+    assert -(L[2] + mu) == pytest.approx(-1.005063, abs=5e-6)
+
+
+def test_translator_table_is_slightly_off():
+    tt = col.translator_table_errors()
+    # the table's L1 and L2 miss the root of Eq. (33) by more than its 6-digit α could explain...
+    assert abs(tt["L_error_km"][0]) > 50 and abs(tt["L_error_km"][1]) > 50
+    # ...but by less than 0.1%: a numerical slip, not a different equation
+    assert max(abs(e) / L for e, L in zip(tt["L_error_km"], tt["L_km"])) < 1e-3
+
+
+def test_case_two_collapse_cos_squared_law_rebound():
+    """§11: from rest, p = p0 cos²φ at t = √(p0³/2K)(φ + sinφ cosφ), ratio q/p fixed."""
+    A, B, C = 2.0, 0.5, 1.5
+    a = col.quintic_root(A, B, C)
+    K = col.kepler_constant(A, B, C, a)
+    pos = np.zeros((3, 3))
+    pos[:, 0] = col.positions_on_line(A, B, C, a, 1.0)
+    phi = np.linspace(0, 1.4, 30)
+    t, p = col.homothetic_collapse(K, 1.0, phi)
+    _, P, _ = integrate_rebound([A, B, C], pos, np.zeros((3, 3)), t)
+    d1 = P[:, 1, 0] - P[:, 0, 0]
+    d2 = P[:, 2, 0] - P[:, 1, 0]
+    assert np.max(np.abs(d1 / p - 1)) < 1e-9
+    assert np.max(np.abs(d2 / d1 / a - 1)) < 1e-9
+    assert np.max(np.abs(P[:, :, 1:])) == 0.0  # stays on the line
+
+
+def test_case_one_expansion_dop853():
+    """§10: expansion, p = n²(r² − a²), t = n³[r√(r²−a²) − a² ln((r+√(r²−a²))/a)]."""
+    A, B, C = 1.0, 2.0, 1.0
+    a = col.quintic_root(A, B, C)
+    K = col.kepler_constant(A, B, C, a)
+    E = 0.4
+    x = col.positions_on_line(A, B, C, a, 1.0)
+    r_a0 = math.sqrt(2 * E / (2 * K) + 1)
+    ra = np.linspace(r_a0, 4 * r_a0, 25)
+    ta, p = col.homothetic_expansion(K, E, ra)
+    assert p[0] == pytest.approx(1.0, rel=1e-12)
+    pos = np.zeros((3, 3))
+    pos[:, 0] = x
+    vel = np.zeros((3, 3))
+    vel[:, 0] = x * math.sqrt(2 * (E + K))
+    _, P, _ = integrate_dop853([A, B, C], pos, vel, ta - ta[0])
+    d1 = P[:, 1, 0] - P[:, 0, 0]
+    assert np.max(np.abs(d1 / p - 1)) < 1e-9
+    assert np.max(np.abs((P[:, 2, 0] - P[:, 1, 0]) / d1 / a - 1)) < 1e-9
+
+
+def test_collinear_scenario_metrics():
+    r = get("collinear").simulate({"motion": "collapse"})
+    for k in ("alpha", "L1_km", "L2_km", "L3_km"):
+        assert math.isfinite(r.metrics[k])
+    assert r.metrics["ratio_max_rel_deviation"] < 1e-9
+    assert set(r.trajectory.bodies) == {"A", "B", "C"}
+    with pytest.raises(ParameterError):
+        get("collinear").simulate({"masses": "1,0,1"})
+
+
+# --- 1766: syzygy ----------------------------------------------------------------------------
+
+def test_syzygy_equilibrium_is_the_sun_earth_l1_l2():
+    """Euler's §7/§9 equations against the restricted problem's collinear points (independent
+    formulation); Euler's model differs from the CR3BP by O(m) = 3e-6 (Sun's pull a³ for
+    GM_sun + GM_earth), so the tolerance is 1e-5."""
+    m = sz.EARTH_SUN_MASS_RATIO
+    L1, L2, _ = col.lagrange_distances_cr3bp(m, 1.0)
+    assert sz.equilibrium_conjunction(m) == pytest.approx(1 - L1, rel=1e-5)
+    assert sz.equilibrium_opposition(m) == pytest.approx(L2 - 1, rel=1e-5)
+    b = sz.equilibrium_conjunction(m) * sz.lunar_units_per_sun_distance(m, sz.MOON_REVOLUTIONS_PER_YEAR)
+    assert 3.8 < b < 4.0  # "about four lunar distances"
+
+
+def test_euler_series_fourth_term():
+    """§8: the printed 4-term series errs by −ε⁴/81 − 16ε⁵/243 + O(ε⁶) (its last coefficient
+    should be 4/243, not 1/81); the corrected series errs by O(ε⁶)."""
+    for m in (1e-4, 1e-6):
+        e = (m / 3) ** (1 / 3)
+        a = sz.equilibrium_conjunction(m)
+        assert sz.euler_series_conjunction(m) - a == pytest.approx(-(e**4 / 81 + 16 * e**5 / 243), abs=2 * e**6)
+        assert abs(sz.series_conjunction(m) - a) < 2 * e**6
+        assert abs(sz.series_opposition(m) - sz.equilibrium_opposition(m)) < 2 * e**6
+
+
+def test_syzygy_frequency_measured_vs_linear_and_euler():
+    m = sz.EARTH_SUN_MASS_RATIO
+    for side in ("conjunction", "opposition"):
+        A = 1e-6
+        t, S, _ = sz.integrate(m, sz.initial_state(m, A, side, "linear-mode", 1e-9), 4 * math.pi, n_samples=8000)
+        eta, _ = sz.eta_and_distance(S, side)
+        w, lam, res = sz.fit_swing_and_escape(t, eta, A)
+        modes = sz.linear_modes(m, side)
+        # nonlinear shift ∝ amplitude (≤ 20 A = 2e-5 in the fit window)
+        assert w == pytest.approx(modes["frequency"], rel=1e-4)
+        assert lam == pytest.approx(modes["escape_exponent"], rel=1e-3)
+        # Euler's Hill value differs by terms of order v/u = α ≈ 0.01
+        assert abs(w / sz.HILL_FREQUENCY - 1) < sz.equilibrium_conjunction(m)
+        assert res < 1e-3
+
+
+def test_hill_limit_is_eulers_equation():
+    """As m → 0 the linearised full problem tends to λ⁴ − 2λ² − 27 = 0: α² = √28 − 1, the real
+    root √(√28 + 1), and the amplitude coefficient 0.311717 of §16."""
+    modes = sz.linear_modes(1e-12)
+    assert modes["frequency"] == pytest.approx(2.071594, rel=1e-3)
+    assert modes["escape_exponent"] == pytest.approx(math.sqrt(math.sqrt(28) + 1), rel=1e-3)
+    Vo = modes["osc_vector"]
+    assert abs(Vo[0]) / abs(Vo[1]) == pytest.approx(0.311717, rel=1e-3)
+    assert sz.AMPLITUDE_COEFFICIENT == pytest.approx(0.311717, abs=1e-6)
+
+
+def test_syzygy_scenario_moon_leaves():
+    r = get("syzygy").simulate({})
+    m = r.metrics
+    for k in ("syzygy_distance_lunar_units", "oscillation_frequency", "oscillation_frequency_euler",
+              "escape_exponent"):
+        assert math.isfinite(m[k])
+    assert m["oscillation_frequency_euler"] == pytest.approx(2.071594, abs=1e-6)
+    assert math.isfinite(m["escape_time_yr"]) and m["escape_time_yr"] < 3.0  # it leaves
+    assert m["swings_before_escape"] >= 1.0
+    assert m["amplitude_ratio"] == pytest.approx(m["amplitude_ratio_linear"], rel=0.02)
+    assert set(r.trajectory.bodies) == {"sun", "earth", "moon"}
+
+
+# --- 1768: the Moon's elements ----------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def lunar_default():
+    return get("lunar-perturbation").simulate({})
+
+
+def test_node_and_apse_periods_vs_published(lunar_default):
+    """Published mean periods (Explanatory Supplement to the Astronomical Almanac, 2013):
+    node 6798.38 d = 18.613 yr, perigee 3232.6 d = 8.850 yr. Done means: within 1% and 2%."""
+    m = lunar_default.metrics
+    assert m["node_period_yr"] == pytest.approx(18.613, rel=0.01)
+    assert m["apse_period_yr"] == pytest.approx(8.850, rel=0.02)
+    # osculating inclination 4.99°–5.30° (period 173 d): the Sun alone gives it to ~0.03°
+    assert m["inclination_min_deg"] == pytest.approx(4.99, abs=0.05)
+    assert m["inclination_max_deg"] == pytest.approx(5.30, abs=0.05)
+    # first order gives half the apse motion (Clairaut 1747) and most of the node motion
+    assert m["apse_first_order_fraction"] == pytest.approx(0.5, abs=0.02)
+    assert m["node_period_first_order_yr"] == pytest.approx(18.6, rel=0.05)
+    assert m["elements_vs_cartesian_max_error"] < 1e-5  # lunar distances over 40 yr
+    assert set(lunar_default.trajectory.bodies) == {"sun", "earth", "moon"}
+
+
+def test_elements_vs_rebound_three_body():
+    """Independent: Sun, Earth and Moon as three massive bodies in REBOUND IAS15, 20 years.
+    The models differ only by the Moon's reflex on the Sun's apparent orbit (4670 km in 1.5e8)."""
+    el, sun, mu, mus = le.initial_conditions()
+    el = le.calibrate_mean_elements(el, sun, mu, mus, 27.321661, 0.0549, math.radians(5.145396))
+    days = 20 * le.YEAR_DAYS
+    t, E = le.integrate_rk4("elements", el, days, 0.025, 0.5, mu, mus, sun)
+    tr, r, v = le.rebound_three_body(el, sun, mu, mus, days, 0.5)
+    Er = le.cartesian_to_elements(r, v, mu)
+    a, b = le.node_and_apse(t, E), le.node_and_apse(tr, Er)
+    assert a["node_period_yr"] == pytest.approx(b["node_period_yr"], rel=1e-4)
+    assert a["apse_period_yr"] == pytest.approx(b["apse_period_yr"], rel=1e-4)
+    assert np.max(np.abs(E[:, 4] - Er[:, 4])) < 1e-4  # inclination, rad
+
+
+def _cartesian_rhs_numpy(t, y, mu, mus, sun):
+    """The same forces written plainly (numpy, no shared code): r̈ = −μr/r³ + μ_S[(R−r)/|R−r|³ − R/R³]."""
+    a_s, es, ns, M0, varpi = sun
+    M = M0 + ns * t
+    E = M
+    for _ in range(30):
+        E = M + es * math.sin(E)
+    f = 2 * math.atan(math.sqrt((1 + es) / (1 - es)) * math.tan(E / 2))
+    u = a_s * (1 - es * math.cos(E))
+    R = u * np.array([math.cos(f + varpi), math.sin(f + varpi), 0.0])
+    r = y[:3]
+    d = R - r
+    acc = -mu * r / np.linalg.norm(r) ** 3 + mus * (d / np.linalg.norm(d) ** 3 - R / u**3)
+    return np.concatenate([y[3:], acc])
+
+
+def test_element_equations_vs_dop853_cartesian():
+    """Euler's element equations (RK4, compiled) against a plain DOP853 Cartesian integration
+    (rtol 1e-12) of the same forces over one year. The printed sign of §XXVII.4 fails."""
+    from scipy.integrate import solve_ivp
+
+    el, sun, mu, mus = le.initial_conditions()
+    r0, v0 = le.elements_to_cartesian(el, mu)
+    t_eval = np.arange(0, 365.0 + 1e-9, 1.0)
+    sol = solve_ivp(_cartesian_rhs_numpy, (0, 365.0), np.concatenate([r0[0], v0[0]]), method="DOP853",
+                    t_eval=t_eval, args=(mu, mus, sun), rtol=1e-12, atol=1e-14)
+    t, E = le.integrate_rk4("elements", el, 365.0, 0.025, 1.0, mu, mus, sun)
+    assert np.allclose(t, sol.t)
+    err = np.max(np.linalg.norm(le.elements_to_position(E) - sol.y[:3].T, axis=1))
+    assert err < 1e-7  # RK4 at 0.025 d: (h·n)⁴ ≈ 3e-11 per step
+    _, Ep = le.integrate_rk4("elements", el, 60.0, 0.025, 1.0, mu, mus, sun, printed_sign=True)
+    assert np.max(np.linalg.norm(le.elements_to_position(Ep) - sol.y[:3, :61].T, axis=1)) > 0.01
+
+
+def test_euler_identities_along_the_orbit():
+    """§VII–IX: dω/sin ω = dψ/tan σ and dσ = d∅ − dψ cos ω, on osculating elements of the DOP853
+    Cartesian solution; 4th-order differences at 0.02 d: error ~ (0.02·2·0.23)⁴ ≈ 1e-7 of the
+    rate (the elements swing twice a month)."""
+    from scipy.integrate import solve_ivp
+
+    el, sun, mu, mus = le.initial_conditions()
+    r0, v0 = le.elements_to_cartesian(el, mu)
+    t = np.arange(0, 30.0 + 1e-9, 0.02)
+    sol = solve_ivp(_cartesian_rhs_numpy, (0, 30.0), np.concatenate([r0[0], v0[0]]), method="DOP853",
+                    t_eval=t, args=(mu, mus, sun), rtol=1e-13, atol=1e-15)
+    r, v = sol.y[:3].T, sol.y[3:].T
+    E = le.cartesian_to_elements(r, v, mu)
+    a, b = le.euler_identity_residuals(t, E, r, v)
+    assert a < 1e-6 and b < 1e-6
+    # the identities are not empty: the node and inclination really move
+    assert np.ptp(E[:, 3]) > 1e-3 and np.ptp(E[:, 4]) > 1e-4
+
+
+def test_element_conversions_round_trip():
+    el, sun, mu, mus = le.initial_conditions()
+    r, v = le.elements_to_cartesian(el, mu)
+    assert np.allclose(le.cartesian_to_elements(r, v, mu)[0], el, atol=1e-12)
+
+
+def test_lunar_bad_input():
+    with pytest.raises(ParameterError):
+        get("lunar-perturbation").simulate({"sample_days": 0.01, "step_days": 0.05})
+    with pytest.raises(ParameterError):
+        get("lunar-perturbation").simulate({"duration_yr": "nan"})
