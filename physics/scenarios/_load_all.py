@@ -4,3 +4,4 @@ from . import three_body  # noqa: F401
 from . import precession  # noqa: F401
 from . import libration  # noqa: F401
 from . import hyperion  # noqa: F401
+from . import earth_precession  # noqa: F401

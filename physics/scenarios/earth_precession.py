@@ -1,0 +1,253 @@
+"""The Earth under the Sun and the Moon: luni-solar precession and nutation (beyond Euler,
+§844–849 with modern values), and the long view of a whole precession cycle."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import earth_precession as EP
+from .. import quaternion as quat
+from ..params import Param
+from ..precession import ARCSEC, euler_N, fit_pole, linear_theory, pole_angles
+from ..trajectory import Trajectory
+from .base import Comparison, Result, Scenario, register
+
+MAX_SAMPLES = 20000
+YR = EP.DAYS_PER_YEAR
+
+
+def _traj(t_days, L, q, I, eph_sun, eph_moon, stride):
+    """Trajectory in years (L scaled to rad/yr so ω is consistent with t), with the Sun's and
+    the Moon's geocentric directions as bodies."""
+    sl = slice(None, None, stride)
+    td = t_days[sl]
+    sun = eph_sun(td)
+    moon = eph_moon(td)
+    return Trajectory(td / YR, q[sl], L[sl] * YR, I, time_unit="yr",
+                      bodies={"sun": sun / np.linalg.norm(sun, axis=1, keepdims=True),
+                              "moon": moon / np.linalg.norm(moon, axis=1, keepdims=True)})
+
+
+def euler_nutation_terms(moon: EP.MeanElements, H=EP.H_DYN, obliquity=EP.OBLIQUITY, spin=EP.SPIN):
+    """Euler's §844 nutation for the Earth: the 2φ term of each body on a circle in the
+    ecliptic (the Sun: semi-annual; the Moon: 13.66-day). Δψ = −a_λ, Δε = +a_p (arcsec).
+    Euler has no 18.6-year term: his centre moves in the plane of the ecliptic."""
+    A, C = 1 - H, 1.0
+    out = {}
+    for name, gm, a, delta in (("semiannual", EP.GM_SUN, EP.SUN_J2000["a"], 2 * math.pi / 365.2564),
+                               ("13.66d", EP.GM_MOON, moon.a, moon.n)):
+        lt = linear_theory(euler_N(gm / a ** 3, C, A, spin), spin, delta, obliquity)
+        out[name] = dict(dpsi=-lt.longitude_amplitude / ARCSEC, deps=lt.obliquity_amplitude / ARCSEC)
+    return out
+
+
+def _fit_earth(t, axis, sun_dir, moon_dir, me):
+    args = EP.nutation_arguments(t, sun_dir, moon_dir, me)
+    fit = fit_pole(t, axis, args)
+    return fit, EP.nutation_arcsec(fit)
+
+
+def _earth(values, progress=None):
+    years = values["years"]
+    dur = years * YR
+    step = values["step_days"]
+    H = values["H"]
+    obl = math.radians(values["obliquity_deg"])
+    el = EP.calibrated_moon_elements()
+    eph = EP.integrate_orbits(dur, 0.5, moon_elements=el)
+    me = EP.moon_mean_elements(eph)
+    runs = {}
+    for key, bodies in (("both", ("sun", "moon")), ("sun", ("sun",)), ("moon", ("moon",))):
+        runs[key] = EP.run_earth(eph.sun, eph.moon, dur, step, H=H, obliquity=obl, bodies=bodies,
+                                 sample_days=0.5, progress=progress if key == "both" else None)
+    t, L, q, I = runs["both"]
+    axis = quat.rotate(q, L)  # the angular-momentum axis: Euler's "true pole" (§848), centre of the diurnal circle
+    sun_dir, moon_dir = eph.sun(t), eph.moon(t)
+    fit, nut = _fit_earth(t, axis, sun_dir, moon_dir, me)
+    rate = -fit.rate_longitude / ARCSEC * YR  # arcsec/yr, positive westward
+    parts = {}
+    for key in ("sun", "moon"):
+        tt, LL, qq, _ = runs[key]
+        f2 = fit_pole(tt, quat.rotate(qq, LL), EP.nutation_arguments(tt, sun_dir, moon_dir, me))
+        parts[key] = -f2.rate_longitude / ARCSEC * YR
+    mod = EP.precession_parts_modern(me, H, obl)
+    eul = -(mod["euler_sun"] + mod["euler_moon"]) / ARCSEC * YR
+    eul_nut = euler_nutation_terms(me, H, obl)
+    iau = EP.IAU2000_NUTATION
+    m = dict(
+        precession_rate_arcsec_per_yr=rate,
+        precession_rate_euler_arcsec_per_yr=eul,
+        precession_rate_modern_formula_arcsec_per_yr=-(mod["sun"] + mod["moon"]) / ARCSEC * YR,
+        precession_rate_iau2006_psi_a_arcsec_per_yr=EP.PSI_A_RATE / 100,
+        precession_rate_iau2006_p_a_arcsec_per_yr=EP.P_A_RATE / 100,
+        precession_period_yr=360 * 3600 / rate,
+        precession_solar_arcsec_per_yr=parts["sun"], precession_lunar_arcsec_per_yr=parts["moon"],
+        precession_solar_formula_arcsec_per_yr=-mod["sun"] / ARCSEC * YR,
+        precession_lunar_formula_arcsec_per_yr=-mod["moon"] / ARCSEC * YR,
+        moon_node_period_yr=me.node_period_yr, moon_apse_period_yr=me.apse_period_yr,
+        moon_inclination_deg=math.degrees(me.inc), moon_mean_distance_km=me.a * EP.AU_KM,
+        sidereal_month_days=2 * math.pi / me.n,
+    )
+    for key, label in (("18.6yr", "18_6yr"), ("semiannual", "semiannual"), ("13.66d", "13_66d"), ("9.3yr", "9_3yr"),
+                       ("annual", "annual")):
+        m[f"nutation_longitude_{label}_arcsec"] = nut[key]["dpsi"]
+        m[f"nutation_obliquity_{label}_arcsec"] = nut[key]["deps"]
+        m[f"nutation_longitude_{label}_iau2000_arcsec"] = iau[key]["dpsi"]
+        m[f"nutation_obliquity_{label}_iau2000_arcsec"] = iau[key]["deps"]
+    for key, label in (("semiannual", "semiannual"), ("13.66d", "13_66d")):
+        m[f"nutation_longitude_{label}_euler_arcsec"] = eul_nut[key]["dpsi"]
+        m[f"nutation_obliquity_{label}_euler_arcsec"] = eul_nut[key]["deps"]
+    comps = [
+        Comparison("luni-solar precession", eul, rate, EP.PSI_A_RATE / 100, "arcsec/yr",
+                   "modern: IAU 2006 ψ_A (fixed ecliptic; includes 0.019″/yr geodesic precession). "
+                   f"General precession p_A = {EP.P_A_RATE / 100:.5f}″/yr adds the ecliptic's motion (planets, not modelled). "
+                   "Euler: Σ N cos n, circles in the ecliptic, A for C in N"),
+        Comparison("  solar part", -mod["euler_sun"] / ARCSEC * YR, parts["sun"], -mod["sun"] / ARCSEC * YR, "arcsec/yr",
+                   "modern: orbit-averaged formula (e☉ = 0.0167)"),
+        Comparison("  lunar part", -mod["euler_moon"] / ARCSEC * YR, parts["moon"], -mod["moon"] / ARCSEC * YR, "arcsec/yr",
+                   "modern: orbit-averaged formula with the Moon's e and inclination (1 − 3/2 sin² i)"),
+        Comparison("nutation in longitude, 18.6 yr (sin Ω)", None, nut["18.6yr"]["dpsi"], iau["18.6yr"]["dpsi"], "arcsec",
+                   "IAU 2000A (MHB2000). Euler's centre moves in the ecliptic: no such term in §844"),
+        Comparison("nutation in obliquity, 18.6 yr (cos Ω)", None, nut["18.6yr"]["deps"], iau["18.6yr"]["deps"], "arcsec", "IAU 2000A"),
+        Comparison("nutation in longitude, semi-annual (sin 2L☉)", eul_nut["semiannual"]["dpsi"], nut["semiannual"]["dpsi"],
+                   iau["semiannual"]["dpsi"], "arcsec",
+                   "rigid Earth; IAU 2000 is ≈3.5% larger: the free-core-nutation resonance of the real, non-rigid Earth "
+                   "(Woolard's rigid-Earth value: −1.2729″)"),
+        Comparison("nutation in obliquity, semi-annual (cos 2L☉)", eul_nut["semiannual"]["deps"], nut["semiannual"]["deps"],
+                   iau["semiannual"]["deps"], "arcsec", "rigid Earth (Woolard: 0.5522″)"),
+        Comparison("nutation in longitude, 13.66 d (sin 2L☾)", eul_nut["13.66d"]["dpsi"], nut["13.66d"]["dpsi"],
+                   iau["13.66d"]["dpsi"], "arcsec",
+                   "angular-momentum axis (Woolard: −0.2037″); IAU refers to the CIP ≈ figure axis, larger by the "
+                   "Oppolzer term (≈ 2δ/ε ≈ 7%), and includes the non-rigid response"),
+        Comparison("nutation in obliquity, 13.66 d (cos 2L☾)", eul_nut["13.66d"]["deps"], nut["13.66d"]["deps"],
+                   iau["13.66d"]["deps"], "arcsec", "angular-momentum axis (Woolard: 0.0884″)"),
+        Comparison("Moon's node regression period", None, me.node_period_yr, 18.6129, "yr",
+                   "from the REBOUND Sun–Earth–Moon integration, not imposed"),
+    ]
+    notes = [
+        "The pole measured is the angular-momentum axis, Euler's 'true pole' (§848: the centre of the diurnal "
+        "circle of the figure axis); its path is fitted by least squares to a line plus sin/cos of the fundamental "
+        "arguments taken from the simulated orbits.",
+        f"Solar part {parts['sun']:.3f}″/yr, lunar part {parts['moon']:.3f}″/yr (each from a run with that body alone); "
+        f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr.",
+        "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψ_A, not the general precession p_A.",
+        f"Moon's orbit: the osculating a, e, i at J2000 are calibrated so that the integrated mean month, e and i equal "
+        f"the observed ones; the node then regresses with period {me.node_period_yr:.3f} yr (observed 18.613 yr).",
+    ]
+    p, lam = pole_angles(axis)
+    tc = t - 0.5 * (t[0] + t[-1])
+    lam_mean = fit.rate_longitude * tc
+    sel = slice(None, None, max(1, int(np.ceil(len(t) / MAX_SAMPLES))))
+    traj = _traj(t, L, q, I, eph.sun, eph.moon, sel.step)
+    # Euler's curves: mean precession −N cos n (Sun + Moon) plus his two 2φ terms
+    args = EP.nutation_arguments(t, sun_dir, moon_dir, me)
+    dpsi_e = eul_nut["semiannual"]["dpsi"] * np.sin(args["semiannual"]) + eul_nut["13.66d"]["dpsi"] * np.sin(args["13.66d"])
+    deps_e = eul_nut["semiannual"]["deps"] * np.cos(args["semiannual"]) + eul_nut["13.66d"]["deps"] * np.cos(args["13.66d"])
+    lam0 = lam[0]
+    plot = {
+        "pole longitude − 90° (arcsec)": ((lam - math.pi / 2) / ARCSEC)[sel],
+        "pole longitude − 90°, Euler (arcsec)": (-eul * t / YR - dpsi_e + dpsi_e[0] + (lam0 - math.pi / 2) / ARCSEC)[sel],
+        "nutation in longitude Δψ (arcsec)": (-(lam - lam.mean() - lam_mean) / ARCSEC)[sel],
+        "nutation in longitude Δψ, Euler (arcsec)": dpsi_e[sel],
+        "obliquity − ε₀ (arcsec)": ((p - obl) / ARCSEC)[sel],
+        "obliquity − ε₀, Euler (arcsec)": (deps_e - deps_e[0])[sel],
+    }
+    return Result("earth", values, traj, m, comps, notes, plot_series=plot)
+
+
+register(Scenario(
+    name="earth",
+    title="The Earth under the Sun and the Moon: precession and nutation",
+    section="§844–849 (modern values)",
+    group="ch. 16",
+    summary=("The Earth's real figure (dynamical ellipticity H), spin and obliquity; the Sun and the Moon "
+             "from a Sun–Earth–Moon REBOUND integration, the Moon's node regressing in 18.6 years. The "
+             "pole turns westward around the ecliptic pole at about 50.4″ a year (a cycle of ~25,700 "
+             "years) and nods: 17″ in longitude and 9″ in obliquity with the Moon's node, 1.3″ twice a "
+             "year, 0.2″ twice a month. Each term beside the IAU value and Euler's."),
+    params=(
+        Param("years", 100.0, 0.0, 400.0, "yr", "length of the run from J2000", exclusive_min=True, step=1.0),
+        Param("step_days", 0.5, 0.0, 3.0, "day", "integrator step (the spin is solved exactly; resolve the month)",
+              exclusive_min=True, step=0.1),
+        Param("H", EP.H_DYN, 0.0, 0.05, "1", "dynamical ellipticity (C − A)/C (IAU 2000: 0.0032737949)",
+              exclusive_min=True),
+        Param("obliquity_deg", math.degrees(EP.OBLIQUITY), 0.0, 89.0, "deg", "obliquity at J2000 (IAU 2006: 23.4392794°)",
+              exclusive_min=True),
+    ),
+    simulate_fn=_earth,
+    euler_formula=(r"mean precession $N\cos n$ per centre, $N = \frac{3GM(C-A)}{2A\varepsilon s^3}$ (§846); "
+                   r"nutation in $2\varphi$: $\frac{\varepsilon N\sin n(\varepsilon+2\delta\cos n)}{2\delta(\varepsilon\varepsilon-4\delta\delta)}$"
+                   r" in obliquity, $\frac{\varepsilon N(\varepsilon\cos n+2\delta)}{2\delta(\varepsilon\varepsilon-4\delta\delta)}$ in longitude (§844)"),
+))
+
+
+# --- the long view: a whole precession cycle ----------------------------------------------
+
+def run_long_view(years=25800.0, step_days=2.0, sample_years=5.0, scheme="strang", progress=None,
+                  calibration_years=40.0):
+    """One run over a whole precession cycle. The Sun on its Kepler ellipse; the Moon on a Kepler
+    ellipse whose node and perigee turn at the rates measured from a REBOUND run of
+    `calibration_years` (the node regression comes from the integration, not imposed).
+    Returns (t_days, L, q, I, MeanOrbits)."""
+    el = EP.calibrated_moon_elements()
+    eph = EP.integrate_orbits(calibration_years * YR, 0.5, moon_elements=el)
+    orb = EP.MeanOrbits(EP.moon_mean_elements(eph))
+    t, L, q, I = EP.run_earth(orb.sun, orb.moon_pos, years * YR, step_days, scheme=scheme,
+                              sample_days=sample_years * YR, progress=progress)
+    return t, L, q, I, orb
+
+
+def _earth_long(values, progress=None):
+    t, L, q, I, orb = run_long_view(values["years"], values["step_days"], values["sample_years"], progress=progress)
+    axis = quat.rotate(q, L)
+    p, lam = pole_angles(axis)
+    ty = t / YR
+    c = np.polyfit(ty, lam, 1)
+    rate = -c[0] / ARCSEC
+    mod = EP.precession_parts_modern(orb.moon)
+    eul = -(mod["euler_sun"] + mod["euler_moon"]) / ARCSEC * YR
+    m = dict(precession_rate_arcsec_per_yr=rate, precession_rate_euler_arcsec_per_yr=eul,
+             precession_period_yr=360 * 3600 / rate, precession_period_euler_yr=360 * 3600 / eul,
+             turned_deg=float(np.degrees(lam[0] - lam[-1])),
+             obliquity_min_deg=float(np.degrees(p.min())), obliquity_max_deg=float(np.degrees(p.max())),
+             moon_node_period_yr=orb.moon.node_period_yr)
+    # the celestial pole in J2000 equatorial RA/Dec, for the star chart
+    ce, se = math.cos(EP.OBLIQUITY), math.sin(EP.OBLIQUITY)
+    ye = ce * axis[:, 1] - se * axis[:, 2]
+    ze = se * axis[:, 1] + ce * axis[:, 2]
+    ra = np.degrees(np.unwrap(np.arctan2(ye, axis[:, 0])))
+    dec = np.degrees(np.arcsin(np.clip(ze, -1, 1)))
+    sun = orb.sun(t)
+    moon = orb.moon_pos(t)
+    traj = Trajectory(ty, q, L * YR, I, time_unit="yr",
+                      bodies={"sun": sun / np.linalg.norm(sun, axis=1, keepdims=True),
+                              "moon": moon / np.linalg.norm(moon, axis=1, keepdims=True)})
+    lam_e = lam[0] - eul * ARCSEC * ty
+    return Result("earth-long-view", values, traj, m,
+                  [Comparison("precession period", 360 * 3600 / eul, m["precession_period_yr"],
+                              360 * 3600 / (EP.PSI_A_RATE / 100), "yr",
+                              "modern: IAU 2006 ψ_A rate (fixed ecliptic); with the ecliptic's motion (p_A) 25,772 yr")],
+                  ["Nutation is sampled too sparsely here to be seen (samples every "
+                   f"{values['sample_years']:g} yr); the pole path is the angular-momentum axis in the J2000 ecliptic.",
+                   "Pass the bright-star catalogue (assets/bright_stars.csv, read by the app) to "
+                   "physics.earth_precession.pole_star_passages to list the pole stars along the path."],
+                  plot_series={"pole longitude (deg)": np.degrees(lam), "pole longitude, Euler (deg)": np.degrees(lam_e),
+                               "obliquity (deg)": np.degrees(p), "obliquity, Euler (deg)": np.full_like(p, np.degrees(p[0])),
+                               "pole RA J2000 (deg)": ra, "pole Dec J2000 (deg)": dec})
+
+
+register(Scenario(
+    name="earth-long-view",
+    title="A whole precession cycle: the pole among the stars",
+    section="§846 (modern values)",
+    group="ch. 16",
+    summary=("One run over ~25,800 years: the celestial pole circles the ecliptic pole at 23.4°, passing "
+             "Polaris now, Thuban (5,000 years ago), Vega in about 12,000 years."),
+    params=(
+        Param("years", 25800.0, 0.0, 30000.0, "yr", "length of the run from J2000", exclusive_min=True, step=100.0),
+        Param("step_days", 2.0, 0.0, 5.0, "day", "integrator step", exclusive_min=True, step=0.5),
+        Param("sample_years", 5.0, 0.0, 1000.0, "yr", "spacing of the stored states", exclusive_min=True),
+    ),
+    simulate_fn=_earth_long,
+))
