@@ -200,7 +200,7 @@ def _syzygy(values, progress=None):
         Comparison("α = v/a: Euler's 4-term series vs root", series_e, alpha, series_c, "",
                    "modern column: the series with the 4th coefficient corrected (4/243, not 1/81)"),
         Comparison("oscillation frequency (Sun's mean motion = 1)", sz.HILL_FREQUENCY, w_meas, modes["frequency"], "",
-                   "Euler/Hill √(√28 − 1); simulated from zero crossings of η; modern: linearised full problem"),
+                   "Euler/Hill √(√28 − 1); simulated: fit of η on the full equations; modern: linearised full problem"),
         Comparison("v = b(1 − k·A cos ω): k", sz.AMPLITUDE_COEFFICIENT, ratio, ratio_linear, "",
                    "half the swing of v/b over the η amplitude on the first swing; modern: centre eigenvector"),
         Comparison("escape exponent (real root Euler missed)", None, lam_meas, modes["escape_exponent"], "",
