@@ -218,10 +218,16 @@ _W0 = -(2.0 ** (1.0 / 3.0)) * _W1
 # Symmetric kick–drift schemes for θ̈ = F(θ, t): kick c_j·h, then drift d_j·h (last drift 0).
 _BM_B = (0.0829844064174052, 0.396309801498368, -0.0390563049223486)
 _BM_A = (0.245298957184271, 0.604872665711080)
+_Y6 = [0.0, -1.17767998417887, 0.235573213359357, 0.784513610477560]
+_Y6[0] = 1.0 - 2.0 * sum(_Y6[1:])
 SCHEMES = {
     # Yoshida (1990) triple jump of leapfrog: order 4, 3 force evaluations per step
     "yoshida4": (np.array([_W1 / 2, (_W1 + _W0) / 2, (_W0 + _W1) / 2, _W1 / 2]),
                  np.array([_W1, _W0, _W1, 0.0])),
+    # Yoshida (1990) solution A: order 6, 7 evaluations per step
+    "yoshida6": (np.array([_Y6[3] / 2, (_Y6[3] + _Y6[2]) / 2, (_Y6[2] + _Y6[1]) / 2, (_Y6[1] + _Y6[0]) / 2,
+                           (_Y6[0] + _Y6[1]) / 2, (_Y6[1] + _Y6[2]) / 2, (_Y6[2] + _Y6[3]) / 2, _Y6[3] / 2]),
+                 np.array([_Y6[3], _Y6[2], _Y6[1], _Y6[0], _Y6[1], _Y6[2], _Y6[3], 0.0])),
     # Blanes & Moan (2002) SRKN_6^b: order 4, 6 evaluations per step, error constant ~100×
     # smaller than Yoshida's
     "blanes-moan4": (np.array([_BM_B[0], _BM_B[1], _BM_B[2], 1 - 2 * sum(_BM_B), _BM_B[2], _BM_B[1], _BM_B[0]]),
@@ -241,56 +247,113 @@ def _orbit_table(e, steps_per_orbit, drifts):
     return ((1.0 / r**3).reshape(tk.shape), np.sin(2 * f).reshape(tk.shape), np.cos(2 * f).reshape(tk.shape))
 
 
+@nb.njit(cache=True, inline="always", fastmath=True)
+def _rot_small(x):
+    """sin x, cos x by Taylor series to degree 15/16: exact to round-off for |x| ≤ 0.8."""
+    x2 = x * x
+    sx = x * (1.0 - x2 * (1.0 / 6.0) * (1.0 - x2 * (1.0 / 20.0) * (1.0 - x2 * (1.0 / 42.0) * (
+        1.0 - x2 * (1.0 / 72.0) * (1.0 - x2 * (1.0 / 110.0) * (1.0 - x2 * (1.0 / 156.0) * (
+            1.0 - x2 * (1.0 / 210.0))))))))
+    cx = 1.0 - x2 * 0.5 * (1.0 - x2 * (1.0 / 12.0) * (1.0 - x2 * (1.0 / 30.0) * (1.0 - x2 * (1.0 / 56.0) * (
+        1.0 - x2 * (1.0 / 90.0) * (1.0 - x2 * (1.0 / 132.0) * (1.0 - x2 * (1.0 / 182.0) * (
+            1.0 - x2 * (1.0 / 240.0))))))))
+    return sx, cx
+
+
+@nb.njit(cache=True, fastmath=True)
+def _kick_drift(thetadot, theta, sn, cs, g, cf, sf, d, scale):
+    for i in range(theta.shape[0]):
+        w = thetadot[i] - g * (sn[i] * cf - cs[i] * sf)
+        thetadot[i] = w
+        st = d * w
+        theta[i] += st
+        sx, cx = _rot_small(2.0 * st)
+        a0 = sn[i]
+        sn[i] = a0 * cx + cs[i] * sx
+        cs[i] = cs[i] * cx - a0 * sx
+
+
+@nb.njit(cache=True, fastmath=True)
+def _kick_drift_halved(thetadot, theta, sn, cs, g, cf, sf, d, scale, p):
+    for i in range(theta.shape[0]):
+        w = thetadot[i] - g * (sn[i] * cf - cs[i] * sf)
+        thetadot[i] = w
+        st = d * w
+        theta[i] += st
+        sx, cx = _rot_small(2.0 * st * scale)
+        for _ in range(p):
+            sx, cx = 2.0 * sx * cx, cx * cx - sx * sx
+        a0 = sn[i]
+        sn[i] = a0 * cx + cs[i] * sx
+        cs[i] = cs[i] * cx - a0 * sx
+
+
 @nb.njit(cache=True)
 def _section_run(theta, thetadot, k, s2f, c2f, h, n_orbits, ck, dk, out_theta, out_dot, lyap_on, dth, ddot, lyap_sum):
-    """The kick–drift chain; the last kick of a step and the first of the next act at the same
-    time and θ, so they are merged (one force evaluation saved per step)."""
+    """The kick–drift chain for the whole ensemble, the ensemble in the innermost loop (no
+    dependence between starts: the compiler vectorises it). The last kick of a step and the
+    first of the next act at the same time and θ, so they are merged. sin 2θ and cos 2θ are
+    carried along and rotated by each drift with a Taylor series (degree 15/16, exact to
+    round-off for angles ≤ 0.8; larger angles are halved p times and doubled back), and
+    re-synchronised from θ at every periapse, so rounding cannot accumulate."""
     n = theta.shape[0]
     m = s2f.shape[0]
     K = ck.shape[0]
-    for i in range(n):
-        th = theta[i]
-        w = thetadot[i]
-        a = dth[i]
-        b = ddot[i]
-        for orb in range(n_orbits):
-            for s in range(m):
-                for j in range(K - 1):
-                    sn = np.sin(2.0 * th)
-                    cs = np.cos(2.0 * th)
-                    if j == 0:
-                        c = ck[0] + (ck[K - 1] if (orb > 0 or s > 0) else 0.0)
-                    else:
-                        c = ck[j]
-                    g = k[s, j] * c * h
-                    w -= g * (sn * c2f[s, j] - cs * s2f[s, j])
-                    if lyap_on:
-                        b -= 2.0 * g * (cs * c2f[s, j] + sn * s2f[s, j]) * a
-                    d = dk[j] * h
-                    th += d * w
-                    if lyap_on:
-                        a += d * b
-            # the pending last kick (at periapse = row 0, stage 0): applied for the record only
-            sn = np.sin(2.0 * th)
-            cs = np.cos(2.0 * th)
-            g = k[0, 0] * ck[K - 1] * h
-            out_theta[i, orb] = th
-            out_dot[i, orb] = w - g * (sn * c2f[0, 0] - cs * s2f[0, 0])
-            if lyap_on:
-                b_rec = b - 2.0 * g * (cs * c2f[0, 0] + sn * s2f[0, 0]) * a
-                nrm = np.sqrt(a * a + b_rec * b_rec)
-                lyap_sum[i] += np.log(nrm)
-                a /= nrm
-                b /= nrm
-        sn = np.sin(2.0 * th)
-        cs = np.cos(2.0 * th)
+    sn = np.empty(n)
+    cs = np.empty(n)
+    dmax = np.max(np.abs(dk)) * h
+    for orb in range(n_orbits):
+        wmax = 0.0
+        for i in range(n):
+            sn[i] = np.sin(2.0 * theta[i])
+            cs[i] = np.cos(2.0 * theta[i])
+            wmax = max(wmax, abs(thetadot[i]))
+        # halvings so that the rotation angle stays ≤ 0.8 (velocity can grow within an orbit
+        # by at most ∫|θ̈| ≤ 2π·ω₀²/2·max(a/r)³; margin: 2× the start-of-orbit value + 4)
+        p = 0
+        xmax = 2.0 * dmax * (2.0 * wmax + 4.0)
+        while xmax > 0.8:
+            xmax *= 0.5
+            p += 1
+        scale = 0.5**p
+        for s in range(m):
+            for j in range(K - 1):
+                if j == 0:
+                    c = ck[0] + (ck[K - 1] if (orb > 0 or s > 0) else 0.0)
+                else:
+                    c = ck[j]
+                g = k[s, j] * c * h
+                cf = c2f[s, j]
+                sf = s2f[s, j]
+                d = dk[j] * h
+                if lyap_on:
+                    for i in range(n):
+                        # tangent map: δθ̈ = −ω₀²(a/r)³ cos 2(θ − f) δθ, at the kick's θ
+                        ddot[i] -= 2.0 * g * (cs[i] * cf + sn[i] * sf) * dth[i]
+                        dth[i] += d * ddot[i]
+                if p == 0:
+                    _kick_drift(thetadot, theta, sn, cs, g, cf, sf, d, 1.0)
+                else:
+                    _kick_drift_halved(thetadot, theta, sn, cs, g, cf, sf, d, scale, p)
+        # periapse: the pending last kick applied for the record only
         g = k[0, 0] * ck[K - 1] * h
-        w -= g * (sn * c2f[0, 0] - cs * s2f[0, 0])
-        b -= 2.0 * g * (cs * c2f[0, 0] + sn * s2f[0, 0]) * a
-        theta[i] = th
-        thetadot[i] = w
-        dth[i] = a
-        ddot[i] = b
+        for i in range(n):
+            s0 = np.sin(2.0 * theta[i])
+            c0 = np.cos(2.0 * theta[i])
+            out_theta[i, orb] = theta[i]
+            out_dot[i, orb] = thetadot[i] - g * (s0 * c2f[0, 0] - c0 * s2f[0, 0])
+            if lyap_on:
+                b_rec = ddot[i] - 2.0 * g * (c0 * c2f[0, 0] + s0 * s2f[0, 0]) * dth[i]
+                nrm = np.sqrt(dth[i] * dth[i] + b_rec * b_rec)
+                lyap_sum[i] += np.log(nrm)
+                dth[i] /= nrm
+                ddot[i] /= nrm
+    g = k[0, 0] * ck[K - 1] * h
+    for i in range(n):
+        s0 = np.sin(2.0 * theta[i])
+        c0 = np.cos(2.0 * theta[i])
+        thetadot[i] -= g * (s0 * c2f[0, 0] - c0 * s2f[0, 0])
+        ddot[i] -= 2.0 * g * (c0 * c2f[0, 0] + s0 * s2f[0, 0]) * dth[i]
 
 
 def spin_orbit_section(theta0, thetadot0, e, omega0, n_orbits, steps_per_orbit=128, lyapunov=False,
@@ -349,7 +412,7 @@ def spin_orbit_section_scipy(theta0, thetadot0, e, omega0, n_orbits, rtol=1e-10,
     return sol.y[:N], sol.y[N:]
 
 
-def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256, iters=30):
+def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256, iters=60):
     """A fixed point of the periapse map (θ mod π, θ̇): Newton on one orbit's map with finite
     differences. Returns (θ, θ̇) or raises ParameterError if Newton does not converge."""
     y = np.array([theta_guess, dot_guess], float)
@@ -368,5 +431,6 @@ def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256,
             d = np.zeros(2)
             d[j] = 1e-6
             J[:, j] = (F(y + d) - F(y - d)) / 2e-6
-        y = y - np.linalg.solve(J, r)
+        dy = np.linalg.solve(J, r)
+        y = y - dy * min(1.0, 0.05 / max(abs(dy[1]), 1e-300), 0.2 / max(abs(dy[0]), 1e-300))  # damped: stay local
     raise ParameterError("omega0", omega0, "no periodic spin state found near this start")

@@ -1,0 +1,282 @@
+"""Chapter 16, Problems 91–94 (§815–838) and spin–orbit chaos: each result against an
+independent reference (exact integration over the body, exact pendulum periods, scipy DOP853
+on the planar equation, Euler's closed forms where they hold)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.special import ellipk
+
+from physics import libration as lib
+from physics.gravity_gradient import (ellipsoid_quadrature, exact_torque_force, extra_force_first_order,
+                                      fitted_order, force_error_vs_size, starting_axis, torque_error_vs_size,
+                                      torque_euler_components, torque_first_order)
+from physics.inertia import ellipsoid_moments
+from physics.orbits import KeplerOrbit, solve_kepler
+from physics.params import ParameterError
+from physics.scenarios.base import get
+
+SEMI = np.array([1.0, 0.8, 0.6])
+DIR = np.array([0.6, 0.5, 0.3])
+
+
+# ------------------------------------------------------------------ §815–818 torque and force
+
+def test_quadrature_is_exact_for_second_moments_and_the_shell_theorem():
+    pts, dm = ellipsoid_quadrature(SEMI, mass=2.0)
+    I = np.array([np.sum(dm * (pts[:, 1] ** 2 + pts[:, 2] ** 2)), np.sum(dm * (pts[:, 2] ** 2 + pts[:, 0] ** 2)),
+                  np.sum(dm * (pts[:, 0] ** 2 + pts[:, 1] ** 2))])
+    assert np.allclose(I, ellipsoid_moments(SEMI, 2.0), rtol=1e-13)
+    # a homogeneous ball attracts like a point (Newton): F = GMm/s², no torque
+    tau, F = exact_torque_force([1, 1, 1], [0.0, 3.0, 0.0], gm=1.0, mass=1.0)
+    assert np.allclose(F, [0, 1 / 9, 0], rtol=0, atol=1e-14)
+    assert np.max(np.abs(tau)) < 1e-15
+
+
+def test_first_order_torque_in_euler_components_and_zero_for_equal_moments():
+    I = np.array([2.0, 3.0, 4.5])
+    s = np.array([3.0, -1.0, 2.0]) * 10
+    r = np.linalg.norm(s)
+    assert np.allclose(torque_first_order(I, s, 7.0), torque_euler_components(I, r, s / r, 7.0), rtol=1e-14)
+    assert np.max(np.abs(torque_first_order([2, 2, 2], s, 7.0))) < 1e-18  # §817
+
+
+def test_first_order_torque_error_is_second_order_in_size_over_distance():
+    """§816: the neglected terms are (size/s)² relative (odd multipoles vanish)."""
+    ratios = np.array([0.2, 0.1, 0.05, 0.025])
+    err = torque_error_vs_size(SEMI, DIR, ratios)
+    assert abs(fitted_order(ratios, err) - 2.0) < 0.02
+    # and the coefficient is O(1): the approximation fails at size ~ distance
+    assert 0.05 < err[0] / ratios[0] ** 2 < 5
+
+
+def test_euler_extra_force_818_against_exact_force():
+    ratios = np.array([0.1, 0.05, 0.025])
+    err = force_error_vs_size(SEMI, DIR, ratios)
+    assert abs(fitted_order(ratios, err) - 2.0) < 0.02
+    assert err[-1] < 1e-3
+    # equal moments: only Mee/ss remains (§818)
+    assert np.max(np.abs(extra_force_first_order([1, 1, 1], [3.0, 1.0, 2.0]))) < 1e-16
+
+
+# ------------------------------------------------------------------ orbits
+
+def test_kepler_orbit_against_two_body_integration():
+    e, n = 0.3, 1.3
+    orb = KeplerOrbit(a=1.0, e=e, n=n, inclination=0.2, node=0.4, argp=1.0)
+    t = np.linspace(0, 3 * 2 * np.pi / n, 50)
+    x0 = orb.position(np.array([0.0]))[0]
+    h = 1e-6
+    v0 = (orb.position(np.array([h]))[0] - orb.position(np.array([-h]))[0]) / (2 * h)
+    gm = n * n  # a = 1
+    sol = solve_ivp(lambda _, y: np.concatenate([y[3:], -gm * y[:3] / np.linalg.norm(y[:3]) ** 3]), (0, t[-1]),
+                    np.concatenate([x0, v0]), t_eval=t, method="DOP853", rtol=1e-12, atol=1e-12)
+    assert np.max(np.abs(sol.y[:3].T - orb.position(t))) < 1e-7  # limited by the finite-difference v0
+    M = np.linspace(-20, 20, 101)
+    for ecc in (0.0, 0.5, 0.99):
+        E = solve_kepler(M, ecc)
+        assert np.max(np.abs(E - ecc * np.sin(E) - M)) < 1e-13
+    ff = orb.true_anomaly(t)
+    fd = (orb.true_anomaly(t + h) - orb.true_anomaly(t - h)) / (2 * h)
+    assert np.allclose(orb.true_anomaly_rate(t), fd, rtol=1e-7)
+    assert np.all(np.diff(ff) > 0)
+
+
+# ------------------------------------------------------------------ §820–822
+
+def test_gravity_start_axis_and_rate():
+    r = get("gravity-start").simulate({})
+    assert r.metrics["start_axis_angle_error_rad"] < 1e-6
+    assert abs(r.metrics["angular_acceleration_rad_per_s2"] / r.metrics["angular_acceleration_euler_rad_per_s2"] - 1) < 1e-5
+    # §821: F in the AB plane → the body starts about C exactly
+    r = get("gravity-start").simulate({"direction": "0.8,0.6,0"})
+    w = r.trajectory.omega_body
+    assert np.max(np.abs(w[:, :2])) < 1e-14 and np.all(w[1:, 2] != 0)
+    I = np.array([2.0, 3.0, 4.0])
+    axis, rate = starting_axis(I, [1.0, 0.0, 0.0])
+    assert np.allclose(axis, [1, 0, 0]) and rate == 0.5
+
+
+# ------------------------------------------------------------------ §825–831
+
+def _planar_reference(t, zeta0, zetadot0, N):
+    sol = solve_ivp(lambda _, y: [y[1], -N * np.sin(2 * y[0])], (0, t[-1]), [zeta0, zetadot0], t_eval=t,
+                    method="DOP853", rtol=1e-12, atol=1e-12)
+    return sol.y[0]
+
+
+@pytest.mark.parametrize("zeta0_deg", [20.0, 60.0, 85.0])
+def test_libration_period_within_0p1_percent_of_exact_pendulum(zeta0_deg):
+    r = get("libration-circular").simulate({"zeta0_deg": zeta0_deg, "asymmetry": 0.05, "periods": 3,
+                                            "steps_per_period": 800})
+    m = r.metrics
+    k = np.sin(np.radians(zeta0_deg))
+    T_exact = 4 * ellipk(k * k) / np.sqrt(3 * 0.05)  # 4K(k)/√(2N), 2N = 3γδ², δ = 1
+    assert abs(m["libration_period_exact"] / T_exact - 1) < 1e-12
+    assert abs(m["libration_period"] / T_exact - 1) < 1e-3
+    assert abs(m["libration_amplitude_rad"] - np.radians(zeta0_deg)) < 1e-6
+    # the whole curve against the planar equation integrated by scipy (independent reference)
+    t = r.trajectory.t
+    ref = _planar_reference(t, np.radians(zeta0_deg), 0.0, 1.5 * 0.05)
+    assert np.max(np.abs(r.plot_series["zeta_rad"] - ref)) < 1e-6  # 4th-order splitting at T/800
+
+
+def test_euler_small_oscillation_period_within_its_order_zeta0_squared():
+    """§831: 2π/√(2N) is the k → 0 limit of 4K(k)/√(2N) = T₀(1 + k²/4 + 9k⁴/64 …)."""
+    for z0 in (3.0, 6.0, 12.0):
+        m = get("libration-circular").simulate({"zeta0_deg": z0, "periods": 3}).metrics
+        rel = m["libration_period"] / m["libration_period_euler"] - 1
+        k2 = np.sin(np.radians(z0)) ** 2
+        assert k2 / 4 < rel < k2 / 4 + k2**2  # the first neglected term and the next
+
+
+def test_four_cases_of_826():
+    sc = get("libration-circular")
+    # 1st: locked — stays exactly
+    r = sc.simulate({"preset": "locked"})
+    assert np.max(np.abs(r.plot_series["zeta_rad"])) < 1e-12
+    assert r.notes[0].startswith("Euler's case: locked")
+    # 2nd: librating, bounded by arcsin k
+    r = sc.simulate({"zeta0_deg": 10.0, "spin_ratio": 1.2})
+    assert "librating" in r.notes[0]
+    assert np.max(np.abs(r.plot_series["zeta_rad"])) < np.pi / 2
+    assert abs(r.metrics["libration_amplitude_rad"] - r.metrics["libration_amplitude_exact_rad"]) < 1e-5
+    # 3rd: separatrix — the time to creep from 10° to 80° is Euler's ln tan(45° + ζ/2)/√(2n)
+    r = sc.simulate({"preset": "separatrix", "zeta0_deg": 10.0})
+    assert "separatrix" in r.notes[0]
+    assert abs(r.metrics["separatrix_time_to_80deg"] / r.metrics["separatrix_time_to_80deg_euler"] - 1) < 1e-4
+    # 4th: circulating — ζ passes 90° and keeps going; period of a half turn = 2K(1/k)/(k√(2N))
+    r = sc.simulate({"zeta0_deg": 0.0, "spin_ratio": 1.5, "periods": 6})
+    assert "circulating" in r.notes[0]
+    z = r.plot_series["zeta_rad"]
+    assert np.all(np.diff(z) < 0) and z[-1] < -np.pi  # spin faster than F: ζ = f − λ decreases
+    assert abs(r.metrics["libration_period"] / r.metrics["libration_period_exact"] - 1) < 1e-3
+
+
+def test_case_II_librates_about_90_degrees():
+    r = get("libration-circular").simulate({"asymmetry": -0.05, "zeta0_deg": 70.0, "periods": 3})
+    z = r.plot_series["zeta_rad"]
+    assert abs(0.5 * (z.max() + z.min()) - np.pi / 2) < 1e-3
+    assert abs(r.metrics["libration_period"] / r.metrics["libration_period_exact"] - 1) < 1e-3
+
+
+def test_bad_input_names_the_parameter():
+    with pytest.raises(ParameterError, match="asymmetry"):
+        get("libration-circular").simulate({"asymmetry": "0.9"})
+    with pytest.raises(ParameterError, match="eccentricity"):
+        get("libration-eccentric").simulate({"eccentricity": "nan"})
+    with pytest.raises(ParameterError, match="asymmetry"):
+        get("libration-eccentric").simulate({"asymmetry": 1 / 3})
+    with pytest.raises(ParameterError, match="direction"):
+        get("gravity-start").simulate({"direction": "0,0,0"})
+
+
+# ------------------------------------------------------------------ §833–838
+
+def test_forced_amplitude_matches_euler_for_small_e_and_free_part_separates():
+    e = 0.01
+    r = get("libration-eccentric").simulate({"eccentricity": e, "free_zeta0_deg": 0.0, "orbits": 3})
+    m = r.metrics
+    assert abs(m["forced_amplitude_rad"] / m["forced_amplitude_euler_rad"] - 1) < 5 * e**2
+    # the rigid-body run started on the forced solution (planar shooting) stays on it
+    assert m["free_amplitude_rad"] < 1e-7
+    # with a free part added, it oscillates at Euler's √(2N) (§838), amplitude kept
+    r = get("libration-eccentric").simulate({"eccentricity": e, "free_zeta0_deg": 1.0, "orbits": 40})
+    assert abs(r.metrics["free_period"] / r.metrics["free_period_euler"] - 1) < 0.01
+    assert abs(r.metrics["free_amplitude_rad"] - np.radians(1.0)) < 0.05 * np.radians(1.0)
+
+
+def test_euler_forced_amplitude_fails_as_e_squared_and_near_resonance():
+    es = np.array([0.05, 0.1, 0.2])
+    errs = np.array([get("libration-eccentric").simulate({"eccentricity": e, "free_zeta0_deg": 0.0, "orbits": 1})
+                     .metrics["forced_amplitude_rel_error"] for e in es])
+    assert abs(fitted_order(es, errs) - 2.0) < 0.3  # Euler's error is O(e²) relative
+    assert errs[-1] > 0.01  # at e = 0.2 it is already a few per cent off
+    # near the resonance A² = 2N ((B−A)/C = 1/3) the linear formula overshoots badly
+    m = get("libration-eccentric").simulate({"eccentricity": 0.1, "asymmetry": 0.25, "free_zeta0_deg": 0.0,
+                                             "orbits": 1}).metrics
+    assert m["forced_amplitude_euler_rad"] > 1.2 * m["forced_amplitude_rad"]
+
+
+class _EulerOrbit:
+    """Euler's §833 parametrisation taken literally: XF = At + α sin At, 1/s³ = (1 + β cos At)/f³."""
+
+    def __init__(self, A, alpha, beta):
+        self.n, self.A, self.alpha, self.beta, self.e = A, A, alpha, beta, alpha / 2
+
+    def anomalies(self, t):
+        t = np.asarray(t, float)
+        return self.A * t + self.alpha * np.sin(self.A * t), (1 + self.beta * np.cos(self.A * t)) ** (-1 / 3)
+
+    def true_anomaly_rate(self, t):
+        return self.A * (1 + self.alpha * np.cos(self.A * np.asarray(t, float)))
+
+
+def test_second_order_term_835_in_eulers_own_model():
+    A, alpha, beta, gamma = 1.0, 0.004, 0.006, 0.02
+    N = lib.euler_N(gamma, 1.0, 1.0)
+    orb = _EulerOrbit(A, alpha, beta)
+    m = lib.forced_amplitude_euler(alpha, A, N)
+    lam0, lamdot0, P = lib.periodic_libration(orb, gamma, 1.0, guess=(0.0, A * (1 + alpha) - m * A))
+    sol = solve_ivp(lib.planar_rhs(orb, gamma, 1.0), (0, P), [lam0, lamdot0], method="DOP853", rtol=1e-12,
+                    atol=1e-14, dense_output=True)
+    t = np.linspace(0, P, 1025)[:-1]
+    zeta = orb.anomalies(t)[0] - sol.sol(t)[0]
+    a, b = lib.harmonics(t, zeta, A, 3)
+    assert abs(a[0] / m - 1) < 10 * alpha**2  # §833
+    full = lib.second_order_full(alpha, beta, A, N)
+    assert abs(a[1] / full - 1) < 0.02  # rederived coefficient, exact to O(α²)
+    euler = lib.second_order_euler(alpha, beta, A, N)
+    # Euler's N ≪ A² form differs from it by the factor (4A² − 2N)/(4A²): here 0.75 %
+    assert abs(euler / full - (4 * A * A - 2 * N) / (4 * A * A)) < 1e-12
+    assert abs(a[1] / euler - 1) < 0.03
+
+
+# ------------------------------------------------------------------ spin–orbit chaos
+
+def test_section_kernel_against_dop853_and_fourth_order():
+    th0 = np.array([0.0, 0.5, 1.0, 0.2])
+    w0 = np.array([0.6, 1.3, 2.2, 3.5])
+    _, Wr = lib.spin_orbit_section_scipy(th0, w0, 0.1, 0.89, 1, rtol=1e-13, atol=1e-14)
+    errs = []
+    for spo in (64, 128):
+        _, W = lib.spin_orbit_section(th0, w0, 0.1, 0.89, 1, spo)
+        errs.append(np.max(np.abs(W[:, 0] - Wr[:, 0])))
+    assert errs[1] < 1e-8
+    assert 2 ** 3.5 < errs[0] / errs[1] < 2 ** 4.5  # 4th order (asymptotic from ~64 steps at θ̇ = 3.5)
+
+
+@pytest.mark.parametrize("p", [0.5, 1.0, 1.5, 2.0])
+def test_islands_where_resonance_theory_puts_them(p):
+    """Small ω₀ (well separated resonances): a fixed point of the periapse map near θ̇ = p,
+    inside the Goldreich–Peale zone p ± ω₀√|H(p,e)|, at θ = 0 (H > 0) or π/2 (H < 0), and
+    elliptic (stable: |trace| < 2)."""
+    e, w0 = 0.1, 0.2
+    th_c = lib.resonance_centre_angle(p, e)
+    th, wd = lib.periapse_fixed_point(th_c, p, e, w0)
+    assert abs(np.remainder(th - th_c + np.pi / 2, np.pi) - np.pi / 2) < 1e-6
+    assert abs(wd - p) < lib.resonance_half_width(p, e, w0)
+    J = np.empty((2, 2))
+    for j in range(2):
+        d = np.zeros(2)
+        d[j] = 1e-6
+        tp, wp = lib.spin_orbit_section([th + d[0]], [wd + d[1]], e, w0, 1, 256)
+        tm, wm = lib.spin_orbit_section([th - d[0]], [wd - d[1]], e, w0, 1, 256)
+        J[:, j] = [(tp[0, 0] - tm[0, 0]) / 2e-6, (wp[0, 0] - wm[0, 0]) / 2e-6]
+    assert abs(np.trace(J)) < 2 and abs(np.linalg.det(J) - 1) < 1e-6  # area-preserving, elliptic
+
+
+def test_hyperion_chaotic_sea_and_regular_island():
+    """WPM 1984: e = 0.1, ω₀ = 0.89 — the 1:1 and 3:2 zones overlap (Chirikov), a start between
+    them is chaotic (Lyapunov time of a few orbits), the synchronous fixed point is not."""
+    e, w0 = 0.1, 0.89
+    assert lib.resonance_half_width(1.0, e, w0) + lib.resonance_half_width(1.5, e, w0) > 0.5
+    th, wd = lib.periapse_fixed_point(0.0, 0.6, e, w0)
+    _, _, lyap = lib.spin_orbit_section([th, 0.0], [wd, 1.4], e, w0, 400, 64, lyapunov=True)
+    per_orbit = lyap * 2 * np.pi
+    assert per_orbit[1] > 0.2  # chaotic: e-folding in a few orbits
+    assert per_orbit[0] < 0.05 * per_orbit[1]
+    r = get("hyperion").simulate({"n_starts": 20, "n_orbits": 100, "probe_orbits": 2})
+    assert 0 < r.metrics["chaotic_fraction"] < 1
+    assert len(r.plot_series["section_theta_dot"]) == len(r.trajectory.t)
