@@ -299,3 +299,17 @@ def test_lunar_bad_input():
         get("lunar-perturbation").simulate({"sample_days": 0.01, "step_days": 0.05})
     with pytest.raises(ParameterError):
         get("lunar-perturbation").simulate({"duration_yr": "nan"})
+
+
+def test_restricted_mode_and_jacobi_constants():
+    """Jacobi constants of the Earth–Moon points (μ = 0.01215) as tabulated by Koon, Lo, Marsden &
+    Ross (2011): C1 = 3.1883, C2 = 3.1722, C3 = 3.0121, C4 = C5 = 2.9880. A satellite released
+    at L1 leaves (unstable, Euler's collinear point); at L4 it stays (μ < 0.0385)."""
+    mu = 0.01215
+    pts = col.lagrange_points_rotating(mu / (1 - mu))
+    C = {k: float(col.jacobi_function(x, y, mu / (1 - mu))) for k, (x, y) in pts.items()}
+    for k, ref in {"L1": 3.1883, "L2": 3.1722, "L3": 3.0121, "L4": 2.9880, "L5": 2.9880}.items():
+        assert C[k] == pytest.approx(ref, abs=1e-4)
+    s = get("collinear")
+    assert s.simulate({"motion": "restricted", "lagrange_point": "L1", "turns": 3}).metrics["satellite_drift_max"] > 0.1
+    assert s.simulate({"motion": "restricted", "lagrange_point": "L4", "turns": 3}).metrics["satellite_drift_max"] < 1e-8

@@ -38,6 +38,8 @@ def _collinear(values, progress=None):
     pos0[:, 0] = x
     motion = values["motion"]
     nsamp = 600
+    if motion == "restricted":
+        return _restricted(values, alpha)
     if motion == "rotating":
         Om = col.rotation_rate(A, B, C, alpha, 1.0)
         vel0 = np.zeros((3, 3))
@@ -112,6 +114,51 @@ def _collinear(values, progress=None):
                                "AB spacing (simulated)": d1, "AB spacing (Euler)": p_euler})
 
 
+def _restricted(values, alpha):
+    """Primary, secondary (mass_ratio) and a massless satellite released at rest in the turning
+    frame at one Lagrange point; markers L1–L5 turn with the primaries (inertial frame, unit
+    distance). L1–L3 are unstable: the satellite drifts off after a few turns; L4/L5 hold for
+    μ < 0.0385 (Gascheau)."""
+    mr = values["mass_ratio"]
+    mu = mr / (1 + mr)
+    pts = col.lagrange_points_rotating(mr)
+    x0, y0 = pts[values["lagrange_point"]]
+    pos = np.array([[-mu, 0, 0], [1 - mu, 0, 0], [x0, y0, 0.0]])
+    vel = np.zeros((3, 3))
+    vel[:, 0], vel[:, 1] = -pos[:, 1], pos[:, 0]  # rate 1 about z
+    t = np.linspace(0.0, values["turns"] * 2 * math.pi, 1200)
+    t, P, V = integrate_dop853([1 - mu, mu, 0.0], pos, vel, t)
+    c, s = np.cos(t), np.sin(t)
+    bodies = {"primary": P[:, 0], "secondary": P[:, 1], "satellite": P[:, 2]}
+    for k, (x, y) in pts.items():
+        bodies[k] = np.stack([c * x - s * y, s * x + c * y, np.zeros_like(t)], axis=1)
+    # satellite in the turning frame and its drift from the point
+    xs = c * P[:, 2, 0] + s * P[:, 2, 1]
+    ys = -s * P[:, 2, 0] + c * P[:, 2, 1]
+    drift = np.hypot(xs - x0, ys - y0)
+    L = col.lagrange_distances(mr, values["distance_km"])
+    Lm = col.lagrange_distances_cr3bp(mr, values["distance_km"])
+    tt = col.translator_table_errors()
+    CJ = {k: float(col.jacobi_function(x, y, mr)) for k, (x, y) in pts.items()}
+    metrics = {"alpha": alpha, "L1_km": L[0], "L2_km": L[1], "L3_km": L[2],
+               "satellite_drift_max": float(drift.max()),
+               "translator_L1_error_km": tt["L_error_km"][0], "translator_L2_error_km": tt["L_error_km"][1],
+               "translator_L3_error_km": tt["L_error_km"][2]}
+    metrics.update({f"jacobi_constant_{k}": v for k, v in CJ.items()})
+    comps = [Comparison(f"{n} distance from the primary", L[k], Lm[k], None, "km",
+                        "Euler's quintic vs the zero of the effective-potential gradient") for k, n in enumerate(("L1", "L2", "L3"))]
+    comps += [Comparison(f"translator's table {n}", tt["L_km_table"][k], tt["L_km"][k], None, "km",
+                         f"table − quintic root = {tt['L_error_km'][k]:+.1f} km") for k, n in enumerate(("L1", "L2", "L3"))]
+    notes = [f"satellite released at {values['lagrange_point']}: largest drift {drift.max():.2e} distances in "
+             f"{values['turns']:g} turns (L1–L3 are unstable; L4/L5 stable for μ < 0.0385)",
+             "zero-velocity curves: levels of 2Ω = x² + y² + 2(1−μ)/r1 + 2μ/r2 through the points "
+             "(physics.three_body.collinear.zero_velocity_grid, jacobi_constant_* metrics)"]
+    traj = orbit_trajectory(t, bodies, "orbits/2π", series={"satellite_corotating_x": xs,
+                                                            "satellite_corotating_y": ys})
+    return Result("collinear", values, traj, metrics, comps, notes,
+                  plot_series={"satellite drift from the point (distances)": drift})
+
+
 register(Scenario(
     name="collinear",
     title="Three bodies on a line: Euler's quintic",
@@ -123,8 +170,12 @@ register(Scenario(
     params=(
         Param("masses", (3.0, 1.0, 2.0), 1e-6, 1e6, "G=1 mass", "masses A, B, C in their order on the line",
               kind="vec3"),
-        Param("motion", "rotating", unit="", help="rigid rotation, Case II collapse from rest, Case I expansion",
-              kind="choice", choices=("rotating", "collapse", "expansion")),
+        Param("motion", "rotating", unit="",
+              help="rigid rotation, Case II collapse from rest, Case I expansion, or the restricted problem "
+                   "(a massless satellite at a Lagrange point of primary + secondary)",
+              kind="choice", choices=("rotating", "collapse", "expansion", "restricted")),
+        Param("lagrange_point", "L1", kind="choice", choices=("L1", "L2", "L3", "L4", "L5"),
+              help="restricted: where the satellite is released"),
         Param("turns", 2.0, 0.1, 20.0, "turns", "rotating: number of turns shown"),
         Param("phi_max_deg", 80.0, 1.0, 89.0, "deg", "collapse: stop at this φ (φ = 90° is the collision)"),
         Param("energy", 0.5, 1e-3, 100.0, "G=1 units", "expansion: energy per unit reduced mass (> 0)",

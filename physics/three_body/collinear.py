@@ -179,3 +179,33 @@ def translator_table_errors() -> dict:
         "L_error_km": tuple(t - c for t, c in zip(tt["L_km"], Ls)),
         "alpha_error": tuple(t - c for t, c in zip(tt["alpha"], alphas)),
     }
+
+
+def lagrange_points_rotating(mass_ratio: float) -> dict:
+    """All five Lagrange points in the frame turning with the primaries (barycentre at 0,
+    primary at (−μ, 0), secondary at (1 − μ, 0), unit distance). L1–L3 from Euler's quintic,
+    L4/L5 the equilateral points (Lagrange 1772), for the markers of the restricted scene."""
+    mu = mass_ratio / (1 + mass_ratio)
+    L = lagrange_distances(mass_ratio, 1.0)
+    h = math.sqrt(3) / 2
+    return {"L1": (L[0] - mu, 0.0), "L2": (L[1] - mu, 0.0), "L3": (-L[2] - mu, 0.0),
+            "L4": (0.5 - mu, h), "L5": (0.5 - mu, -h)}
+
+
+def jacobi_function(x, y, mass_ratio: float):
+    """2Ω(x, y) = x² + y² + 2(1−μ)/r1 + 2μ/r2 in the rotating frame (unit distance and rate);
+    the zero-velocity curves are its level sets 2Ω = C_J (Jacobi constant)."""
+    mu = mass_ratio / (1 + mass_ratio)
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    r1 = np.hypot(x + mu, y)
+    r2 = np.hypot(x - 1 + mu, y)
+    return x * x + y * y + 2 * (1 - mu) / r1 + 2 * mu / r2
+
+
+def zero_velocity_grid(mass_ratio: float, n: int = 201, extent: float = 1.6):
+    """(X, Y, 2Ω) on an n×n grid of the rotating plane, for drawing the zero-velocity curves;
+    the levels through the L-points are 2Ω(L_k)."""
+    g = np.linspace(-extent, extent, n)
+    X, Y = np.meshgrid(g, g)
+    return X, Y, jacobi_function(X, Y, mass_ratio)
