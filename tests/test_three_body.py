@@ -313,3 +313,18 @@ def test_restricted_mode_and_jacobi_constants():
     s = get("collinear")
     assert s.simulate({"motion": "restricted", "lagrange_point": "L1", "turns": 3}).metrics["satellite_drift_max"] > 0.1
     assert s.simulate({"motion": "restricted", "lagrange_point": "L4", "turns": 3}).metrics["satellite_drift_max"] < 1e-8
+
+
+def test_euler_series_of_xxxiii_is_close():
+    """§XXXIII: 1/w³ − 1/u³ expanded to second order in v/u. The neglected terms are of relative
+    order (v/u)² ≈ 7e-6 in the solar force, so the node and apse rates move by ~1e-5, and the
+    orbit drifts (slowly, in phase) from the exact-force one."""
+    el, sun, mu, mus = le.initial_conditions()
+    days = 10 * le.YEAR_DAYS
+    t, Ex = le.integrate_rk4("elements", el, days, 0.025, 0.5, mu, mus, sun)
+    _, Es = le.integrate_rk4("elements", el, days, 0.025, 0.5, mu, mus, sun, euler_series=True)
+    a, b = le.node_and_apse(t, Ex), le.node_and_apse(t, Es)
+    assert b["node_rate"] == pytest.approx(a["node_rate"], rel=1e-4)
+    assert b["apse_rate"] == pytest.approx(a["apse_rate"], rel=1e-4)
+    d = np.max(np.linalg.norm(le.elements_to_position(Ex) - le.elements_to_position(Es), axis=1))
+    assert 1e-7 < d < 1e-2

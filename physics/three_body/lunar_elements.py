@@ -110,10 +110,12 @@ def rhs_cartesian(t, y, mu, mus, sun):
 
 
 @njit(cache=True)
-def rhs_elements(t, y, mu, mus, sun, sign4=1.0):
+def rhs_elements(t, y, mu, mus, sun, sign4=1.0, series=0.0):
     """Euler's element equations (§XXVII–XXVIII, corrected as in the module docstring), per
     unit time: each d/d∅ times d∅/dt = √(μp)/v². y = (p, q, Υ, ψ, ω, σ).
-    sign4 = +1: the corrected sign of the last term of dΥ (§XXVII.4); −1: as printed."""
+    sign4 = +1: the corrected sign of the last term of dΥ (§XXVII.4); −1: as printed.
+    series = 1: Euler's expansion of §XXXIII, 1/w³ − 1/u³ ≈ 3v cos μ/u⁴ + 3v²(5cos²μ − 1)/(2u⁵)
+    (and 1/w³ = 1/u³ + that), instead of the exact distances."""
     p, q, Y, psi, om, sig = y[0], y[1], y[2], y[3], y[4], y[5]
     n = mus / mu
     sx, sy, u, th = sun_state(t, sun)
@@ -128,6 +130,9 @@ def rhs_elements(t, y, mu, mus, sun, sign4=1.0):
     sinnu = ss * cd - cs * co * sd
     K, w = _K(v, u, cosmu)
     w3 = w**3
+    if series != 0.0:
+        K = 3.0 * v * cosmu / u**4 + 3.0 * v * v * (5.0 * cosmu * cosmu - 1.0) / (2.0 * u**5)
+        w3 = 1.0 / (1.0 / u**3 + K)
     den = 1.0 + q * cY
     out = np.empty(6)
     out[0] = -2.0 * n * v**3 * u * K * sinnu
@@ -143,7 +148,7 @@ def rhs_elements(t, y, mu, mus, sun, sign4=1.0):
 
 
 @njit(cache=True)
-def _rk4(which, y0, t0, h, nsteps, stride, mu, mus, sun, sign4):
+def _rk4(which, y0, t0, h, nsteps, stride, mu, mus, sun, sign4, series):
     nout = nsteps // stride + 1
     out = np.empty((nout, y0.size))
     y = y0.copy()
@@ -157,10 +162,10 @@ def _rk4(which, y0, t0, h, nsteps, stride, mu, mus, sun, sign4):
             k3 = rhs_cartesian(t + 0.5 * h, y + 0.5 * h * k2, mu, mus, sun)
             k4 = rhs_cartesian(t + h, y + h * k3, mu, mus, sun)
         else:
-            k1 = rhs_elements(t, y, mu, mus, sun, sign4)
-            k2 = rhs_elements(t + 0.5 * h, y + 0.5 * h * k1, mu, mus, sun, sign4)
-            k3 = rhs_elements(t + 0.5 * h, y + 0.5 * h * k2, mu, mus, sun, sign4)
-            k4 = rhs_elements(t + h, y + h * k3, mu, mus, sun, sign4)
+            k1 = rhs_elements(t, y, mu, mus, sun, sign4, series)
+            k2 = rhs_elements(t + 0.5 * h, y + 0.5 * h * k1, mu, mus, sun, sign4, series)
+            k3 = rhs_elements(t + 0.5 * h, y + 0.5 * h * k2, mu, mus, sun, sign4, series)
+            k4 = rhs_elements(t + h, y + h * k3, mu, mus, sun, sign4, series)
         y = y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         t = t0 + i * h
         if i % stride == 0:
@@ -170,13 +175,15 @@ def _rk4(which, y0, t0, h, nsteps, stride, mu, mus, sun, sign4):
 
 
 def integrate_rk4(kind: str, y0, duration_days: float, step_days: float, sample_days: float, mu, mus, sun,
-                  printed_sign: bool = False):
+                  printed_sign: bool = False, euler_series: bool = False):
     """Classical RK4 at a fixed step (compiled). kind = "cartesian" | "elements".
-    Returns (t, states) sampled every `sample_days` (rounded to whole steps)."""
+    Returns (t, states) sampled every `sample_days` (rounded to whole steps). printed_sign /
+    euler_series: see `rhs_elements`."""
     stride = max(1, int(round(sample_days / step_days)))
     nsteps = int(math.ceil(duration_days / step_days / stride)) * stride
     out = _rk4(0 if kind == "cartesian" else 1, np.asarray(y0, float), 0.0, step_days, nsteps, stride,
-               mu, mus, np.asarray(sun, float), -1.0 if printed_sign else 1.0)
+               mu, mus, np.asarray(sun, float), -1.0 if printed_sign else 1.0,
+               1.0 if euler_series else 0.0)
     return np.arange(out.shape[0]) * stride * step_days, out
 
 
