@@ -328,3 +328,15 @@ def test_euler_series_of_xxxiii_is_close():
     assert b["apse_rate"] == pytest.approx(a["apse_rate"], rel=1e-4)
     d = np.max(np.linalg.norm(le.elements_to_position(Ex) - le.elements_to_position(Es), axis=1))
     assert 1e-7 < d < 1e-2
+
+
+def test_small_inclination_forms_of_xxxiv():
+    """§XXXIV: the small-inclination forms of cos μ and sin ν err by O(ω⁴) (cos ω = 1 − ω²/2 + ω⁴/24)."""
+    rng = np.random.default_rng(3)
+    s, d = rng.uniform(0, 2 * np.pi, 200), rng.uniform(0, 2 * np.pi, 200)
+    for w in (0.09, 0.045):  # the Moon's 5.1°, and half of it
+        ex = le.cos_mu_sin_nu(s, d, w)
+        ap = le.cos_mu_sin_nu(s, d, w, small_inclination=True)
+        err = max(np.max(np.abs(ex[0] - ap[0])), np.max(np.abs(ex[1] - ap[1])))
+        assert err <= w**4 / 24 * 1.0001
+        assert err > w**4 / 24 * 0.5

@@ -266,6 +266,10 @@ def _syzygy(values, progress=None):
         "Sun drawn at 3 syzygy distances along its true direction (true distance "
         f"{scale:.0f} lunar distances).",
     ]
+    if values["start"] == "euler":
+        notes.append("Euler's start (his first-order solution at ω = 0, Hill's approximation) differs from the true "
+                     "centre mode by terms of order v/u ≈ 1%: that small share of the unstable mode is enough for "
+                     "the Moon to leave within about one swing.")
     # bodies: Earth-centred inertial frame, lunar distances (the Sun turns at rate 1)
     sgn = 1.0 if side == "conjunction" else -1.0
     c, s = np.cos(t), np.sin(t)

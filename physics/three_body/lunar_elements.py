@@ -386,3 +386,17 @@ def rebound_three_body(el0, sun, mu, mus, duration_days: float, sample_days: flo
         sim.serialize_particle_data(vxvyvz=buf)
         vv[k] = buf[2] - buf[1]
     return t, rr, vv
+
+
+def cos_mu_sin_nu(sigma, theta_minus_psi, omega, small_inclination: bool = False):
+    """cos μ and sin ν of §XV/§XVII/§XXXI: cos μ = cos σ cos(θ−ψ) + sin σ cos ω sin(θ−ψ),
+    sin ν = sin σ cos(θ−ψ) − cos σ cos ω sin(θ−ψ). With small_inclination, Euler's §XXXIV
+    forms with cos ω = 1 − ω²/2: cos μ ≈ cos(σ−θ+ψ) − ½ω² sin σ sin(θ−ψ),
+    sin ν ≈ sin(σ−θ+ψ) + ½ω² cos σ sin(θ−ψ) (the text's extra factor cos ω in the last term is
+    harmless at this order but should not be there)."""
+    s, d, w = np.asarray(sigma, float), np.asarray(theta_minus_psi, float), np.asarray(omega, float)
+    if small_inclination:
+        return (np.cos(s - d) - 0.5 * w * w * np.sin(s) * np.sin(d),
+                np.sin(s - d) + 0.5 * w * w * np.cos(s) * np.sin(d))
+    return (np.cos(s) * np.cos(d) + np.sin(s) * np.cos(w) * np.sin(d),
+            np.sin(s) * np.cos(d) - np.cos(s) * np.cos(w) * np.sin(d))
