@@ -64,8 +64,8 @@ def _pole_near_axis(values, progress=None):
     # F is fixed in space, the body turns: F's inertial position (initial body frame = space)
     traj = Trajectory(t, q, L, I, time_unit="s", bodies={"centre": np.tile(u, (len(t), 1))},
                       figure_axis_index=0)
-    # the momentary rates: a separate short run over 1/50 turn, finely sampled
-    ts, Ls, qs = integrate(I, w0, T / 50, T / 5000, masses=[PointMass(tidal, _fixed_direction(u))],
+    # the momentary rates: a separate short run over 1/200 turn, finely sampled
+    ts, Ls, qs = integrate(I, w0, T / 200, T / 20000, masses=[PointMass(tidal, _fixed_direction(u))],
                            scheme="yoshida4")
     dspin, dbeta, dgamma = measure_pole_rates(ts, Ls / I)
     e = pole_rates_840(I, spin, (cz, ce, ct), tidal)
@@ -168,13 +168,20 @@ def initial_state_844(theory, n, lam0, delta, h):
 
 
 def simulate_circular(eps_over_delta, flattening, obliquity, h, orbits, steps_per_orbit,
-                      scheme="yoshida4", lam0=np.pi / 2, progress=None, max_samples=MAX_SAMPLES):
-    """Run §844's problem: δ = 1, GM/s³ = 1, s = 1. Returns (t, L, q, I, theory objects)."""
+                      scheme="yoshida4", lam0=np.pi / 2, progress=None, max_samples=MAX_SAMPLES, on_axis=False):
+    """Run §844's problem: δ = 1, GM/s³ = 1, s = 1. Returns (t, L, q, I, N, corrected theory).
+
+    The pole of rotation starts at its forced place (plus h) of the corrected linear theory, or
+    on the figure axis if `on_axis` or if that place is infinite (at the resonance)."""
     I = spheroid_moments(flattening)
     delta, eps = 1.0, eps_over_delta
     N = euler_N(1.0, I[2], I[0], eps)
     corr = linear_theory(N, eps, delta, obliquity, I[2] / I[0], corrected=True)
-    w0, q0 = initial_state_844(corr, obliquity, lam0, delta, h)
+    if on_axis or not (np.isfinite(corr.F) and np.isfinite(corr.G)):
+        q0 = attitude_from_pole(obliquity, lam0)
+        w0 = np.array([0.0, 0.0, eps])
+    else:
+        w0, q0 = initial_state_844(corr, obliquity, lam0, delta, h)
     dur = 2 * np.pi * orbits
     n = int(np.ceil(orbits * steps_per_orbit))
     centre = lambda t: np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], -1)  # noqa: E731
