@@ -54,8 +54,9 @@ def e11_table():
     rel = float(np.max(err / np.array(tt["L_km"])))
     return dict(euler=tt["L_km_table"][1], simulated=tt["L_km"][1], modern=tt["L_km"][1], rel_error=rel,
                 tolerance=1e-3, unit="km (L2)",
-                note="the table is slightly off: table − root = {:+.0f}, {:+.0f}, {:+.0f} km for L1, L2, L3 (passes: "
-                     "the error is below 0.1%, i.e. rounding of α, not a wrong equation)".format(*tt["L_error_km"]))
+                note="the table is slightly off: table − root = {:+.0f}, {:+.0f}, {:+.0f} km for L1, L2, L3; its α1, α2 "
+                     "miss the root by ≈ 2.6e-4, 2.9e-4 (far more than the rounding of the printed digits): a numerical "
+                     "slip, not a different equation (the row passes if the slip stays below 0.1%)".format(*tt["L_error_km"]))
 
 
 @register_check("E12", "Moon swinging about syzygy: frequency vs Euler's √(√28 − 1)", "Euler 1766 §12–§16")
@@ -116,7 +117,7 @@ def e13():
                               math.radians(le.MOON_J2000["inclination_deg"]))
     return dict(euler=2 * math.pi / abs(fo["node_rate"]) / le.YEAR_DAYS, simulated=na["node_period_yr"], modern=le.NODE_PERIOD_YR, rel_error=rel, tolerance=0.01,
                 unit="yr", note="Euler column: first-order rate (3/4)n'²/n cos i; published 6798.38 d (Explanatory Supplement 2013); model: Sun on a fixed Kepler "
-                                "ellipse, no planets, no Earth oblateness (their share of the node rate is < 0.1%)")
+                                "ellipse, no planets, no Earth oblateness (the 0.05% left is of their order)")
 
 
 @register_check("E13.apse", "advance of the Moon's perigee from Euler's element equations (40 yr)", "Euler 1768 §XXVII, §XXXII")
@@ -128,7 +129,7 @@ def e13_apse():
     return dict(euler=2 * math.pi / fo["apse_rate"] / le.YEAR_DAYS, simulated=na["apse_period_yr"],
                 modern=le.APSE_PERIOD_YR, rel_error=rel, tolerance=0.02, unit="yr",
                 note="Euler column: the first-order rate, half the observed motion (Clairaut's 1747 puzzle); "
-                     "published 3232.6 d; planets add ~0.2%")
+                     "published 3232.6 d; planets and the Earth's figure are left out")
 
 
 @register_check("E13.identities", "Euler's identities dω/sin ω = dψ/tan σ and dσ = d∅ − dψ cos ω along the orbit", "Euler 1768 §VII–§IX")
