@@ -15,8 +15,10 @@ Errors in the translation, checked here by re-deriving from Eqs. (1)–(3):
 - Eq. (17), (19), (22), (24), (27) and §7 carry "B ∓ C" or "B − C": the correct coefficient is
   B + C (q̈ = ż̈ − ÿ = A/p² − A/(p+q)² − (B+C)/q²). The quintic (33) itself is right.
 - The translator's table for the Earth–Moon points (α1 = 0.17737, α2 = 0.167417,
-  α3 = 1.00711; L1 = 326490 km, L2 = 448755 km, L3 = 381686 km) is slightly off: see
-  `translator_table_errors` (the root of the quintic gives L1 ≈ 326,4xx km etc.).
+  α3 = 1.00711; L1 = 326490 km, L2 = 448755 km, L3 = 381686 km) is slightly off: with its
+  own inputs the root of the quintic is α = 0.177628, 0.167711, 1.007124, i.e. L1 = 326419 km,
+  L2 = 448868 km, L3 = 381681 km — the table is off by +71, −113 and +5 km
+  (`translator_table_errors`). With the IAU mass ratio 0.0123000371: 326381, 448915, 381675 km.
 """
 from __future__ import annotations
 
