@@ -102,6 +102,10 @@ def _collinear(values, progress=None):
         f"L3 = {tt['L_km'][2]:.0f} km (table 381686, {tt['L_error_km'][2]:+.0f} km).",
         "Eqs. (17), (19), (22), (24), (27) print 'B ∓ C' / 'B − C'; re-derived, the coefficient is B + C.",
     ]
+    if motion == "rotating":
+        notes.append("The rigidly turning line is a true solution but an unstable one (for every choice of masses): "
+                     f"round-off grows to a {ratio_err:.1e} change of the ratio in {values['turns']:g} turns; "
+                     "give it more turns to watch the line break.")
     # L-point markers in the rotating frame of the primaries (units of the primaries' distance,
     # primary at the origin), for the restricted-case scene
     Lx = np.array([L[0], L[1], -L[2]]) / d
