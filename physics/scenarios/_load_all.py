@@ -5,3 +5,4 @@ from . import precession  # noqa: F401
 from . import libration  # noqa: F401
 from . import hyperion  # noqa: F401
 from . import earth_precession  # noqa: F401
+from . import moon  # noqa: F401
