@@ -195,7 +195,16 @@ def fit_circular(t, axis, delta, eps_gyro):
     p, lam = pole_angles(axis)
     c1, c0 = np.polyfit(t, lam, 1)
     phi = c0 + c1 * t - delta * t
-    return fit_pole(t, axis, {"2phi": 2 * phi, "free": eps_gyro * t}), phi
+    # the free wobble's frequency is ε' shifted by terms of order N (the torque): over a long run
+    # that shift smears a fit at exactly ε', so the frequency is refined by maximising its amplitude
+    span = t[-1] - t[0]
+    best = None
+    for w in eps_gyro + np.linspace(-8.0, 8.0, 33) * np.pi / max(span, 1e-300):
+        f = fit_pole(t, axis, {"2phi": 2 * phi, "free": w * t})
+        a = f.amplitude("free", "obliquity")
+        if best is None or a > best[0]:
+            best = (a, f)
+    return best[1], phi
 
 
 def _check_circular(values):

@@ -1,0 +1,270 @@
+"""Problems 95–96 (§840–849) and the Earth's precession and nutation.
+
+References: the equations of motion evaluated directly (§840), scipy DOP853 at tight tolerance
+(the splitting integrator), the corrected linear theory (Euler's with the gyroscopic term he
+dropped), REBOUND (the Moon's node), and IAU 2006/2000A computed with pyerfa.
+The Earth is run over 40 years here (the scenario's default is a century; 40 years hold two
+18.6-year cycles and take a few seconds)."""
+from __future__ import annotations
+
+import erfa
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from physics import quaternion as quat
+from physics.euler_equations import rhs_state
+from physics.params import ParameterError
+from physics.precession import (ARCSEC, equal_moments_841, euler_N, fit_pole, linear_theory, pole_rates_840,
+                                resonance_849)
+from physics.scenarios.base import get
+from physics.scenarios.precession import fit_circular, simulate_circular, spheroid_moments
+from physics.trajectory import Trajectory
+
+N_DEG = 23.44
+
+
+# --- §840–843 --------------------------------------------------------------------------------
+
+def _omega_dot(I, w, tidal, u):
+    """ω̇ from Euler's equations with the torque 3GM/s³·ŝ×Iŝ, written out independently."""
+    tau = 3 * tidal * np.cross(u, I * u)
+    return (tau - np.cross(w, I * w)) / I
+
+
+@pytest.mark.parametrize("moments", [(1.3, 1.0, 0.8), (1.2, 1.0, 1.0), (0.8, 1.1, 1.2)])
+def test_pole_rates_840_equal_equations_of_motion_at_the_axis(moments):
+    I = np.array(moments)
+    spin, tidal = 7.0, 2.0
+    u = np.array([np.cos(0.7), np.sin(0.7) * np.cos(0.4), np.sin(0.7) * np.sin(0.4)])
+    wd = _omega_dot(I, np.array([spin, 0, 0]), tidal, u)
+    r = pole_rates_840(I, spin, u, tidal)
+    # x = γ' cos α ≈ γ', y = γ' cos β → dy = −γ' dβ, dz = −γ' dγ (at β = γ = 90°)
+    assert r.dspin_dt == pytest.approx(wd[0], rel=1e-12, abs=1e-14)
+    assert r.dbeta_dt == pytest.approx(-wd[1] / spin, rel=1e-12)
+    assert r.dgamma_dt == pytest.approx(-wd[2] / spin, rel=1e-12)
+
+
+def test_equal_moments_841_843():
+    I = np.array([1.2, 1.0, 1.0])
+    spin, tidal, zeta = 5.0, 1.5, 0.6
+    u = np.array([np.cos(zeta), np.sin(zeta) * np.cos(1.0), np.sin(zeta) * np.sin(1.0)])
+    r = pole_rates_840(I, spin, u, tidal)
+    e = equal_moments_841(I, spin, u, tidal)
+    assert r.dspin_dt == 0.0
+    assert r.dbeta_dt * u[1] + r.dgamma_dt * u[2] == pytest.approx(0.0, abs=1e-14)  # §841
+    assert r.pole_speed == pytest.approx(e["pole_speed"], rel=1e-12)  # §842
+    disp = np.array([-r.dbeta_dt, -r.dgamma_dt])
+    assert np.allclose(disp / np.linalg.norm(disp), e["direction_BC"])  # §843: sense C→B
+    assert np.cross(np.append(u[1:], 0), np.append(disp, 0))[2] < 0  # turned −90° from F's projection
+
+
+def test_pole_near_axis_scenario_matches_euler_and_shows_dropped_term():
+    s = get("pole-near-axis")
+    m = s.simulate({"duration_turns": 1.0}).metrics
+    for k in ("dbeta_dt", "dgamma_dt"):
+        assert m[k] == pytest.approx(m[k + "_euler"], rel=1e-6)
+    # off the axis, Euler's rates miss the free wobble γ'(aa−cc)/bb·α (§840 drops it)
+    r = s.simulate({"duration_turns": 1.0, "offset_deg": 0.5, "moments": (1.2, 1.0, 1.0)})
+    wobble = 10.0 * 0.2 / 1.0 * np.radians(0.5)
+    miss = np.hypot(r.metrics["dbeta_dt"] - r.metrics["dbeta_dt_euler"], r.metrics["dgamma_dt"] - r.metrics["dgamma_dt_euler"])
+    assert miss == pytest.approx(wobble, rel=0.05)
+
+
+# --- §844–849 --------------------------------------------------------------------------------
+
+def test_splitting_matches_dop853_on_the_circular_problem():
+    """The figure axis against DOP853 (rtol 1e-12): small, and falling as h⁴ (yoshida4)."""
+    r, f, n = 10.0, 0.1, np.radians(N_DEG)
+    errs = []
+    for steps in (100, 200):
+        t, L, q, I, N, corr = simulate_circular(r, f, n, 0.01, 3, steps)
+        centre = lambda tt: np.array([np.cos(tt), np.sin(tt), 0.0])  # noqa: E731
+
+        def torque(tt, qq, w):
+            s = quat.rotate_inverse(qq / np.linalg.norm(qq), centre(tt))
+            return 3.0 * np.cross(s, I * s)
+
+        y0 = np.concatenate([L[0] / I, q[0]])
+        sol = solve_ivp(rhs_state, (0, t[-1]), y0, method="DOP853", rtol=1e-12, atol=1e-12, t_eval=t,
+                        args=(I, torque))
+        ax_ref = quat.rotate(quat.normalize(sol.y[3:].T), np.array([0, 0, 1.0]))
+        ax = quat.rotate(q, np.array([0, 0, 1.0]))
+        errs.append(np.max(np.arccos(np.clip(np.sum(ax * ax_ref, axis=1), -1, 1))))
+    assert errs[1] < 1e-6  # against a nutation of 3e-3 rad and a precession of 0.1 rad over the run
+    assert 8 < errs[0] / errs[1] < 32  # fourth order
+
+
+def _run(r, f, orbits=60, steps=200, h=0.0, on_axis=False):
+    n = np.radians(N_DEG)
+    t, L, q, I, N, corr = simulate_circular(r, f, n, h, orbits, steps, on_axis=on_axis)
+    traj = Trajectory(t, q, L, I)
+    fit, _ = fit_circular(t, traj.figure_axis, 1.0, corr.eps_gyro)
+    return fit, N, corr, I, traj, linear_theory(N, r, 1.0, n)
+
+
+def test_precession_rate_euler_846_off_by_his_neglected_gyroscopic_term():
+    """ε ≫ δ: Euler's −N cos n is too fast by C/A (the (aa−cc)/bb·xz term he drops in §840);
+    what remains is of order N/δ."""
+    fit, N, corr, I, _, eul = _run(30.0, 0.05)
+    ratio = fit.rate_longitude / eul.precession_rate
+    assert ratio == pytest.approx(I[0] / I[2], abs=3 * N)
+    assert fit.rate_longitude == pytest.approx(corr.precession_rate, rel=3 * N)
+    assert abs(ratio - 1) > 0.5 * (I[2] - I[0]) / I[0]  # the neglected term is really there
+
+
+def test_nutation_terms_844_and_free_wobble():
+    fit, N, corr, I, _, eul = _run(30.0, 0.05, h=0.002)
+    ca = (I[2] - I[0]) / I[0]
+    ap, al = -fit.obliquity["2phi"][1], fit.longitude["2phi"][0]
+    assert ap == pytest.approx(corr.obliquity_amplitude, rel=3 * N + 0.005)
+    assert al == pytest.approx(corr.longitude_amplitude, rel=3 * N + 0.005)
+    assert ap == pytest.approx(eul.obliquity_amplitude, rel=1.2 * ca + 3 * N)
+    assert al == pytest.approx(eul.longitude_amplitude, rel=1.2 * ca + 3 * N)
+    # Euler's h: the diurnal circle of the figure axis (§848), radius h·ε/ε' with the gyroscopic term
+    assert fit.amplitude("free", "obliquity") == pytest.approx(0.002 * I[0] / I[2], rel=0.02)
+
+
+def test_nutation_grows_toward_resonance_as_1_over_eps2_minus_4delta2():
+    f = 0.01
+    I = spheroid_moments(f)
+    amps = {}
+    for r in (20.0, 4.0, 2.6):
+        fit, N, corr, _, _, eul = _run(r, f, orbits=40)
+        amps[r] = -fit.obliquity["2phi"][1]
+        assert amps[r] == pytest.approx(corr.obliquity_amplitude, rel=0.03)
+    # ε/δ = 20 → 2.6: Euler's factor εN(ε + 2δ cos n)/(ε² − 4δ²) grows ~8-fold (N ∝ 1/ε)
+    assert amps[2.6] / amps[20.0] > 5
+    # the true divergence sits at ε/δ = 2A/C, where Euler's formula is still finite
+    r_res = 2 * I[0] / I[2]
+    assert np.isfinite(linear_theory(euler_N(1.0, I[2], I[0], r_res), r_res, 1.0, 0.4).F)
+    assert not np.isfinite(linear_theory(euler_N(1.0, I[2], I[0], r_res), r_res, 1.0, 0.4, I[2] / I[0], True).F)
+
+
+def test_resonance_849_secular_growth():
+    f = 0.01
+    I = spheroid_moments(f)
+    r = 2 * I[0] / I[2]
+    fit, N, corr, _, traj, _ = _run(r, f, orbits=4, steps=400, on_axis=True)
+    alpha = np.arccos(np.clip(np.sum(traj.rotation_axis * traj.figure_axis, axis=1), -1, 1))
+    sel = traj.t > np.pi
+    slope = np.polyfit(traj.t[sel], alpha[sel], 1)[0]
+    assert slope == pytest.approx(resonance_849(N, 1.0, np.radians(N_DEG))["alpha_growth_rate"], rel=0.05)
+    # far from resonance α stays at its forced size
+    fit2, N2, corr2, _, traj2, _ = _run(20.0, f, orbits=4, steps=200, on_axis=True)
+    a2 = np.arccos(np.clip(np.sum(traj2.rotation_axis * traj2.figure_axis, axis=1), -1, 1))
+    assert a2.max() < 0.05 * alpha.max()
+
+
+def test_scenario_metrics_and_notes_near_resonance():
+    s = get("precession-circular")
+    r = s.simulate({"eps_over_delta": 2.05, "orbits": 5})
+    assert any("resonance" in n for n in r.notes)
+    assert np.isfinite(r.metrics["alpha_max_rad"])
+    assert set(r.plot_series) >= {"obliquity p (rad)", "obliquity p, Euler §847 (rad)"}
+    with pytest.raises(ParameterError):
+        s.resolve({"eps_over_delta": "0"})
+    with pytest.raises(ParameterError):
+        s.resolve({"orbits": 1e5, "steps_per_orbit": 1000})
+
+
+def test_fit_pole_recovers_known_terms():
+    t = np.linspace(0, 1000, 20001)
+    lam = 1.0 - 1e-3 * t + 2e-4 * np.sin(0.3 * t) + 1e-5 * np.cos(0.3 * t)
+    p = 0.4 + 5e-5 * np.cos(0.3 * t) + 3e-6 * np.sin(0.02 * t)
+    ax = np.stack([np.sin(p) * np.cos(lam), np.sin(p) * np.sin(lam), np.cos(p)], -1)
+    f = fit_pole(t, ax, {"a": 0.3 * t, "b": 0.02 * t})
+    assert f.rate_longitude == pytest.approx(-1e-3, rel=1e-9)
+    assert f.longitude["a"] == pytest.approx((2e-4, 1e-5), rel=1e-6)
+    assert f.obliquity["a"][1] == pytest.approx(5e-5, rel=1e-6)
+    assert f.obliquity["b"][0] == pytest.approx(3e-6, rel=1e-5)
+
+
+# --- the Earth ------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def earth():
+    return get("earth").simulate({"years": 40.0})
+
+
+def _iau2006_psi_a_rate():
+    """dψ_A/dt at J2000 from erfa.p06e (IAU 2006), arcsec per year."""
+    d = 1.0  # days
+    a = erfa.p06e(2451545.0, -d)[1]
+    b = erfa.p06e(2451545.0, d)[1]
+    return (b - a) / (2 * d) / ARCSEC * 365.25
+
+
+def _iau2000_terms(years=40.0):
+    """Amplitudes of the 18.6-yr, semi-annual and 13.66-d terms fitted to erfa.nut00a."""
+    jd = 2451545.0 + np.arange(0, years * 365.25, 0.5)
+    tc = (jd - 2451545.0) / 36525
+    dpsi, deps = erfa.nut00a(2451545.0, jd - 2451545.0)
+    om, f, d = erfa.faom03(tc), erfa.faf03(tc), erfa.fad03(tc)
+    args = {"om": om, "semi": 2 * f - 2 * d + 2 * om, "fort": 2 * f + 2 * om, "2om": 2 * om,
+            "lp": erfa.falp03(tc), "l": erfa.fal03(tc)}
+    cols = [np.ones_like(tc), tc]
+    for v in args.values():
+        cols += [np.sin(v), np.cos(v)]
+    M = np.stack(cols, 1)
+    cp = np.linalg.lstsq(M, dpsi, rcond=None)[0] / ARCSEC
+    ce = np.linalg.lstsq(M, deps, rcond=None)[0] / ARCSEC
+    out = {}
+    for i, k in enumerate(args):
+        out[k] = (cp[2 + 2 * i], ce[3 + 2 * i])  # Δψ: sin coefficient; Δε: cos coefficient
+    return out
+
+
+def test_earth_precession_within_half_percent_of_iau2006(earth):
+    m = earth.metrics
+    ref = _iau2006_psi_a_rate()
+    assert ref == pytest.approx(50.3848, abs=1e-3)  # the published 5038.481507″/cy
+    assert m["precession_rate_arcsec_per_yr"] == pytest.approx(ref, rel=0.005)
+    assert m["precession_solar_arcsec_per_yr"] + m["precession_lunar_arcsec_per_yr"] == pytest.approx(
+        m["precession_rate_arcsec_per_yr"], rel=2e-3)  # linear in the torques to O(H)
+    assert m["precession_lunar_arcsec_per_yr"] / m["precession_solar_arcsec_per_yr"] == pytest.approx(2.16, abs=0.05)
+    assert m["precession_period_yr"] == pytest.approx(25722, rel=0.005)
+    # Euler's §846 sum is too fast by C/A and the Moon's inclination/eccentricity factors
+    assert m["precession_rate_euler_arcsec_per_yr"] > m["precession_rate_arcsec_per_yr"]
+
+
+def test_earth_nutation_18_6yr_within_3_percent_and_semiannual_within_10(earth):
+    m = earth.metrics
+    iau = _iau2000_terms()
+    # sanity of the erfa fit: −17.2064161″ − 0.0174666″·T with T ≈ 0.2 cy the middle of the fitted span
+    assert iau["om"][0] == pytest.approx(-17.2064161 - 0.0174666 * 0.2, abs=1e-3)
+    assert m["nutation_longitude_18_6yr_arcsec"] == pytest.approx(iau["om"][0], rel=0.03)
+    assert m["nutation_obliquity_18_6yr_arcsec"] == pytest.approx(iau["om"][1], rel=0.03)
+    assert m["nutation_longitude_semiannual_arcsec"] == pytest.approx(iau["semi"][0], rel=0.10)
+    assert m["nutation_obliquity_semiannual_arcsec"] == pytest.approx(iau["semi"][1], rel=0.10)
+    # the 13.66-day term of the angular-momentum axis: 10% below the CIP's (Oppolzer term + non-rigid)
+    assert m["nutation_longitude_13_66d_arcsec"] == pytest.approx(iau["fort"][0], rel=0.15)
+    # and the moon's node regression really comes out of the REBOUND integration
+    assert m["moon_node_period_yr"] == pytest.approx(18.6129, rel=0.003)
+
+
+def test_earth_trajectory_and_series(earth):
+    tr = earth.trajectory
+    assert set(tr.bodies) == {"sun", "moon"}
+    assert np.allclose(np.linalg.norm(tr.bodies["moon"], axis=1), 1.0)
+    assert len(tr) <= 20001
+    for k, v in earth.plot_series.items():
+        assert v.shape == tr.t.shape, k
+
+
+def test_long_view_pole_reaches_vega_region_and_passes_polaris():
+    from app.bright_stars import load_bright_stars
+    from physics.earth_precession import pole_star_passages
+    from physics.scenarios.earth_precession import run_long_view
+
+    cat = load_bright_stars()
+    assert {"Polaris", "Vega", "Thuban", "Deneb", "Alderamin"} <= set(cat.names)
+    t, L, q, I, orb = run_long_view(years=3000.0, step_days=2.0, sample_years=2.0, calibration_years=20.0)
+    ax = quat.rotate(q, L)
+    ax /= np.linalg.norm(ax, axis=1, keepdims=True)
+    lam = np.unwrap(np.arctan2(ax[:, 1], ax[:, 0]))
+    rate = -np.polyfit(t / 365.25, lam, 1)[0] / ARCSEC
+    assert rate == pytest.approx(_iau2006_psi_a_rate(), rel=0.005)
+    passes = pole_star_passages(t / 365.25 + 2000, ax, cat.names, cat.ra_deg, cat.dec_deg, within_deg=1.0)
+    name, year, sep = passes[0]
+    assert name == "Polaris" and 2080 < year < 2120 and sep < 0.5  # closest approach ≈ 0.45° around 2100
