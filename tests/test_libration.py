@@ -280,3 +280,58 @@ def test_hyperion_chaotic_sea_and_regular_island():
     r = get("hyperion").simulate({"n_starts": 20, "n_orbits": 100, "probe_orbits": 2})
     assert 0 < r.metrics["chaotic_fraction"] < 1
     assert len(r.plot_series["section_theta_dot"]) == len(r.trajectory.t)
+
+
+# ------------------------------------------------------------------ the Moon
+
+def test_lunar_position_and_optical_libration_against_meeus_examples():
+    """Meeus, Astronomical Algorithms (2nd ed.), Example 47.a and 53.a: 1992 April 12, 0h TD
+    (JD 2448724.5): λ = 133.162655°, β = −3.229126°, Δ = 368409.7 km (of date, no nutation);
+    l′ = −1.206°, b′ = +4.194° (his values include nutation, ~0.005°)."""
+    from physics import moon
+    t = np.array([2448724.5 - 2451545.0])
+    lon, lat, dist = moon.moon_geocentric(t)
+    lon_of_date = np.degrees(lon[0]) + moon.PRECESSION_DEG_PER_CY * t[0] / 36525.0
+    assert abs(np.remainder(lon_of_date - 133.162655 + 180, 360) - 180) < 0.02  # 31 of Meeus's 60 terms
+    assert abs(np.degrees(lat[0]) + 3.229126) < 0.01
+    assert abs(dist[0] - 368409.7) < 30.0
+    lp, bp = moon.optical_libration_meeus(t)
+    assert abs(np.degrees(lp[0]) + 1.206) < 0.01 and abs(np.degrees(bp[0]) - 4.194) < 0.01
+    # the Cassini frame's sub-Earth point is the same closed form (two independent routes)
+    tt = np.linspace(0, 6800, 3000)
+    l, b = moon.sub_earth_point(moon.mean_frame(tt), moon.earth_from_moon(tt))
+    lp, bp = moon.optical_libration_meeus(tt)
+    assert np.max(np.abs(np.remainder(l - lp + np.pi, 2 * np.pi) - np.pi)) < 1e-9
+    # maxima over an 18.6-yr nodal cycle: published about ±7.9° and ±6.8°
+    assert abs(np.degrees(np.max(np.abs(lp))) - moon.OPTICAL_MAX_LON_DEG) < 0.25
+    assert abs(np.degrees(np.max(np.abs(bp))) - moon.OPTICAL_MAX_LAT_DEG) < 0.1
+
+
+def test_moon_physical_libration_against_euler_and_published_terms():
+    from physics import moon
+    r = get("moon").simulate({"years": 6.0})
+    m = r.metrics
+    # the face seen from the Earth: optical libration, the body's own motion only arcminutes
+    assert m["sub_earth_vs_uniform_lon_max_arcsec"] < 300
+    assert abs(m["optical_libration_lon_max_deg"] - moon.OPTICAL_MAX_LON_DEG) < 0.25
+    assert abs(m["optical_libration_lat_max_deg"] - moon.OPTICAL_MAX_LAT_DEG) < 0.15
+    # Euler's forced libration (§833/§836) term by term: linear in e and in each term, so a few %
+    for key in ("mprime", "annual", "evection"):
+        sim = m[f"physical_libration_{key}_arcsec"]
+        eul = m[f"physical_libration_{key}_euler_arcsec"]
+        assert abs(sim / eul - 1) < 0.05, key
+    # published (Eckhardt 1981 via Meeus ch. 53): −16.8″ sin M′, +90.7″ E sin M, −4.14″ sin(2D−M′).
+    # Not modelled: the Moon's third-degree gravity field and the Sun's direct torque (~1″ each).
+    assert abs(m["physical_libration_mprime_arcsec"] - m["physical_libration_mprime_published_arcsec"]) < 1.6
+    assert abs(m["physical_libration_annual_arcsec"] / m["physical_libration_annual_published_arcsec"] - 1) < 0.02
+    assert abs(m["physical_libration_evection_arcsec"] + 0.00115 * 3600) < 0.3
+    assert m["free_libration_amplitude_arcsec"] < 20  # started on Euler's forced solution
+
+
+def test_moon_free_libration_period():
+    """Started rotating uniformly, the Moon librates freely at 2π/√(2N) (§838); LLR: 1056 d
+    (Rambaux & Williams 2011). The fit scans the period on a 10-day grid."""
+    m = get("moon").simulate({"years": 6.0, "start": "uniform"}).metrics
+    assert m["free_libration_amplitude_arcsec"] > 100
+    assert abs(m["free_libration_period_days"] / m["free_libration_period_euler_days"] - 1) < 0.02
+    assert abs(m["free_libration_period_days"] / 1056.0 - 1) < 0.02
