@@ -53,7 +53,7 @@ def add_param_control(gui, p: Param, value: Any):
     if p.kind == "choice":
         return gui.add_dropdown(label, [str(c) for c in p.choices], initial_value=str(value), hint=hint)
     if p.kind == "vec3":
-        return gui.add_vector3(label, tuple(float(x) for x in value), step=_step(p), hint=hint)
+        return gui.add_vector3(label, tuple(float(x) for x in value), step=p.step or 0.001, hint=hint)
     rng = slider_range(p)
     if rng is not None:
         lo, hi, step = rng

@@ -184,6 +184,13 @@ class SceneView:
         self.state = SceneState()
 
     def _all_handles(self):
+        seen = set()
+        for h in self._handles():
+            if id(h) not in seen:
+                seen.add(id(h))
+                yield h
+
+    def _handles(self):
         s = self.state
         for paths in s.paths.values():
             for p in paths:

@@ -93,6 +93,7 @@ class ClientSession:
         self.playing = True
         self.clock = 0.0  # playback time as a fraction of the run, 0..1
         self._guard = False  # set while the code itself moves the scrubber
+        self._view_lock = threading.RLock()  # the worker rebuilds while the player animates
         self._lock = threading.Lock()
         self._cv = threading.Condition(self._lock)
         self._request: tuple[int, str, dict] | None = None
@@ -194,12 +195,14 @@ class ClientSession:
     def _on_exaggerate(self) -> None:
         if self.result is None:
             return
-        with self.client.atomic():
+        with self._view_lock, self.client.atomic():
             self.view.set_exaggerate(self.exag.value)
             self.view.set_frame(self._frame_index())
 
     def _on_toggle(self, key: str) -> None:
-        with self.client.atomic():
+        if self._guard:
+            return
+        with self._view_lock, self.client.atomic():
             self.view.set_overlay(key, self.toggles[key].value)
 
     # ---- simulation worker -----------------------------------------------------------------
@@ -256,7 +259,7 @@ class ClientSession:
         t_sim = time.perf_counter() - t0
         if self._gen != gen:
             raise _Stale()
-        with self.client.atomic():
+        with self._view_lock, self.client.atomic():
             if self._gen != gen or spec.name != self.spec.name:
                 raise _Stale()
             overlays = None
@@ -304,7 +307,7 @@ class ClientSession:
             return
         i = self._frame_index()
         if force or i != self.view.frame:
-            with self.client.atomic():
+            with self._view_lock, self.client.atomic():
                 self.view.set_frame(i)
 
     def _play(self) -> None:

@@ -1,0 +1,265 @@
+"""The web app in a real headless Chromium (Debian's /usr/bin/chromium driven by Playwright;
+never a downloaded browser). Run: pytest -m browser tests/test_app_browser.py
+
+Every request the page makes outside 127.0.0.1 / file:// is aborted and recorded, so "loads with
+no internet" is checked, not assumed. The scene is read from the client's own scene tree
+(`window.__viserMutable.nodeRefFromName`, internal to viser 1.1).
+"""
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.browser
+
+CHROMIUM = "/usr/bin/chromium"
+ARGS = ["--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+        "--disable-background-networking", "--disable-component-update", "--no-first-run"]
+WAIT_MS = 120_000  # generous: 2 shared cores, software WebGL (not a performance limit)
+SCREENSHOTS = Path(__file__).resolve().parent.parent / "docs" / "screenshots"
+
+SIGNATURE_JS = """(name) => {
+  const o = window.__viserMutable && window.__viserMutable.nodeRefFromName[name];
+  if (!o) return null;
+  let n = 0, s = 0;
+  o.traverse(c => {
+    const g = c.geometry; if (!g || !g.attributes) return;
+    for (const k in g.attributes) {
+      const a = g.attributes[k]; const arr = a.array || (a.data && a.data.array);
+      if (!arr) continue;
+      n += arr.length; for (let i = 0; i < arr.length; i += 3) s += Math.abs(arr[i]);
+    }
+  });
+  return [n, s];
+}"""
+
+INPUTS_JS = """(label) => {
+  const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
+  if (!l) return [];
+  let p = l;
+  for (let k = 0; k < 8 && p; k++) {
+    p = p.parentElement;
+    const ins = p ? p.querySelectorAll('input[type=text]') : [];
+    if (ins.length) return Array.from(ins);
+  }
+  return [];
+}"""
+
+
+def _have_browser() -> bool:
+    try:
+        import playwright  # noqa: F401
+    except ImportError:
+        return False
+    return os.path.exists(CHROMIUM)
+
+
+if not _have_browser():
+    pytest.skip("needs Debian's chromium at /usr/bin/chromium and python playwright", allow_module_level=True)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield b
+        b.close()
+
+
+def _server(scenario):
+    from app.server import make_server
+
+    server, sessions = make_server(port=_free_port(), host="127.0.0.1", scenario=scenario, verbose=False)
+    return server, sessions
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def tumble_app():
+    server, sessions = _server(None)  # default scenario: free-tumble
+    yield f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1", sessions
+    server.stop()
+
+
+@pytest.fixture(scope="module")
+def flip_app():
+    server, sessions = _server("middle-axis-flip")
+    yield f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1", sessions
+    server.stop()
+
+
+class Page:
+    """A browser context + page, with every request off this machine aborted and recorded."""
+
+    def __init__(self, browser, url):
+        self.outside: list[str] = []
+        self.ctx = browser.new_context(viewport={"width": 1280, "height": 800})
+
+        def route(r):
+            u = r.request.url
+            if u.startswith(("http://127.0.0.1", "ws://127.0.0.1", "file://", "data:", "blob:")):
+                r.continue_()
+            else:
+                self.outside.append(u)
+                r.abort()
+
+        self.ctx.route("**/*", route)
+        self.page = self.ctx.new_page()
+        self.page.goto(url)
+
+    def wait_ready(self):
+        pg = self.page
+        pg.wait_for_function("!document.body.innerText.includes('Connecting')", timeout=WAIT_MS)
+        pg.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/polhode/0']",
+                             timeout=WAIT_MS)
+        return self
+
+    def nodes(self) -> list[str]:
+        return self.page.evaluate("Object.keys(window.__viserMutable.nodeRefFromName)")
+
+    def signature(self, name):
+        return self.page.evaluate(SIGNATURE_JS, name)
+
+    def set_input(self, label, texts):
+        ins = self.page.evaluate_handle(INPUTS_JS, label)
+        elements = [ins.get_property(str(i)).as_element() for i in range(len(texts))]
+        assert all(elements), f"no inputs for {label}"
+        for el, text in zip(elements, texts):
+            el.fill(str(text))
+            el.press("Enter")
+
+    def wait_signature_change(self, name, before):
+        self.page.wait_for_function(f"(b) => {{ const s = ({SIGNATURE_JS})('{name}'); return s && (s[0] !== b[0] || Math.abs(s[1] - b[1]) > 1e-6 * (1 + Math.abs(b[1]))); }}",
+                                    arg=before, timeout=WAIT_MS)
+
+    def close(self):
+        self.ctx.close()
+
+
+def _canvas_pixels(page) -> np.ndarray:
+    from PIL import Image
+
+    png = page.screenshot(clip={"x": 320, "y": 160, "width": 540, "height": 600})
+    return np.asarray(Image.open(io.BytesIO(png)).convert("L"), float)
+
+
+def test_page_loads_offline_and_draws_the_body(browser, tumble_app):
+    url, sessions = tumble_app
+    p = Page(browser, url).wait_ready()
+    try:
+        names = set(p.nodes())
+        for n in ("/world/body", "/world/body/mesh", "/world/body/axes", "/world/body/axis_labels/A",
+                  "/world/omega", "/world/L", "/world/axis_trail/0", "/world/herpolhode/0",
+                  "/world/body/polhode/0"):
+            assert n in names, n
+        # the polhode is a child of the body frame: it turns with the body (same world matrix)
+        d = p.page.evaluate("""(() => { const m = window.__viserMutable.nodeRefFromName;
+            const a = m['/world/body'], b = m['/world/body/polhode/0'];
+            a.updateWorldMatrix(true, false); b.updateWorldMatrix(true, false);
+            const x = a.matrixWorld.elements, y = b.matrixWorld.elements;
+            return [x.reduce((s, v, i) => s + Math.abs(v - y[i]), 0), Math.abs(x[0] - 1) + Math.abs(x[5] - 1)]; })()""")
+        assert d[0] < 1e-9 and d[1] > 1e-6, d  # equal, and not the identity (the body has turned)
+        time.sleep(1.0)  # let a few frames render
+        pix = _canvas_pixels(p.page)
+        assert pix.std() > 10.0, pix.std()  # a blank canvas has std ≈ 0
+        assert np.mean(np.abs(pix - np.median(pix)) > 30) > 0.02  # ≥ 2 % of the area is drawn
+        SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+        p.page.screenshot(path=str(SCREENSHOTS / "free-tumble.png"))
+        assert p.outside == [], p.outside
+        # the body moves: playback turns the body frame
+        q0 = p.page.evaluate("window.__viserMutable.nodeRefFromName['/world/body'].quaternion.toArray()")
+        p.page.wait_for_function("(q0) => { const q = window.__viserMutable.nodeRefFromName['/world/body'].quaternion.toArray();"
+                                 " return Math.abs(q[0]-q0[0]) + Math.abs(q[1]-q0[1]) + Math.abs(q[3]-q0[3]) > 1e-3; }",
+                                 arg=q0, timeout=WAIT_MS)
+    finally:
+        p.close()
+
+
+def test_slider_changes_scene_and_bad_value_keeps_it(browser, flip_app):
+    url, sessions = flip_app
+    p = Page(browser, url).wait_ready()
+    try:
+        time.sleep(0.5)
+        SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+        p.page.screenshot(path=str(SCREENSHOTS / "middle-axis-flip.png"))
+        before = p.signature("/world/body/polhode/0")
+        p.set_input("perturbation", ["0.2"])
+        p.wait_signature_change("/world/body/polhode/0", before)
+        good = p.signature("/world/body/polhode/0")
+        assert good != before
+        # an impossible body (A + B < C): a notification naming the parameter and the rule
+        p.set_input("inertia [kg m^2]", ["1", "1", "5"])
+        p.page.wait_for_function("document.body.innerText.includes('Bad value for inertia')", timeout=WAIT_MS)
+        text = p.page.evaluate("document.body.innerText")
+        assert "A+B >= C" in text and "triangle" in text
+        time.sleep(1.0)
+        assert p.signature("/world/body/polhode/0") == good  # the scene keeps the last good state
+        # out of range for a number input: the allowed range is named
+        p.set_input("duration [s]", ["-3"])
+        p.page.wait_for_function("document.body.innerText.includes('Bad value for duration')", timeout=WAIT_MS)
+        assert "(0, 1e+06] s" in p.page.evaluate("document.body.innerText")
+        time.sleep(0.5)
+        assert p.signature("/world/body/polhode/0") == good
+        # the server is still alive: good values are simulated and drawn
+        p.set_input("duration [s]", ["30"])
+        p.set_input("inertia [kg m^2]", ["1", "2", "2.5"])
+        p.wait_signature_change("/world/body/polhode/0", good)
+        assert p.outside == []
+    finally:
+        p.close()
+
+
+def test_two_browsers_hold_independent_states(browser, flip_app):
+    url, sessions = flip_app
+    a = Page(browser, url).wait_ready()
+    b = Page(browser, url).wait_ready()
+    try:
+        sig_b = b.signature("/world/body/polhode/0")
+        sig_a = a.signature("/world/body/polhode/0")
+        assert sig_a == sig_b  # same defaults
+        a.set_input("perturbation", ["0.3"])
+        a.wait_signature_change("/world/body/polhode/0", sig_a)
+        time.sleep(1.0)
+        assert b.signature("/world/body/polhode/0") == sig_b
+        vals = sorted(s.controls.values()["perturbation"] for s in list(sessions.values())[-2:])
+        assert vals == [pytest.approx(0.01), pytest.approx(0.3)]
+    finally:
+        a.close()
+        b.close()
+
+
+def test_exported_html_plays_from_file(browser, tmp_path):
+    from app.export_html import export
+    from physics.scenarios import get
+
+    out = tmp_path / "tumble.html"
+    info = export("free-tumble", str(out), get("free-tumble").resolve({"duration": "10"}))
+    assert info["frames"] > 100 and out.stat().st_size == info["bytes"]
+    p = Page(browser, out.as_uri())
+    try:
+        p.page.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/mesh']",
+                                 timeout=WAIT_MS)
+        names = set(p.nodes())
+        assert {"/world/body", "/world/axis_trail/0", "/world/body/polhode/0"} <= names
+        q0 = p.page.evaluate("window.__viserMutable.nodeRefFromName['/world/body'].quaternion.toArray()")
+        p.page.wait_for_function("(q0) => { const q = window.__viserMutable.nodeRefFromName['/world/body'].quaternion.toArray();"
+                                 " return Math.abs(q[0]-q0[0]) + Math.abs(q[1]-q0[1]) + Math.abs(q[3]-q0[3]) > 1e-3; }",
+                                 arg=q0, timeout=WAIT_MS)
+        assert p.outside == [], p.outside
+    finally:
+        p.close()
