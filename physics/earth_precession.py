@@ -334,13 +334,14 @@ def per_day_to_arcsec_per_yr(x):
 def nutation_arguments(t, sun_dir, moon_dir, moon: MeanElements):
     """Fundamental arguments measured from the simulated orbits (days, rad): the Moon's mean
     node Ω (from the REBOUND orbit normal), the mean longitudes L☉, L☾ (straight lines fitted to
-    the simulated directions) and the Moon's mean anomaly l = L☾ − ϖ."""
+    the simulated directions), the Sun's mean anomaly l' = L☉ − ϖ☉ and the Moon's l = L☾ − ϖ."""
     from .precession import mean_longitude
 
     _, _, Ls = mean_longitude(t, sun_dir)
     _, _, Lm = mean_longitude(t, moon_dir)
     Om = moon.node0 + moon.node_rate * np.asarray(t, float)
-    return {"18.6yr": Om, "9.3yr": 2 * Om, "semiannual": 2 * Ls, "annual": Ls, "13.66d": 2 * Lm,
+    return {"18.6yr": Om, "9.3yr": 2 * Om, "semiannual": 2 * Ls,
+            "annual": Ls - math.radians(SUN_J2000["varpi"]),  # l' = L☉ − ϖ☉ "13.66d": 2 * Lm,
             "9.13d": 2 * Lm - Om, "27.55d": Lm - (moon.varpi0 + moon.varpi_rate * np.asarray(t, float))}
 
 
