@@ -1,0 +1,114 @@
+"""Rerun recordings read back with rerun's own reader (rerun.chunk.RrdReader)."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rerun.chunk import RrdReader
+
+from app.record import record
+from physics.scenarios import get
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _read(path):
+    """entity path → (rows on the `step` timeline, static rows, timeline names, chunks)."""
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # "RRD file has no footer" is a warning: make it fail
+        chunks = RrdReader(str(path)).stream().to_chunks()
+    for c in chunks:
+        e = out.setdefault(str(c.entity_path), {"rows": 0, "static": 0, "timelines": set(), "chunks": []})
+        if c.is_static:
+            e["static"] += c.num_rows
+        else:
+            e["rows"] += c.num_rows
+            e["timelines"] |= set(c.timeline_names)
+        e["chunks"].append(c)
+    return out
+
+
+def test_recording_holds_entities_and_every_step(tmp_path):
+    spec = get("middle-axis-flip")
+    values = spec.resolve({"duration": "10", "step": "0.02"})
+    out = tmp_path / "flip.rrd"
+    info = record("middle-axis-flip", str(out), values)
+    n = 501  # 10 s / 0.02 s steps + the initial state (below MAX_SAMPLES, so stride 1)
+    assert info["steps"] == n
+    ents = _read(out)
+    for e in ("/world/body", "/world/omega", "/world/L", "/series/energy", "/series/momentum_norm",
+              "/series/omega/x", "/series/omega/y", "/series/omega/z"):
+        assert ents[e]["rows"] == n, (e, ents[e]["rows"])
+        assert {"step", "t"} <= ents[e]["timelines"], e
+    for e in ("/world/body/ellipsoid", "/world/body/axes", "/world/body/polhode", "/world/herpolhode",
+              "/world/axis_trail", "/text"):
+        assert ents[e]["static"] >= 1, e
+    for m in ("flip_interval", "flip_interval_exact", "energy_rel_drift"):
+        assert ents[f"/metrics/{m}"]["rows"] == 2
+    # the quaternions in the file are the trajectory's, in rerun's (x, y, z, w) order
+    res = spec.simulate_fn(values)
+    rows = []
+    for c in ents["/world/body"]["chunks"]:
+        if c.is_static:
+            continue
+        rb = c.to_record_batch()
+        rows += list(zip(rb.column("step").to_pylist(), (x[0] for x in rb.column("Transform3D:quaternion").to_pylist())))
+    rows.sort()
+    assert [r[0] for r in rows] == list(range(n))
+    q = np.array([r[1] for r in rows])
+    qw = res.trajectory.quat_wxyz
+    assert np.allclose(q, np.c_[qw[:, 1:], qw[:, :1]], atol=1e-6)  # float32 in the file
+    text = [c for c in ents["/text"]["chunks"]][0].to_record_batch().to_pylist()
+    assert "§808" in str(text)
+
+
+def test_orbit_like_bodies_are_recorded(tmp_path):
+    """A trajectory with Trajectory.bodies (as the orbit scenarios produce) gets points per step."""
+    from app.record import record_result
+    from physics.scenarios.base import Result, Scenario
+    from physics.trajectory import Trajectory
+
+    n = 50
+    t = np.linspace(0, 1, n)
+    pos = np.stack([np.cos(t), np.sin(t), 0 * t], 1)
+    traj = Trajectory(t, np.tile([1.0, 0, 0, 0], (n, 1)), np.zeros((n, 3)), (1.0, 1.0, 1.0),
+                      bodies={"moon": pos, "sun": -pos})
+    spec = Scenario("demo-orbit", "demo", "§0", "three bodies", "demo", (), lambda v, progress=None: None, kind="orbit")
+    out = tmp_path / "orbit.rrd"
+    record_result(Result("demo-orbit", {}, traj, {"x_m": 1.0}), spec, str(out))
+    ents = _read(out)
+    assert ents["/world/bodies/moon"]["rows"] == n and ents["/world/bodies/sun"]["rows"] == n
+    assert ents["/world/trails/moon"]["static"] == 1
+    assert "/world/body" not in ents
+
+
+def test_footer_written_when_interrupted(tmp_path):
+    """SIGTERM during a long recording: the file is still complete (readable, footer present)."""
+    out = tmp_path / "killed.rrd"
+    code = textwrap.dedent(f"""
+        import sys, time
+        import app.record as R
+        orig = R._write
+        def slow(rec, *a):
+            orig(rec, *a)
+            print("written", flush=True)
+            time.sleep(60)
+        R._write = slow
+        R.record("free-tumble", {str(out)!r}, None)
+    """)
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, env=env, cwd=ROOT)
+    assert p.stdout.readline().strip() == b"written"
+    p.send_signal(signal.SIGTERM)
+    p.wait()
+    p.stdout.close()
+    ents = _read(out)  # a file without footer raises (warning turned into an error)
+    assert ents["/world/body"]["rows"] == 2001
