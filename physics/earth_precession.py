@@ -341,7 +341,7 @@ def nutation_arguments(t, sun_dir, moon_dir, moon: MeanElements):
     _, _, Lm = mean_longitude(t, moon_dir)
     Om = moon.node0 + moon.node_rate * np.asarray(t, float)
     return {"18.6yr": Om, "9.3yr": 2 * Om, "semiannual": 2 * Ls,
-            "annual": Ls - math.radians(SUN_J2000["varpi"]),  # l' = L☉ − ϖ☉ "13.66d": 2 * Lm,
+            "annual": Ls - math.radians(SUN_J2000["varpi"]), "13.66d": 2 * Lm,  # annual: l' = L☉ − ϖ☉
             "9.13d": 2 * Lm - Om, "27.55d": Lm - (moon.varpi0 + moon.varpi_rate * np.asarray(t, float))}
 
 
