@@ -151,7 +151,7 @@ def planar_rhs(orbit, gamma, gm):
     return rhs
 
 
-def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-13, iters=20):
+def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-13, iters=40):
     """§838's forced libration: the solution with the orbit's period (free part zero), by
     Newton shooting on (λ(0), λ̇(0)) − the orbit starts at periapse (t_peri = 0). Returns
     (λ0, λ̇0, P) with P the orbital period. Fails (ParameterError) near resonance."""
@@ -172,8 +172,13 @@ def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-
             d = np.zeros(2)
             d[j] = 1e-6
             J[:, j] = (F(y + d) - F(y - d)) / 2e-6
-        y = y - np.linalg.solve(J, r)
-    raise ParameterError("eccentricity", orbit.e, "no forced (periodic) libration found near these values")
+        try:
+            dy = np.linalg.solve(J, r)
+        except np.linalg.LinAlgError:
+            break
+        y = y - dy * min(1.0, 0.3 / max(np.max(np.abs(dy)), 1e-300))  # damped: stay near the guess
+    raise ParameterError("eccentricity", orbit.e, f"no forced (periodic) libration found with (B−A)/C = {gamma:g}: "
+                         "too close to the resonance (B−A)/C = 1/3 or too eccentric; lower one of them")
 
 
 def harmonics(t, x, omega, k_max=3):

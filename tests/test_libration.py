@@ -199,6 +199,18 @@ def test_euler_forced_amplitude_fails_as_e_squared_and_near_resonance():
     assert m["forced_amplitude_euler_rad"] > 1.2 * m["forced_amplitude_rad"]
 
 
+def test_forced_libration_case_II_about_the_B_axis():
+    """B < A: the forced libration is about ζ = 90° (§827) with Euler's amplitude using |n|;
+    the A axis facing F is unstable (§837's separatrix), so the body never librates there."""
+    e = 0.01
+    r = get("libration-eccentric").simulate({"eccentricity": e, "asymmetry": -0.05, "free_zeta0_deg": 0.0,
+                                             "orbits": 2})
+    m = r.metrics
+    assert abs(m["forced_amplitude_rad"] / m["forced_amplitude_euler_rad"] - 1) < 5 * e**2
+    z = r.plot_series["zeta_rad"]
+    assert abs(np.remainder(z.mean(), np.pi) - np.pi / 2) < 1e-3
+
+
 class _EulerOrbit:
     """Euler's §833 parametrisation taken literally: XF = At + α sin At, 1/s³ = (1 + β cos At)/f³."""
 

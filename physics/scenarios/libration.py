@@ -188,7 +188,7 @@ def _libration_circular(values, progress=None):
         "modulus_k2": float(lib.pendulum_modulus_sq(phi0, phidot0, w0)) if w0 > 0 else np.inf,
         "first_integral_abs_drift": float(np.max(np.abs(jac - jac[0]))),
     }
-    if case == "separatrix" and w0 > 0:
+    if case == "separatrix" and w0 > 0 and abs(phi0) < np.radians(80.0):
         target = np.sign(phi0 or 1.0) * np.radians(80.0)
         k = np.nonzero(np.abs(phi) >= np.radians(80.0))[0]
         if len(k) and k[0] > 0:  # interpolate the crossing between samples
@@ -260,8 +260,12 @@ class ForcedSolution:
         self.orbit = KeplerOrbit(a=1.0, e=e, n=n)
         N = lib.euler_N(gamma, n * n, 1.0)
         m = lib.forced_amplitude_euler(2 * e, n, N)
-        guess = (0.0, float(self.orbit.true_anomaly_rate(np.array([0.0]))[0] - m * n))
-        lam0, lamdot0, P = lib.periodic_libration(self.orbit, gamma, n * n, guess=guess)
+        zeq = lib.equilibrium_zeta(gamma)
+        if gamma == 0:  # no torque (§837, n = 0): uniform rotation, ζ is the equation of the centre
+            lam0, lamdot0, P = -zeq, float(n), 2 * np.pi / n
+        else:
+            guess = (-zeq, float(self.orbit.true_anomaly_rate(np.array([0.0]))[0] - m * n))
+            lam0, lamdot0, P = lib.periodic_libration(self.orbit, gamma, n * n, guess=guess)
         lam0 = float(np.remainder(lam0 + 0.5 * np.pi, np.pi) - 0.5 * np.pi)  # ζ ≡ ζ + π
         self.lam0, self.lamdot0, self.P = lam0, lamdot0, P
         self.sol = solve_ivp(lib.planar_rhs(self.orbit, gamma, n * n), (0.0, P), [lam0, lamdot0],
@@ -303,8 +307,12 @@ def _libration_eccentric(values, progress=None):
     zf1 = fs.zeta(tp)
     a, b = lib.harmonics(tp, zf1, n, 3)
     alpha, beta, A = 2 * e, 3 * e, n
-    m1 = lib.forced_amplitude_euler(alpha, A, N)
-    m2e = lib.second_order_euler(alpha, beta, A, N)
+    # B < A: the stable state has the B axis toward F (§827, ζ = 90° + φ), where Euler's formulas
+    # hold with |n|. His §837 reading of n < 0 as "smaller digressions" is about the A axis facing
+    # F, which his own §837 separatrix shows is unstable — the simulation never stays there.
+    Ns = abs(N)
+    m1 = lib.forced_amplitude_euler(alpha, A, Ns)
+    m2e = lib.second_order_euler(alpha, beta, A, Ns)
     w0 = lib.small_oscillation_omega(g, gm, 1.0)
     z_euler = m1 * np.sin(A * t) + (dz * np.cos(w0 * t) if w0 > 0 else dz)
     mt = {
@@ -327,6 +335,8 @@ def _libration_eccentric(values, progress=None):
         Comparison("free libration period 2π/√(2N) (§838)", mt["free_period_euler"], mt["free_period"], None, "1/n"),
     ]
     notes = ["Euler's α = 2e, A = n (anomalistic = orbital rate for a fixed ellipse), β = 3e: the ellipse to first order in e.",
+             "For B < A the forced libration is about ζ = 90° (the B axis toward F) and Euler's formula is used with |n|; "
+             "his §837 remark that n < 0 makes the digressions smaller concerns the unstable state with A toward F.",
              "The translation prints ζ = AA/(AA−2n) sin At (α dropped) at the end of §833; §834 has it right."]
     series = {"zeta_rad": zeta, "zeta_euler_rad": z_euler, "zeta_forced_rad": z_forced, "zeta_free_rad": z_free}
     traj.series.update(series)
@@ -344,7 +354,7 @@ register(Scenario(
              "to approach the resonance A² = 2N."),
     params=(
         Param("asymmetry", 0.05, -0.45, 0.45, "", "(B − A)/C"),
-        Param("eccentricity", 0.05, 0.0, 0.6, "", "eccentricity e of F's orbit"),
+        Param("eccentricity", 0.05, 0.0, 0.5, "", "eccentricity e of F's orbit"),
         Param("orbital_rate", 1.0, 0.0, 100.0, "rad/unit", "mean motion n", exclusive_min=True),
         Param("free_zeta0_deg", 2.0, -60.0, 60.0, "deg", "initial offset from the forced libration (free part)"),
         Param("orbits", 20.0, 1.0, 500.0, "", "orbits to simulate"),
