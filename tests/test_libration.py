@@ -60,6 +60,17 @@ def test_euler_extra_force_818_against_exact_force():
     assert np.max(np.abs(extra_force_first_order([1, 1, 1], [3.0, 1.0, 2.0]))) < 1e-16
 
 
+def test_accuracy_scenario_and_quadrature_convergence_close_to_the_body():
+    r = get("gravity-gradient-accuracy").simulate({})
+    assert abs(r.metrics["torque_error_order"] - 2) < 0.02 and abs(r.metrics["force_error_order"] - 2) < 0.02
+    assert all(len(v) == len(r.trajectory.t) for v in r.plot_series.values())
+    # F only 1.25 sizes away: the quadrature has converged (doubling the points changes < 1e-5)
+    s = DIR / np.linalg.norm(DIR) * 1.25
+    t1, f1 = exact_torque_force(SEMI, s)
+    t2, f2 = exact_torque_force(SEMI, s, n=(32, 32, 64))
+    assert np.linalg.norm(t1 - t2) < 1e-5 * np.linalg.norm(t2) and np.linalg.norm(f1 - f2) < 1e-5 * np.linalg.norm(f2)
+
+
 # ------------------------------------------------------------------ orbits
 
 def test_kepler_orbit_against_two_body_integration():
