@@ -377,3 +377,28 @@ def pole_star_passages(t_yr, pole, names, ra_deg, dec_deg, within_deg=5.0):
         if sep[i, j] <= within_deg:
             out.append((str(name), float(t_yr[i]), float(sep[i, j])))
     return sorted(out, key=lambda r: r[1])
+
+
+def figure_pole_free_of_diurnal(L_inertial, sun_pos, moon_pos, H=H_DYN):
+    """The figure axis with its diurnal (free) circle removed — the pole the IAU nutation series
+    refer to (the CIP of a rigid Earth) — from the angular-momentum axis and the torque:
+
+        â = L̂ − A (L̂ × τ)/|L|²
+
+    (the forced part of the figure axis's offset from L: â turns about L̂ at |L|/A, so to follow
+    L̂ as L̂ moves at τ⊥/|L| it must lead by that amount; the "Oppolzer terms"). τ is the
+    gravity-gradient torque of the Sun and the Moon with the figure axis taken along L̂
+    (the error is of the order of the offset itself, ~1e-8 rad).
+    Units: L in C·rad/day with C = 1 (as `run_earth`), positions in AU."""
+    L = np.asarray(L_inertial, float)
+    Ln = np.linalg.norm(L, axis=1, keepdims=True)
+    a = L / Ln
+    A = 1 - H
+    tau = np.zeros_like(L)
+    for gm, s in ((GM_SUN, sun_pos), (GM_MOON, moon_pos)):
+        s = np.asarray(s, float)
+        r = np.linalg.norm(s, axis=1, keepdims=True)
+        sa = np.sum(s * a, axis=1, keepdims=True)
+        tau += 3 * gm * (1.0 - A) / r ** 5 * sa * np.cross(s, a)
+    fig = a - A * np.cross(a, tau) / Ln ** 2
+    return fig / np.linalg.norm(fig, axis=1, keepdims=True)

@@ -62,9 +62,14 @@ def _earth(values, progress=None):
         runs[key] = EP.run_earth(eph.sun, eph.moon, dur, step, H=H, obliquity=obl, bodies=bodies,
                                  sample_days=0.5, progress=progress if key == "both" else None)
     t, L, q, I = runs["both"]
-    axis = quat.rotate(q, L)  # the angular-momentum axis: Euler's "true pole" (§848), centre of the diurnal circle
+    L_in = quat.rotate(q, L)  # the angular-momentum axis
     sun_dir, moon_dir = eph.sun(t), eph.moon(t)
+    # the pole the IAU series refer to (CIP of a rigid Earth): the figure axis without its diurnal
+    # circle, Euler's "true pole" of §848 (the centre of that circle); differs from L̂ by the
+    # Oppolzer terms, ≈ 7% of the 13.66-day term
+    axis = EP.figure_pole_free_of_diurnal(L_in, sun_dir, moon_dir, H)
     fit, nut = _fit_earth(t, axis, sun_dir, moon_dir, me)
+    _, nut_L = _fit_earth(t, L_in, sun_dir, moon_dir, me)
     rate = -fit.rate_longitude / ARCSEC * YR  # arcsec/yr, positive westward
     parts = {}
     for key in ("sun", "moon"):
@@ -89,10 +94,11 @@ def _earth(values, progress=None):
         moon_inclination_deg=math.degrees(me.inc), moon_mean_distance_km=me.a * EP.AU_KM,
         sidereal_month_days=2 * math.pi / me.n,
     )
-    for key, label in (("18.6yr", "18_6yr"), ("semiannual", "semiannual"), ("13.66d", "13_66d"), ("9.3yr", "9_3yr"),
-                       ("annual", "annual")):
+    for key, label in (("18.6yr", "18_6yr"), ("semiannual", "semiannual"), ("13.66d", "13_66d"), ("9.3yr", "9_3yr")):
         m[f"nutation_longitude_{label}_arcsec"] = nut[key]["dpsi"]
         m[f"nutation_obliquity_{label}_arcsec"] = nut[key]["deps"]
+        m[f"nutation_longitude_{label}_momentum_axis_arcsec"] = nut_L[key]["dpsi"]
+        m[f"nutation_obliquity_{label}_momentum_axis_arcsec"] = nut_L[key]["deps"]
         m[f"nutation_longitude_{label}_iau2000_arcsec"] = iau[key]["dpsi"]
         m[f"nutation_obliquity_{label}_iau2000_arcsec"] = iau[key]["deps"]
     for key, label in (("semiannual", "semiannual"), ("13.66d", "13_66d")):
@@ -112,23 +118,25 @@ def _earth(values, progress=None):
         Comparison("nutation in obliquity, 18.6 yr (cos Ω)", None, nut["18.6yr"]["deps"], iau["18.6yr"]["deps"], "arcsec", "IAU 2000A"),
         Comparison("nutation in longitude, semi-annual (sin 2L☉)", eul_nut["semiannual"]["dpsi"], nut["semiannual"]["dpsi"],
                    iau["semiannual"]["dpsi"], "arcsec",
-                   "rigid Earth; IAU 2000 is ≈3.5% larger: the free-core-nutation resonance of the real, non-rigid Earth "
-                   "(Woolard's rigid-Earth value: −1.2729″)"),
+                   "rigid Earth; IAU 2000 is ≈3% larger: the free-core-nutation resonance of the real, non-rigid Earth"),
         Comparison("nutation in obliquity, semi-annual (cos 2L☉)", eul_nut["semiannual"]["deps"], nut["semiannual"]["deps"],
-                   iau["semiannual"]["deps"], "arcsec", "rigid Earth (Woolard: 0.5522″)"),
+                   iau["semiannual"]["deps"], "arcsec", "rigid Earth"),
         Comparison("nutation in longitude, 13.66 d (sin 2L☾)", eul_nut["13.66d"]["dpsi"], nut["13.66d"]["dpsi"],
                    iau["13.66d"]["dpsi"], "arcsec",
-                   "angular-momentum axis (Woolard: −0.2037″); IAU refers to the CIP ≈ figure axis, larger by the "
-                   "Oppolzer term (≈ 2δ/ε ≈ 7%), and includes the non-rigid response"),
+                   f"figure axis free of diurnal terms (CIP-like); the angular-momentum axis has {nut_L['13.66d']['dpsi']:.4f}″ "
+                   "(the Oppolzer term, ≈ 2δ/ε ≈ 7%). IAU 2000 includes the non-rigid response (≈3%)"),
         Comparison("nutation in obliquity, 13.66 d (cos 2L☾)", eul_nut["13.66d"]["deps"], nut["13.66d"]["deps"],
-                   iau["13.66d"]["deps"], "arcsec", "angular-momentum axis (Woolard: 0.0884″)"),
+                   iau["13.66d"]["deps"], "arcsec", f"angular-momentum axis: {nut_L['13.66d']['deps']:.4f}″"),
         Comparison("Moon's node regression period", None, me.node_period_yr, 18.6129, "yr",
                    "from the REBOUND Sun–Earth–Moon integration, not imposed"),
     ]
     notes = [
-        "The pole measured is the angular-momentum axis, Euler's 'true pole' (§848: the centre of the diurnal "
-        "circle of the figure axis); its path is fitted by least squares to a line plus sin/cos of the fundamental "
-        "arguments taken from the simulated orbits.",
+        "The pole measured is the figure axis without its diurnal circle (Euler's 'true pole', §848: the centre of "
+        "that circle; the CIP of a rigid Earth), L̂ − A(L̂ × τ)/|L|²; its path is fitted by least squares to a line "
+        "plus sin/cos of the fundamental arguments taken from the simulated orbits. Metrics ending in "
+        "_momentum_axis are the same fit for the angular-momentum axis.",
+        "The annual term is left out of the metrics: l' and 2L☉ − l' share the annual frequency and cannot be "
+        "told apart by the fit.",
         f"Solar part {parts['sun']:.3f}″/yr, lunar part {parts['moon']:.3f}″/yr (each from a run with that body alone); "
         f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr.",
         "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψ_A, not the general precession p_A.",
