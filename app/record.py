@@ -51,7 +51,9 @@ def text_of(spec, result) -> str:
     lines = [f"# {spec.title}", f"**{spec.section}** · {spec.group} · `{spec.name}`", "", spec.summary, ""]
     if spec.euler_formula:
         lines += ["**Euler:** " + spec.euler_formula, ""]
-    lines += ["## Parameters", ""]
+    lines += [f"Time: timeline `t` (seconds), or `t_milli` = 1000 × t in {result.trajectory.time_unit} "
+              "when the unit is not a time or the run is longer than rerun's durations allow.", "",
+              "## Parameters", ""]
     for p in spec.params:
         lines.append(f"- `{p.name}` = {result.params.get(p.name)} {p.unit}")
     lines += ["", "## Euler says / simulated / modern", "", comparison_markdown(result)]
@@ -95,9 +97,7 @@ def record_result(result, spec, out: str, application_id: str = "theoria") -> di
 
 
 def _write(rec, result, spec, traj, n, unit):
-    tcols = [rr.TimeColumn("step", sequence=np.arange(n))]
-    if unit is not None:
-        tcols.append(rr.TimeColumn("t", duration=np.asarray(traj.t, float) * unit))
+    tcols = [rr.TimeColumn("step", sequence=np.arange(n))] + _time_columns(traj.t, unit, traj.time_unit)
     rec.log("/world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     rec.log("/text", rr.TextDocument(text_of(spec, result), media_type=rr.MediaType.MARKDOWN), static=True)
     idx = _decimate(n, MAX_TRAIL_POINTS)
@@ -164,9 +164,7 @@ def _write(rec, result, spec, traj, n, unit):
         rec.send_columns(f"/series/{_safe(name)}", indexes=tcols, columns=rr.Scalars.columns(scalars=v))
     # the metrics, as constant lines over the run (so they show beside the series)
     ends = [0, n - 1]
-    mcols = [rr.TimeColumn("step", sequence=ends)]
-    if unit is not None:
-        mcols.append(rr.TimeColumn("t", duration=np.asarray(traj.t, float)[ends] * unit))
+    mcols = [rr.TimeColumn("step", sequence=ends)] + _time_columns(np.asarray(traj.t)[ends], unit, traj.time_unit)
     for name, v in result.metrics.items():
         try:
             v = float(v)
@@ -174,6 +172,15 @@ def _write(rec, result, spec, traj, n, unit):
             continue
         if np.isfinite(v):
             rec.send_columns(f"/metrics/{_safe(name)}", indexes=mcols, columns=rr.Scalars.columns(scalars=[v, v]))
+
+
+def _time_columns(t, unit, unit_name) -> list:
+    """The `t` timeline: a duration in seconds when the unit is known and fits rerun's int64
+    nanoseconds (±292 years); otherwise `t_milli`, a sequence of 1000 × t in the run's own unit."""
+    t = np.asarray(t, float)
+    if unit is not None and np.all(np.abs(t * unit) < 9e9):
+        return [rr.TimeColumn("t", duration=t * unit)]
+    return [rr.TimeColumn("t_milli", sequence=np.round(1000.0 * t).astype(np.int64))]
 
 
 def _safe(name: str) -> str:

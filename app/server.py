@@ -244,6 +244,7 @@ class ClientSession:
     def _simulate(self, gen: int, name: str, given: dict) -> None:
         spec = self.scenarios[name]
         values = spec.resolve(given)
+        self._status(f"simulating {name}…")
 
         def progress(_frac):
             if self._gen != gen or self._closed:
