@@ -130,7 +130,16 @@ def _earth(values, progress=None):
         Comparison("Moon's node regression period", None, me.node_period_yr, 18.6129, "yr",
                    "from the REBOUND Sun–Earth–Moon integration, not imposed"),
     ]
+    # why Euler's §846 sum differs: A for C in N, circles (no eccentricity), the Moon in the ecliptic
+    ws = mod["sun"] / (mod["sun"] + mod["moon"])
+    f_ca = 1 / (1 - H)
+    f_e = ws * (1 - EP.SUN_J2000["e"] ** 2) ** 1.5 + (1 - ws) * (1 - me.e ** 2) ** 1.5 / (1 - 1.5 * math.sin(me.inc) ** 2)
+    m["euler_excess_predicted"] = f_ca * f_e - 1
+    m["euler_excess_measured"] = eul / rate - 1
     notes = [
+        f"Euler's sum is {100 * m['euler_excess_measured']:.2f}% faster than the simulation; predicted "
+        f"{100 * m['euler_excess_predicted']:.2f}% from what he leaves out: C/A in N (+{100 * (f_ca - 1):.2f}%), the "
+        f"eccentricities (1 − e²)^(3/2) and the Moon's inclination 1/(1 − 3/2 sin² i) (together {100 * (f_e - 1):+.2f}%).",
         "The pole measured is the figure axis without its diurnal circle (Euler's 'true pole', §848: the centre of "
         "that circle; the CIP of a rigid Earth), L̂ − A(L̂ × τ)/|L|²; its path is fitted by least squares to a line "
         "plus sin/cos of the fundamental arguments taken from the simulated orbits. Metrics ending in "
