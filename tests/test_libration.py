@@ -165,6 +165,18 @@ def test_four_cases_of_826():
     assert abs(r.metrics["libration_period"] / r.metrics["libration_period_exact"] - 1) < 1e-3
 
 
+def test_circulation_period_against_euler_826_fourth_case():
+    """§826 4th: with C = m²n, t√n ≈ ζ/m − sin 2ζ/(4m³), so half a turn relative to F takes
+    π/(m√N)(1 + 3/(16m⁴) + …) — Euler's leading term is short by about 3/(16m⁴)."""
+    for spin in (1.5, 2.0, 3.0):
+        m = get("libration-circular").simulate({"zeta0_deg": 0.0, "spin_ratio": spin, "periods": 4}).metrics
+        m2 = (1 - spin) ** 2 / (1.5 * 0.05) - 1  # Euler's C/n = ζ̇₀²/N − cos 2ζ₀
+        rel = m["libration_period"] / m["circulation_period_euler"] - 1
+        # ⟨(1 + cos 2ζ/m²)^(-1/2)⟩ = 1 + 3/(16m⁴) + 105/(1024m⁸) + …
+        assert 3 / (16 * m2**2) < rel < 3 / (16 * m2**2) + 2 * 105 / (1024 * m2**4)
+        assert abs(m["libration_period"] / m["libration_period_exact"] - 1) < 1e-3
+
+
 def test_case_II_librates_about_90_degrees():
     r = get("libration-circular").simulate({"asymmetry": -0.05, "zeta0_deg": 70.0, "periods": 3})
     z = r.plot_series["zeta_rad"]

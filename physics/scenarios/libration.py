@@ -188,6 +188,10 @@ def _libration_circular(values, progress=None):
         "modulus_k2": float(lib.pendulum_modulus_sq(phi0, phidot0, w0)) if w0 > 0 else np.inf,
         "first_integral_abs_drift": float(np.max(np.abs(jac - jac[0]))),
     }
+    if case == "circulating" and w0 > 0:
+        # §826 4th: C = m²n, t√n = ζ/m − sin 2ζ/(4m³): half a turn relative to F takes π/(m√N)
+        m2 = (phidot0**2 - Nn * np.cos(2 * phi0)) / Nn
+        m["circulation_period_euler"] = float(np.pi / (np.sqrt(m2) * np.sqrt(Nn)))
     if case == "separatrix" and w0 > 0 and abs(phi0) < np.radians(80.0):
         target = np.sign(phi0 or 1.0) * np.radians(80.0)
         k = np.nonzero(np.abs(phi) >= np.radians(80.0))[0]
@@ -204,6 +208,12 @@ def _libration_circular(values, progress=None):
                    "modern: finite-amplitude pendulum in 2ζ, 4K(sin ζ_max)/√(2N)"),
         Comparison("largest digression ζ_max", None, amp_meas, m["libration_amplitude_exact_rad"], "rad"),
     ]
+    if "circulation_period_euler" in m:
+        comps.append(Comparison("half turn relative to F, π/(m√n) (§826 4th)", m["circulation_period_euler"], T_meas,
+                                T_exact, "1/δ", "Euler keeps the first term of t√n = ζ/m − sin 2ζ/(4m³)"))
+    if "separatrix_time_to_80deg" in m:
+        comps.append(Comparison("time to creep to 80° on the separatrix, ln tan(45° + ζ/2)/√(2n) (§826 3rd)",
+                                m["separatrix_time_to_80deg_euler"], m["separatrix_time_to_80deg"], None, "1/δ"))
     notes = [f"Euler's case: {case} (§826).",
              "Euler's √(2n) is in his units: his n is N = 3GM(B−A)/(2Cs³); the small-oscillation "
              "angular frequency is √(2N) = δ√(3(B−A)/C) on a Kepler circle, and his π/√(2n) is half "
