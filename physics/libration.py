@@ -439,3 +439,26 @@ def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256,
         dy = np.linalg.solve(J, r)
         y = y - dy * min(1.0, 0.05 / max(abs(dy[1]), 1e-300), 0.2 / max(abs(dy[0]), 1e-300))  # damped: stay local
     raise ParameterError("omega0", omega0, "no periodic spin state found near this start")
+
+
+def periapse_map_trace(theta, thetadot, e, omega0, steps_per_orbit=128, d=1e-6):
+    """Trace of the Jacobian of the periapse map at (θ, θ̇) (determinant 1: area preserving).
+    |trace| < 2: elliptic (an island centre); > 2: hyperbolic."""
+    J = np.empty((2, 2))
+    for j in range(2):
+        dv = np.zeros(2)
+        dv[j] = d
+        tp, wp = spin_orbit_section([theta + dv[0]], [thetadot + dv[1]], e, omega0, 1, steps_per_orbit)
+        tm, wm = spin_orbit_section([theta - dv[0]], [thetadot - dv[1]], e, omega0, 1, steps_per_orbit)
+        J[:, j] = [(tp[0, 0] - tm[0, 0]) / (2 * d), (wp[0, 0] - wm[0, 0]) / (2 * d)]
+    return float(np.trace(J))
+
+
+def continue_resonance(p, e, omega0, dw=0.05, steps_per_orbit=128):
+    """Follow the p resonance's fixed point of the periapse map from small ω₀ (where it sits at
+    Goldreich & Peale's centre: θ = 0 or π/2, θ̇ = p) up to `omega0`, in steps of dw.
+    Returns (θ, θ̇, trace) at omega0; raises ParameterError if the branch is lost."""
+    th, wd = resonance_centre_angle(p, e), float(p)
+    for w in list(np.arange(dw, omega0, dw)) + [omega0]:
+        th, wd = periapse_fixed_point(th, wd, e, w, steps_per_orbit=steps_per_orbit)
+    return th, wd, periapse_map_trace(th, wd, e, omega0, steps_per_orbit)

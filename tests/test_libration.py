@@ -315,6 +315,17 @@ def test_hyperion_chaotic_sea_and_regular_island():
     r = get("hyperion").simulate({"n_starts": 20, "n_orbits": 100, "probe_orbits": 2})
     assert 0 < r.metrics["chaotic_fraction"] < 1
     assert len(r.plot_series["section_theta_dot"]) == len(r.trajectory.t)
+    # the synchronous, 1:2 and 2:1 islands survive at Hyperion's ω₀ (followed from the GP centres)
+    for p in (0.5, 1.0, 2.0):
+        assert abs(r.metrics[f"island_trace_{p:g}"]) < 2, p
+    assert abs(r.metrics["island_rate_1"] - wd) < 1e-6  # the same synchronous orbit as found directly
+    # the drawn body (rigid-body integrator, 3-D) agrees with the section kernel at periapse
+    t = r.trajectory.t
+    q = r.trajectory.quat_wxyz
+    theta = np.unwrap(2 * np.arctan2(q[:, 3], q[:, 0]))
+    k = np.argmin(np.abs(t[:, None] - 2 * np.pi * np.arange(1, 3)[None, :]), axis=0)
+    T, _ = lib.spin_orbit_section([0.0], [1.4], e, w0, 2, 128)
+    assert np.max(np.abs(theta[k] - T[0])) < 1e-5
 
 
 # ------------------------------------------------------------------ the Moon

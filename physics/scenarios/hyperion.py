@@ -63,6 +63,18 @@ def _hyperion(values, progress=None):
     for p in RESONANCES:
         m[f"gp_half_width_{p:g}"] = float(lib.resonance_half_width(p, e, w0))
     m["overlap_1_and_1.5"] = float((m["gp_half_width_1"] + m["gp_half_width_1.5"]) / 0.5)
+    # the islands at these values: each resonance's periodic orbit followed from small ω₀
+    islands = []
+    for p in RESONANCES[:4]:
+        try:
+            th_i, wd_i, tr = lib.continue_resonance(p, e, w0)
+        except Exception:  # noqa: BLE001 — a lost branch is reported as NaN
+            th_i, wd_i, tr = np.nan, np.nan, np.nan
+        m[f"island_rate_{p:g}"] = float(wd_i)
+        m[f"island_angle_{p:g}_rad"] = float(th_i)
+        m[f"island_trace_{p:g}"] = float(tr)
+        if np.isfinite(tr):
+            islands.append(f"{p:g}: θ̇/n = {wd_i:.3f} at θ = {th_i:.2f} ({'stable island' if abs(tr) < 2 else 'unstable (no island)'})")
     # Euler's §833 first-order forced libration ζ = 2e/(1 − ω₀²)·sin M (fails here: ω₀ ~ 1, e = 0.1)
     z_euler = 2 * e / (1 - w0**2) * np.sin(t) if abs(1 - w0**2) > 1e-9 else np.full_like(t, np.nan)
     nan = np.array([np.nan])
@@ -77,7 +89,8 @@ def _hyperion(values, progress=None):
                         m[f"gp_half_width_{p:g}"], "n", "Goldreich & Peale 1966") for p in RESONANCES]
     comps.append(Comparison("Lyapunov exponent of the probe start", None, m["lyapunov_probe_per_orbit"], None,
                             "1/orbit", "WPM 1984 found Lyapunov times of a few orbits in the chaotic zone"))
-    notes = ["section_* series are a point cloud (n_starts × n_orbits points at periapse, then one NaN), "
+    notes = ["Periodic orbits followed from Goldreich & Peale's centres (small ω₀) to these values — " + "; ".join(islands),
+             "section_* series are a point cloud (n_starts × n_orbits points at periapse, then one NaN), "
              "not a time series: plot section_theta_dot against section_theta_mod_pi, coloured by "
              "section_lyapunov_per_orbit. Draw the resonance zones θ̇/n = p ± gp_half_width_p.",
              "Euler's linear forced libration (§833) is drawn as zeta_euler_rad: for Hyperion it fails "
