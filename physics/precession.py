@@ -278,9 +278,9 @@ def fit_pole(t, axis, arguments: dict, quadratic=False) -> PoleFit:
     scale = np.max(np.abs(M), axis=0)
     scale[scale == 0] = 1.0
     out = []
-    for y in (lam, p):
-        coef, *_ = np.linalg.lstsq(M / scale, y, rcond=None)
-        coef = coef / scale
+    coefs, *_ = np.linalg.lstsq(M / scale, np.stack([lam, p], 1), rcond=None)
+    for j, y in enumerate((lam, p)):
+        coef = coefs[:, j] / scale
         res = y - M @ coef
         out.append((coef, float(np.sqrt(np.mean(res * res)))))
     j0 = 3 if quadratic else 2
