@@ -88,7 +88,7 @@ def _hyperion(values, progress=None):
     comps = [Comparison(f"resonance θ̇/n = {p:g}: half-width ω₀√|H(p,e)|", None, None,
                         m[f"gp_half_width_{p:g}"], "n", "Goldreich & Peale 1966") for p in RESONANCES]
     comps.append(Comparison("Lyapunov exponent of the probe start", None, m["lyapunov_probe_per_orbit"], None,
-                            "1/orbit", "WPM 1984 found Lyapunov times of a few orbits in the chaotic zone"))
+                            "1/orbit", "nearby starts in the chaotic sea separate by a factor e every 1/λ orbits"))
     notes = ["Periodic orbits followed from Goldreich & Peale's centres (small ω₀) to these values — " + "; ".join(islands),
              "section_* series are a point cloud (n_starts × n_orbits points at periapse, then one NaN), "
              "not a time series: plot section_theta_dot against section_theta_mod_pi, coloured by "
