@@ -55,6 +55,19 @@ import numpy as np
 
 ARCSEC = np.pi / (180.0 * 3600.0)
 
+# Where the printed text (Bruce's translation of §840–849) is wrong, for the app to show
+TYPOS_840_843 = (
+    "§840: γ'dβ and γ'dγ are printed without their minus sign (dy = −γ'dβ); §841 has it right.",
+)
+TYPOS_844_849 = (
+    "§844: the second display of y prints N sin n(ε − 2δ cos n)/(εε − 4δδ); it is (ε + 2δ cos n), the G found just before.",
+    "§844: 'dv + εv dφ/δ = 0' should read dv + εu dφ/δ = 0; 'sin(A − λt)' stands for sin(λ − δt).",
+    "§847 prints −h sin(ε/δ)(φ + ζ) in ZA; §844's +h is what dp = −εy dt gives.",
+    "§849: the maximal prosthaphaeresis of the longitude is εN(ε cos n + 2δ)/(2δ(εε − 4δδ)) (as in §844), "
+    "not εN sin n(ε + 2δ cos n)/(2δ(εε − 4δδ)) as printed.",
+    "§846, §848: N = 3gee(aa − cc)/(eccs³) stands for 3gee(aa − cc)/(ε cc s³).",
+)
+
 
 # --------------------------------------------------------------------------------------------
 # §840–843: the momentary motion of the pole near a principal axis

@@ -8,8 +8,8 @@ from .. import quaternion as quat
 from ..inertia import validate_moments
 from ..integrator import PointMass, integrate
 from ..params import Param, ParameterError
-from ..precession import (equal_moments_841, euler_N, fit_pole, linear_theory, pole_angles,
-                          pole_rates_840, resonance_849)
+from ..precession import (TYPOS_840_843, TYPOS_844_849, equal_moments_841, euler_N, fit_pole, linear_theory,
+                          pole_angles, pole_rates_840, resonance_849)
 from ..trajectory import Trajectory
 from .base import Comparison, Result, Scenario, register
 
@@ -76,7 +76,7 @@ def _pole_near_axis(values, progress=None):
              Comparison("dβ/dt (pole toward/away from B)", e.dbeta_dt, dbeta, None, "rad/s",
                         "§840 (the printed formula lacks the minus sign)"),
              Comparison("dγ/dt (pole toward/away from C)", e.dgamma_dt, dgamma, None, "rad/s", "§840")]
-    notes = []
+    notes = ["Text: " + t for t in TYPOS_840_843]
     if a0 > 0:
         notes.append(f"the pole starts {values['offset_deg']:g}° from A: Euler's rates drop the free "
                      f"wobble γ'(aa−cc)/bb·α, of size {spin * abs(I[0] - I[2]) / I[1] * a0:.3g} rad/s in dβ/dt")
@@ -282,6 +282,7 @@ def _precession_circular(values, progress=None):
     if m["alpha_max_rad"] > 0.1:
         notes.append(f"the pole of rotation went {np.degrees(m['alpha_max_rad']):.3g}° from the figure axis: "
                      "Euler's small-α hypothesis (§845) no longer holds.")
+    notes += ["Text: " + t_ for t_ in TYPOS_844_849]
     rows = resonance_sweep(values["flattening"], n)
     notes.append("Nutation in obliquity toward the resonance (30 revolutions each, same flattening): "
                  + "; ".join(f"ε/δ = {r_:g}: simulated {a:.3g}, Euler {e:.3g}, corrected {c:.3g} rad"
