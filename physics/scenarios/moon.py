@@ -19,6 +19,7 @@ from ..trajectory import Trajectory
 from .base import Comparison, Result, Scenario, register
 
 ARCSEC = 180.0 / np.pi * 3600.0
+TERM_2D2M = "2D−2M'"
 J2000_YEAR = 2000.0
 
 
@@ -128,8 +129,8 @@ def _moon(values, progress=None):
         "The −16.8″ term is the anomalistic-month term (sin M′); the annual term is +90.7″ E sin M "
         "(Meeus ch. 53 after Eckhardt 1981).",
         f"Euler's formula (§836) is linear in each longitude term: it gets the M′, annual and evection terms to a few "
-        f"per cent. For 2D−2M′ it gives {coef_e["2D−2M'"] * ARCSEC:.1f}″ from the 0.0588° longitude term; the run "
-        f"gives {coef["2D−2M'"] * ARCSEC:.1f}″ (published −9.9″): the rest is second order, products of the "
+        f"per cent. For 2D−2M′ it gives {coef_e[TERM_2D2M] * ARCSEC:.1f}″ from the 0.0588° longitude term; the run "
+        f"gives {coef[TERM_2D2M] * ARCSEC:.1f}″ (published −9.9″): the rest is second order, products of the "
         "orbit's terms through the 1/s³ modulation (the kind of term of §835).",
         "plot_series: sub-Earth longitude/latitude (deg, the wobbling face), the same for uniform rotation "
         "(Meeus l′, b′), and the physical libration τ (arcsec) with Euler's Σ-term curve.",
