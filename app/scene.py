@@ -41,8 +41,11 @@ HERPOLHODE_COLOR = (0, 190, 200)
 FIGURE_COLOR = (38, 110, 220)
 ORBIT_RADIUS = 3.0
 MAX_DRAW_POINTS = 10000  # points per drawn path (10⁴-point trails)
-TRAIL_CHUNKS = 40  # a path is sent once, in chunks whose visibility grows with time
+TRAIL_CHUNKS = 24  # a path is sent once, in chunks whose visibility grows with time
 AXIS_TRAIL_RADIUS = 1.6
+# Paths live in scene units of order 1 (body ≈ 1, celestial sphere 2.4, orbits ≤ 3), where
+# float16 is good to ~1e-3 of a unit, far below a point's size: half the bytes per update.
+PATH_PRECISION = "float16"
 CELESTIAL_RADIUS = 2.4
 
 OVERLAYS = {
@@ -69,6 +72,22 @@ def decimate_index(n: int, max_points: int = MAX_DRAW_POINTS) -> np.ndarray:
     if n <= max_points:
         return np.arange(n)
     return np.unique(np.linspace(0, n - 1, max_points).round().astype(int))
+
+
+def densify(path: np.ndarray, idx: np.ndarray, spacing: float, max_points: int):
+    """Resample a polyline uniformly in arc length: gaps ≤ spacing where possible, at least the
+    original number of points (capped at max_points); `idx` (trajectory index of each point)
+    is interpolated alongside."""
+    seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    if s[-1] <= 0:
+        return path[: max_points], idx[: max_points]
+    n = int(np.clip(s[-1] / spacing, len(path), max_points))
+    if n == len(path) and n <= max_points:
+        return path, idx
+    u = np.linspace(0.0, s[-1], n)
+    out = np.stack([np.interp(u, s, path[:, k]) for k in range(3)], axis=1)
+    return out, np.interp(u, s, idx)
 
 
 def segments(path: np.ndarray) -> np.ndarray:
@@ -144,246 +163,323 @@ class _Path:
         self.set_time_index(i)
 
 
-@dataclass
-class SceneState:
-    n: int = 0
-    t: np.ndarray | None = None
-    paths: dict = field(default_factory=dict)  # overlay → list of _Path
-    static: dict = field(default_factory=dict)  # overlay → list of handles (shown/hidden, never animated)
-    body_frame: object = None
-    omega_arrow: object = None
-    L_arrow: object = None
-    markers: dict = field(default_factory=dict)  # name → (handle, (N,3) positions)
-
-
 class SceneView:
-    """All nodes of one result under `root` (e.g. "/world") on a viser scene API."""
+    """All nodes of one result under `root` (e.g. "/world") on a viser scene API.
+
+    Nodes are kept in a cache by name: a new result of the same scenario updates the existing
+    handles in place (points, scale, pose: no node is re-created, meshes are sent once as unit
+    shapes and scaled), nodes no longer needed are removed, and the paths of an overlay that is
+    switched off are not sent at all until it is switched on.
+    """
 
     def __init__(self, scene, root: str = "/world", grow_trails: bool = True):
         self.scene = scene
         self.root = root
         self.grow_trails = grow_trails
-        self.state = SceneState()
         self.overlays: dict[str, bool] = {}
         self.exaggerate = 1.0
         self.frame = 0
+        self.n = 0
         self._result = None
         self._spec = None
+        self._h: dict[str, object] = {}  # name → handle (alive)
+        self._touched: set[str] = set()
+        self._paths: dict[str, list[_Path]] = {}  # overlay → paths
+        self._static: dict[str, list] = {}  # overlay → handles shown/hidden with it
+        self._built: set[str] = set()  # overlays built for the current result
+        self._markers: dict[str, tuple] = {}  # name → (handle, (N,3) positions)
+        self._labels = []
+        self.body_frame = self.omega_arrow = self.L_arrow = None
+        self.k_omega = 1.0
+
+    # ---- node cache --------------------------------------------------------------------------
+    def _node(self, name: str, create, **update):
+        """The handle called `name`: created by `create()` the first time, else updated."""
+        h = self._h.get(name)
+        if h is None:
+            h = create()
+            self._h[name] = h
+        else:
+            for k, v in update.items():
+                setattr(h, k, v)
+        self._touched.add(name)
+        return h
+
+    def _segments(self, name, segs, color, thickness):
+        segs = np.asarray(segs, np.float32)
+        return self._node(name, lambda: self.scene.add_line_segments(name, segs, color, thickness=thickness,
+                                                                       thickness_units="world"), points=segs)
+
+    def _prune(self, keep_prefixes=()):
+        for name in list(self._h):
+            if name not in self._touched and not name.startswith(keep_prefixes):
+                try:
+                    self._h.pop(name).remove()
+                except Exception:
+                    pass
+
+    def clear(self) -> None:
+        for name in list(self._h):
+            try:
+                self._h.pop(name).remove()
+            except Exception:
+                pass
+        self._paths, self._static, self._built, self._markers = {}, {}, set(), {}
+        self.body_frame = self.omega_arrow = self.L_arrow = None
+        self.n = 0
 
     # ---- building --------------------------------------------------------------------------
     def default_overlays(self, spec) -> dict[str, bool]:
         ch15 = spec is not None and spec.group == "ch. 15"
         return {k: (v[1] if ch15 else v[2]) for k, v in OVERLAYS.items()}
 
-    def clear(self) -> None:
-        for h in self._all_handles():
-            try:
-                h.remove()
-            except Exception:
-                pass
-        self.state = SceneState()
-
-    def _all_handles(self):
-        seen = set()
-        for h in self._handles():
-            if id(h) not in seen:
-                seen.add(id(h))
-                yield h
-
-    def _handles(self):
-        s = self.state
-        for paths in s.paths.values():
-            for p in paths:
-                yield from p.handles
-        for hs in s.static.values():
-            yield from hs
-        for h, _ in s.markers.values():
-            yield h
-        for h in (s.omega_arrow, s.L_arrow, s.body_frame):
-            if h is not None:
-                yield h
-
     def show(self, result, spec, overlays: dict[str, bool] | None = None, exaggerate: float | None = None) -> None:
-        """Replace the scene by `result` (a physics.scenarios.Result) of scenario `spec`."""
+        """Show `result` (a physics.scenarios.Result) of scenario `spec`, updating in place."""
         if overlays is not None:
             self.overlays = dict(overlays)
         if not self.overlays:
             self.overlays = self.default_overlays(spec)
         if exaggerate is not None:
             self.exaggerate = float(exaggerate)
-        self.clear()
+        if self._spec is not None and (spec.name != self._spec.name or spec.kind != self._spec.kind):
+            self.clear()
         self._result, self._spec = result, spec
         traj = result.trajectory
-        st = self.state
-        st.n = len(traj.t)
-        st.t = traj.t
-        self.frame = 0
-        rotation = spec.kind == "rotation"
-        if rotation:
-            self._build_rotation(traj)
-        self._build_bodies(traj, rotation)
+        self.n = len(traj.t)
+        self._idx = decimate_index(self.n)
+        self._touched = set()
+        self._paths, self._static, self._built = {}, {}, set()
+        self._rotation = spec.kind == "rotation"
+        if self._rotation:
+            self._build_body(traj)
         for name, on in self.overlays.items():
-            self.set_overlay(name, on)
-        self.set_frame(0)
+            if on:
+                self._build(name)
+        self._prune()
+        for name, on in self.overlays.items():
+            self._apply_visibility(name, on)
+        self.frame = min(self.frame, self.n - 1)
+        self.set_frame(self.frame)
 
-    def _add_path(self, overlay: str, name: str, path: np.ndarray, color, thickness=0.012,
-                  grow: bool | None = None, idx: np.ndarray | None = None) -> None:
-        """Send `path` (samples at trajectory indices `idx`) once, as TRAIL_CHUNKS chunks."""
-        path = np.asarray(path, np.float32)
+    def _build(self, overlay: str) -> None:
+        if overlay in self._built or self._result is None:
+            return
+        self._built.add(overlay)
+        traj = self._result.trajectory
+        fn = getattr(self, f"_build_{overlay}", None)
+        if fn is not None and (self._rotation or overlay == "bodies"):
+            fn(traj)
+
+    def _cloud(self, name, pts, color, size):
+        pts = np.asarray(pts, np.float32)
+        return self._node(name, lambda: self.scene.add_point_cloud(
+            name, pts, color, point_size=size, point_shape="square", precision=PATH_PRECISION, point_shading="flat"),
+            points=pts)
+
+    def _add_path(self, overlay: str, name: str, path: np.ndarray, color, thickness=0.02,
+                  idx: np.ndarray | None = None) -> None:
+        """Send `path` (samples at trajectory indices `idx`) once, as TRAIL_CHUNKS chunks whose
+        visibility follows the playback time.
+
+        Paths are drawn as dense clouds of round points (resampled along the arc so that the
+        gaps are under the point size, at most MAX_DRAW_POINTS): in software WebGL a 10⁴-point
+        fat line (three's Line2) renders at a few frames per second, a 10⁴-point cloud at ~30.
+        """
+        path = np.asarray(path, float)
         if len(path) < 2:
             return
-        if idx is None:
-            idx = np.arange(len(path))
-        grow = self.grow_trails if grow is None else grow
-        k = TRAIL_CHUNKS if grow else 1
-        bounds = np.unique(np.linspace(0, len(path) - 1, k + 1).round().astype(int))
+        idx = np.arange(len(path)) if idx is None else np.asarray(idx, float)
+        path, idx = densify(path, idx, 0.6 * thickness, MAX_DRAW_POINTS)
+        k = TRAIL_CHUNKS if self.grow_trails else 1
+        bounds = np.unique(np.linspace(0, len(path), k + 1).round().astype(int))
         handles, starts = [], []
         for j in range(len(bounds) - 1):
             a, b = bounds[j], bounds[j + 1]
-            h = self.scene.add_line_segments(f"{name}/{j}", segments(path[a:b + 1]), color,
-                                             thickness=thickness, thickness_units="world")
-            handles.append(h)
-            starts.append(idx[a] if grow else 0)
-        self.state.paths.setdefault(overlay, []).append(_Path(handles, np.asarray(starts)))
+            handles.append(self._cloud(f"{name}/{j}", path[a:b], color, thickness))
+            starts.append(int(idx[a]) if self.grow_trails else 0)
+        self._paths.setdefault(overlay, []).append(_Path(handles, np.asarray(starts)))
 
-    def _build_rotation(self, traj) -> None:
-        sc, r, st = self.scene, self.root, self.state
-        I = traj.inertia
-        semi = shape_semi_axes(I, self.exaggerate)
-        idx = decimate_index(len(traj.t))
-        st.body_frame = sc.add_frame(f"{r}/body", show_axes=False)
-        st.static["body"] = [sc.add_mesh_trimesh(f"{r}/body/mesh", banded_ellipsoid(semi))]
-        # principal axes A, B, C with labels
-        ends = np.diag(semi * 1.35)
-        arrows = np.stack([np.zeros((3, 3)), ends], 1)
+    def _build_body(self, traj) -> None:
+        sc, r = self.scene, self.root
+        semi = shape_semi_axes(traj.inertia, self.exaggerate)
+        self.body_frame = self._node(f"{r}/body", lambda: sc.add_frame(f"{r}/body", show_axes=False))
+        unit = banded_ellipsoid((1.0, 1.0, 1.0))
+        self._node(f"{r}/body/mesh", lambda: sc.add_mesh_trimesh(f"{r}/body/mesh", unit, scale=tuple(semi),
+                                                                      cast_shadow=False, receive_shadow=False),
+                   scale=tuple(semi))
+        self._semi = semi
+        E = float(traj.energy[0])
+        Lmag = float(traj.momentum_norm[0])
+        self._E, self._Lmag = E, Lmag
+        self.k_omega = 1.3 / np.sqrt(2 * E / traj.inertia).max() if E > 0 else 1.0
+        # ω and L (moved every frame: one arrow each, tiny messages)
+        z = np.zeros((1, 2, 3), np.float32)
+        self.omega_arrow = self._node(f"{r}/omega", lambda: sc.add_arrows(
+            f"{r}/omega", z, OMEGA_COLOR, shaft_radius=0.025, head_radius=0.06, head_length=0.12))
+        self.L_arrow = self._node(f"{r}/L", lambda: sc.add_arrows(
+            f"{r}/L", z, L_COLOR, shaft_radius=0.025, head_radius=0.06, head_length=0.12))
+        self._labels = [self._node(f"{r}/omega_label", lambda: sc.add_label(f"{r}/omega_label", "ω")),
+                        self._node(f"{r}/L_label", lambda: sc.add_label(f"{r}/L_label", "L"))]
+
+    def _build_vectors(self, traj) -> None:
+        self._static["vectors"] = [self.omega_arrow, self.L_arrow] + self._labels
+
+    def _build_axes(self, traj) -> None:
+        sc, r, semi, I = self.scene, self.root, self._semi, traj.inertia
+        ends = np.diag(semi * 1.35).astype(np.float32)
+        arrows = np.stack([np.zeros((3, 3), np.float32), ends], 1)
         cols = np.array(AXIS_COLORS, np.uint8)
-        axes = [sc.add_arrows(f"{r}/body/axes", arrows, cols, shaft_radius=0.018, head_radius=0.05, head_length=0.1)]
+        hs = [self._node(f"{r}/body/axes", lambda: sc.add_arrows(f"{r}/body/axes", arrows, cols, shaft_radius=0.018,
+                                                                 head_radius=0.05, head_length=0.1), points=arrows)]
         for k, lab in enumerate("ABC"):
-            axes.append(sc.add_label(f"{r}/body/axis_labels/{lab}", f"{lab} = {I[k]:.4g}",
-                                     position=tuple(ends[k] * 1.08)))
-        st.static["axes"] = axes
-        # polhode on the body: where the rotation axis pierces the surface (ray / ellipsoid)
+            text = f"{lab} = {I[k]:.4g}"
+            pos = tuple(float(x) for x in ends[k] * 1.08)
+            hs.append(self._node(f"{r}/body/axis_labels/{lab}",
+                                 lambda text=text, pos=pos, lab=lab: sc.add_label(f"{r}/body/axis_labels/{lab}", text,
+                                                                                  position=pos),
+                                 text=text, position=pos))
+        self._static["axes"] = hs
+
+    def _build_polhode(self, traj) -> None:
+        """Where the rotation axis pierces the body surface (ray/ellipsoid), on the body frame."""
+        idx, semi = self._idx, self._semi
         w = traj.omega_body[idx]
         nw = np.linalg.norm(w, axis=1, keepdims=True)
         ok = nw[:, 0] > 0
         if np.count_nonzero(ok) >= 2:
             u = w[ok] / nw[ok]
             s = 1.0 / np.sqrt(np.sum((u / semi) ** 2, axis=1, keepdims=True))
-            self._add_path("polhode", f"{r}/body/polhode", 1.015 * s * u, POLHODE_COLOR, 0.02, idx=idx[ok])
-        # Poinsot: energy ellipsoid ω·Iω = 2E in ω-space, scaled so its largest semi-axis is 1.3
-        E = float(traj.energy[0])
-        Lmag = float(traj.momentum_norm[0])
-        if E > 0 and Lmag > 0:
-            e_semi = np.sqrt(2 * E / I)
-            k_w = 1.3 / e_semi.max()
-            self.k_omega = k_w
-            ell = trimesh.creation.icosphere(subdivisions=3)
-            ell.vertices = ell.vertices * (e_semi * k_w)[None, :]
-            st.static["energy_ellipsoid"] = [
-                sc.add_mesh_simple(f"{r}/body/energy_ellipsoid", ell.vertices, ell.faces, color=(120, 200, 255),
-                                   opacity=0.25, side="double")]
-            self._add_path("energy_ellipsoid", f"{r}/body/polhode_on_ellipsoid", k_w * traj.omega_body[idx],
-                           POLHODE_COLOR, 0.012, idx=idx)
-            # momentum sphere |L| (body frame) and the path of L on the body
-            k_L = 1.3 / Lmag
-            sph = trimesh.creation.icosphere(subdivisions=3, radius=1.3)
-            st.static["momentum_sphere"] = [
-                sc.add_mesh_simple(f"{r}/body/momentum_sphere", sph.vertices, sph.faces, color=(200, 150, 255),
-                                   opacity=0.2, side="double")]
-            self._add_path("momentum_sphere", f"{r}/body/L_path", k_L * traj.L_body[idx], L_COLOR, 0.012, idx=idx)
-            # herpolhode: ω tip in space, and the invariable plane through it (normal to L₀)
-            Lhat = traj.L_inertial[0] / Lmag
-            self._add_path("herpolhode", f"{r}/herpolhode", k_w * traj.omega_inertial[idx], HERPOLHODE_COLOR,
-                           0.012, idx=idx)
-            d = k_w * 2 * E / Lmag  # distance of the plane from the centre: ω·L̂ = 2E/|L|
-            disc = trimesh.creation.cylinder(radius=1.5, height=0.002, sections=64)
-            z = np.array([0, 0, 1.0])
-            ax = np.cross(z, Lhat)
-            ang = np.arctan2(np.linalg.norm(ax), z @ Lhat)
-            wxyz = (1.0, 0.0, 0.0, 0.0)
-            if np.linalg.norm(ax) > 1e-12:
-                ax = ax / np.linalg.norm(ax)
-                wxyz = (np.cos(ang / 2), *(np.sin(ang / 2) * ax))
-            st.static["herpolhode"] = [
-                sc.add_mesh_simple(f"{r}/invariable_plane", disc.vertices, disc.faces, color=(0, 160, 170),
-                                   opacity=0.1, side="double", position=tuple(d * Lhat), wxyz=wxyz)]
-        else:
-            self.k_omega = 1.0
-        # vectors ω and L (updated per frame: one arrow each, tiny messages)
-        st.omega_arrow = sc.add_arrows(f"{r}/omega", np.zeros((1, 2, 3)), OMEGA_COLOR, shaft_radius=0.025,
-                                       head_radius=0.06, head_length=0.12)
-        st.L_arrow = sc.add_arrows(f"{r}/L", np.zeros((1, 2, 3)), L_COLOR, shaft_radius=0.025,
-                                   head_radius=0.06, head_length=0.12)
-        st.static["vectors"] = [st.omega_arrow, st.L_arrow,
-                                sc.add_label(f"{r}/omega_label", "ω"), sc.add_label(f"{r}/L_label", "L")]
-        self._labels = st.static["vectors"][2:]
-        # trail of the rotation axis in space
-        self._add_path("axis_trail", f"{r}/axis_trail", AXIS_TRAIL_RADIUS * traj.rotation_axis[idx], TRAIL_COLOR,
-                       0.012, idx=idx)
-        # celestial sphere with the paths of the rotation axis and of the figure axis
-        st.static["celestial"] = [sc.add_line_segments(f"{r}/celestial/grid", wire_sphere(CELESTIAL_RADIUS),
-                                                       (150, 150, 160), thickness=0.004)]
-        self._add_path("celestial", f"{r}/celestial/figure_axis", CELESTIAL_RADIUS * traj.figure_axis[idx],
-                       FIGURE_COLOR, 0.02, idx=idx)
-        self._add_path("celestial", f"{r}/celestial/rotation_axis", CELESTIAL_RADIUS * traj.rotation_axis[idx],
-                       TRAIL_COLOR, 0.012, idx=idx)
+            self._add_path("polhode", f"{self.root}/body/polhode", 1.015 * s * u, POLHODE_COLOR, 0.03, idx=idx[ok])
 
-    def _build_bodies(self, traj, rotation: bool) -> None:
+    def _build_energy_ellipsoid(self, traj) -> None:
+        """Poinsot: the energy ellipsoid ω·Iω = 2E in ω-space (largest semi-axis drawn 1.3),
+        fixed in the body, with the polhode (tip of ω) on it."""
+        if self._E <= 0:
+            return
+        sc, r = self.scene, self.root
+        e_semi = tuple(float(x) for x in np.sqrt(2 * self._E / traj.inertia) * self.k_omega)
+        ico = trimesh.creation.icosphere(subdivisions=3)
+        h = self._node(f"{r}/body/energy_ellipsoid", lambda: sc.add_mesh_simple(
+            f"{r}/body/energy_ellipsoid", ico.vertices, ico.faces, color=(120, 200, 255), opacity=0.25,
+            side="double", scale=e_semi, cast_shadow=False, receive_shadow=False), scale=e_semi)
+        self._static["energy_ellipsoid"] = [h]
+        self._add_path("energy_ellipsoid", f"{r}/body/polhode_on_ellipsoid", self.k_omega * traj.omega_body[self._idx],
+                       POLHODE_COLOR, 0.02, idx=self._idx)
+
+    def _build_momentum_sphere(self, traj) -> None:
+        """The sphere |L| = const in the body frame, with the path of L on it."""
+        if self._Lmag <= 0:
+            return
+        sc, r = self.scene, self.root
+        sph = trimesh.creation.icosphere(subdivisions=3, radius=1.3)
+        h = self._node(f"{r}/body/momentum_sphere", lambda: sc.add_mesh_simple(
+            f"{r}/body/momentum_sphere", sph.vertices, sph.faces, color=(200, 150, 255), opacity=0.2, side="double",
+            cast_shadow=False, receive_shadow=False))
+        self._static["momentum_sphere"] = [h]
+        self._add_path("momentum_sphere", f"{r}/body/L_path", 1.3 / self._Lmag * traj.L_body[self._idx], L_COLOR,
+                       0.02, idx=self._idx)
+
+    def _build_herpolhode(self, traj) -> None:
+        """Tip of ω in space, on the invariable plane ω·L̂ = 2E/|L| (a disc normal to L₀)."""
+        if self._E <= 0 or self._Lmag <= 0:
+            return
+        sc, r = self.scene, self.root
+        self._add_path("herpolhode", f"{r}/herpolhode", self.k_omega * traj.omega_inertial[self._idx],
+                       HERPOLHODE_COLOR, 0.02, idx=self._idx)
+        Lhat = traj.L_inertial[0] / self._Lmag
+        d = self.k_omega * 2 * self._E / self._Lmag
+        z = np.array([0, 0, 1.0])
+        ax = np.cross(z, Lhat)
+        ang = np.arctan2(np.linalg.norm(ax), z @ Lhat)
+        wxyz = (1.0, 0.0, 0.0, 0.0)
+        if np.linalg.norm(ax) > 1e-12:
+            ax = ax / np.linalg.norm(ax)
+            wxyz = (float(np.cos(ang / 2)), *(float(x) for x in np.sin(ang / 2) * ax))
+        pos = tuple(float(x) for x in d * Lhat)
+        disc = trimesh.creation.cylinder(radius=1.5, height=0.002, sections=64)
+        self._static["herpolhode"] = [self._node(f"{r}/invariable_plane", lambda: sc.add_mesh_simple(
+            f"{r}/invariable_plane", disc.vertices, disc.faces, color=(0, 160, 170), opacity=0.1, side="double",
+            position=pos, wxyz=wxyz, cast_shadow=False, receive_shadow=False), position=pos, wxyz=wxyz)]
+
+    def _build_axis_trail(self, traj) -> None:
+        self._add_path("axis_trail", f"{self.root}/axis_trail", AXIS_TRAIL_RADIUS * traj.rotation_axis[self._idx],
+                       TRAIL_COLOR, 0.02, idx=self._idx)
+
+    def _build_celestial(self, traj) -> None:
+        """A celestial sphere with the paths of the figure axis and of the rotation axis."""
+        sc, r = self.scene, self.root
+        self._static["celestial"] = [self._node(f"{r}/celestial/grid", lambda: sc.add_line_segments(
+            f"{r}/celestial/grid", wire_sphere(CELESTIAL_RADIUS), (150, 150, 160), thickness=0.004))]
+        self._add_path("celestial", f"{r}/celestial/figure_axis", CELESTIAL_RADIUS * traj.figure_axis[self._idx],
+                       FIGURE_COLOR, 0.03, idx=self._idx)
+        self._add_path("celestial", f"{r}/celestial/rotation_axis", CELESTIAL_RADIUS * traj.rotation_axis[self._idx],
+                       TRAIL_COLOR, 0.02, idx=self._idx)
+
+    def _build_bodies(self, traj) -> None:
         if not traj.bodies:
             return
-        sc, r, st = self.scene, self.root, self.state
-        idx = decimate_index(len(traj.t))
+        sc, r, idx = self.scene, self.root, self._idx
         allpos = np.concatenate([np.asarray(p, float) for p in traj.bodies.values()])
-        if rotation:
-            # a distant attractor is drawn by its direction, not its distance
-            scale_fn = lambda p: ORBIT_RADIUS * p / np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-300)  # noqa: E731
+        if self._rotation:  # a distant attractor is drawn by its direction, not its distance
+            def scale_fn(p):
+                return ORBIT_RADIUS * p / np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-300)
         else:
             span = float(np.max(np.linalg.norm(allpos, axis=1))) or 1.0
-            scale_fn = lambda p: ORBIT_RADIUS * p / span  # noqa: E731
+
+            def scale_fn(p):
+                return ORBIT_RADIUS * p / span
         hs = []
+        self._markers = {}
         for k, (name, pos) in enumerate(traj.bodies.items()):
             pos = scale_fn(np.asarray(pos, float))
             col = palette(k)
-            h = sc.add_icosphere(f"{r}/bodies/{name}", radius=0.12, color=col)
-            lab = sc.add_label(f"{r}/bodies/{name}/label", name, position=(0, 0, 0.2))
-            st.markers[name] = (h, pos)
+            h = self._node(f"{r}/bodies/{name}", lambda col=col, name=name: sc.add_icosphere(
+                f"{r}/bodies/{name}", radius=0.12, color=col, cast_shadow=False, receive_shadow=False))
+            lab = self._node(f"{r}/bodies/{name}/label", lambda name=name: sc.add_label(
+                f"{r}/bodies/{name}/label", name, position=(0, 0, 0.2)))
+            self._markers[name] = (h, pos)
             hs += [h, lab]
-            self._add_path("bodies", f"{r}/body_trails/{name}", pos[idx], col, 0.015, idx=idx)
-        st.static["bodies"] = hs
+            self._add_path("bodies", f"{r}/body_trails/{name}", pos[idx], col, 0.03, idx=idx)
+        self._static["bodies"] = hs
 
     # ---- animating -------------------------------------------------------------------------
+    def _apply_visibility(self, name: str, on: bool) -> None:
+        for h in self._static.get(name, []):
+            if h.visible != on:
+                h.visible = on
+        for p in self._paths.get(name, []):
+            p.set_visible(on, self.frame)
+
     def set_overlay(self, name: str, on: bool) -> None:
         self.overlays[name] = bool(on)
-        for h in self.state.static.get(name, []):
-            h.visible = bool(on)
-        for p in self.state.paths.get(name, []):
-            p.set_visible(bool(on), self.frame)
+        if on and name not in self._built:
+            self._build(name)  # first time on for this result: send its paths now
+        self._apply_visibility(name, bool(on))
 
     def set_exaggerate(self, factor: float) -> None:
-        """Re-send only the body mesh and its axes with the new proportions."""
+        """New proportions: rescale the body mesh, move the axes and redraw the polhode."""
         self.exaggerate = float(factor)
         if self._result is not None:
             self.show(self._result, self._spec)
 
     def set_frame(self, i: int) -> None:
-        st = self.state
-        if st.n == 0:
+        if self.n == 0:
             return
-        i = int(np.clip(i, 0, st.n - 1))
+        i = int(np.clip(i, 0, self.n - 1))
         self.frame = i
         traj = self._result.trajectory
-        if st.body_frame is not None:
-            st.body_frame.wxyz = traj.quat_wxyz[i]
+        if self._rotation and self.body_frame is not None:
+            self.body_frame.wxyz = traj.quat_wxyz[i]
             if self.overlays.get("vectors", True):
                 w = self.k_omega * traj.omega_inertial[i]
                 Lm = traj.momentum_norm[i]
                 Lv = 1.3 * traj.L_inertial[i] / Lm if Lm > 0 else np.zeros(3)
-                st.omega_arrow.points = np.array([[[0, 0, 0], w]], np.float32)
-                st.L_arrow.points = np.array([[[0, 0, 0], Lv]], np.float32)
-                self._labels[0].position = tuple(w * 1.1)
-                self._labels[1].position = tuple(Lv * 1.1)
-        for h, pos in st.markers.values():
+                self.omega_arrow.points = np.array([[[0, 0, 0], w]], np.float32)
+                self.L_arrow.points = np.array([[[0, 0, 0], Lv]], np.float32)
+                self._labels[0].position = tuple(float(x) for x in w * 1.1)
+                self._labels[1].position = tuple(float(x) for x in Lv * 1.1)
+        for h, pos in self._markers.values():
             h.position = pos[i]
-        for paths in st.paths.values():
+        for paths in self._paths.values():
             for p in paths:
                 p.set_time_index(i)

@@ -147,6 +147,13 @@ class Page:
         self.page.wait_for_function(f"(b) => {{ const s = ({SIGNATURE_JS})('{name}'); return s && (s[0] !== b[0] || Math.abs(s[1] - b[1]) > 1e-6 * (1 + Math.abs(b[1]))); }}",
                                     arg=before, timeout=WAIT_MS)
 
+    def dismiss_software_webgl_note(self):
+        """Close viser's "Software WebGL rendering detected" notification (for clean screenshots)."""
+        self.page.evaluate("""(() => { for (const b of document.querySelectorAll('button')) {
+            let p = b; for (let k = 0; k < 5 && p; k++) { p = p.parentElement;
+              if (p && (p.innerText || '').startsWith('Software WebGL')) { b.click(); return true; } } }
+            return false; })()""")
+
     def close(self):
         self.ctx.close()
 
@@ -179,6 +186,8 @@ def test_page_loads_offline_and_draws_the_body(browser, tumble_app):
         assert pix.std() > 10.0, pix.std()  # a blank canvas has std ≈ 0
         assert np.mean(np.abs(pix - np.median(pix)) > 30) > 0.02  # ≥ 2 % of the area is drawn
         SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+        p.dismiss_software_webgl_note()
+        time.sleep(0.5)
         p.page.screenshot(path=str(SCREENSHOTS / "free-tumble.png"))
         assert p.outside == [], p.outside
         # the body moves: playback turns the body frame
@@ -194,7 +203,8 @@ def test_slider_changes_scene_and_bad_value_keeps_it(browser, flip_app):
     url, sessions = flip_app
     p = Page(browser, url).wait_ready()
     try:
-        time.sleep(0.5)
+        p.dismiss_software_webgl_note()
+        time.sleep(4.0)  # let the flips play (a third of the 30 s run at speed 1 is 10 s)
         SCREENSHOTS.mkdir(parents=True, exist_ok=True)
         p.page.screenshot(path=str(SCREENSHOTS / "middle-axis-flip.png"))
         before = p.signature("/world/body/polhode/0")

@@ -1,0 +1,301 @@
+"""Benchmarks of the web app and the replays (issue 3), measured in headless Chromium
+(Debian's /usr/bin/chromium, software WebGL) and with rerun, each against a baseline run in the
+same process:
+
+- app-slider-latency: a parameter change sent by the page (the slider's own GuiUpdateMessage) →
+  server → re-simulation (middle-axis-flip defaults, 6001 samples) → scene update → the page's
+  polhode geometry changed (checked every animation frame). Median of 7. Baseline: the 100 ms
+  target of issue 3 (ratio = 0.1 s / measured; ≥ 1 meets it).
+- app-playback-fps: frames per second in which the page shows a new body pose during playback of
+  a 20001-sample run drawn with 10⁴-point trails (polhode, herpolhode, rotation-axis trail; the
+  default overlays of a ch. 15 scene). theoria sends the paths once and moves poses and chunk
+  visibility; baseline: the naive player that re-sends the three growing trails every frame.
+  Times are seconds per displayed frame (ratio = baseline / theoria).
+- record-1e5-steps: a 10⁵-step recording (free tumble, one sample per step) written column-wise;
+  baseline: the same entities logged row by row (set_time + log per step) on 10⁴ steps, scaled
+  ×10 (linear in steps; reported as baseline_extrapolated).
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import socket
+import statistics
+import tempfile
+import threading
+import time
+
+import numpy as np
+
+from .bench import register_bench
+
+CHROMIUM = "/usr/bin/chromium"
+ARGS = ["--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+        "--disable-background-networking", "--disable-component-update", "--no-first-run"]
+VIEWPORT = {"width": 1280, "height": 800}
+WAIT_MS = 120_000
+
+SIG_JS = """(name) => { const o = window.__viserMutable && window.__viserMutable.nodeRefFromName[name];
+  if (!o) return null; let n = 0, s = 0;
+  o.traverse(c => { const g = c.geometry; if (!g || !g.attributes) return;
+    for (const k in g.attributes) { const a = g.attributes[k]; const arr = a.array || (a.data && a.data.array);
+      if (!arr) continue; n += arr.length; for (let i = 0; i < arr.length; i += 3) s += Math.abs(arr[i]); } });
+  return [n, s]; }"""
+
+LATENCY_JS = """([uuid, value]) => new Promise(resolve => {
+  const sig = """ + SIG_JS + """;
+  const name = '/world/body/polhode/0';
+  const s0 = sig(name);
+  const t0 = performance.now();
+  window.__viserMutable.sendMessage({type: 'GuiUpdateMessage', uuid: uuid, updates: {value: value}});
+  function loop() {
+    const s = sig(name);
+    if (s && (s[0] !== s0[0] || s[1] !== s0[1])) { resolve(performance.now() - t0); return; }
+    if (performance.now() - t0 > 20000) { resolve(-1); return; }
+    requestAnimationFrame(loop);
+  }
+  requestAnimationFrame(loop);
+})"""
+
+FPS_JS = """(seconds) => new Promise(resolve => {
+  const m = window.__viserMutable.nodeRefFromName;
+  let last = null, frames = 0, poses = 0; const t0 = performance.now();
+  function loop() {
+    const o = m['/world/body']; const q = o ? o.quaternion.toArray().join(',') : '';
+    frames++; if (q !== last) { poses++; last = q; }
+    if (performance.now() - t0 < seconds * 1000) requestAnimationFrame(loop);
+    else resolve({frames: frames, poses: poses, seconds: (performance.now() - t0) / 1000});
+  }
+  requestAnimationFrame(loop);
+})"""
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextlib.contextmanager
+def _browser():
+    from playwright.sync_api import sync_playwright
+
+    if not os.path.exists(CHROMIUM):
+        raise RuntimeError(f"needs Debian's chromium at {CHROMIUM}")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        try:
+            yield b
+        finally:
+            b.close()
+
+
+def _open(browser, url):
+    ctx = browser.new_context(viewport=VIEWPORT)
+    page = ctx.new_page()
+    page.goto(url)
+    page.wait_for_function("!document.body.innerText.includes('Connecting')", timeout=WAIT_MS)
+    page.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/polhode/0']",
+                           timeout=WAIT_MS)
+    return ctx, page
+
+
+def _quiet_server(**kw):
+    from .server import make_server
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        return make_server(port=_free_port(), host="127.0.0.1", verbose=False, **kw)
+
+
+def _wait_updates(session, n, timeout=120.0):
+    t0 = time.time()
+    while session.updates < n:
+        if time.time() - t0 > timeout:
+            raise RuntimeError("the app did not redraw")
+        time.sleep(0.02)
+
+
+@register_bench("app-slider-latency")
+def slider_latency():
+    srv, sessions = _quiet_server(scenario="middle-axis-flip")
+    try:
+        with _browser() as b:
+            ctx, page = _open(b, f"http://127.0.0.1:{srv.get_port()}/?fixedDpr=1")
+            session = list(sessions.values())[-1]
+            _wait_updates(session, 1)
+            uuid = session.controls.handles["perturbation"]._impl.uuid
+            lat, server = [], []
+            for k, v in enumerate([0.05, 0.02, 0.1, 0.03, 0.2, 0.04, 0.15, 0.06]):
+                ms = page.evaluate(LATENCY_JS, [uuid, v])
+                if k > 0 and ms > 0:  # the first one warms up the path
+                    lat.append(ms / 1000.0)
+                    tm = session.timing
+                    if "shown" in tm:
+                        server.append(tm["shown"] - tm["request"])
+                time.sleep(0.2)
+            n = len(session.result.trajectory.t)
+            ctx.close()
+    finally:
+        with contextlib.redirect_stdout(io.StringIO()):
+            srv.stop()
+    if not lat:
+        raise RuntimeError("no redraw observed")
+    med = statistics.median(lat)
+    return {"theoria_s": med, "baseline_s": 0.1, "theoria_error": None, "baseline_error": None,
+            "latency_ms_median": 1000 * med, "latency_ms_max": 1000 * max(lat), "samples": n,
+            "server_ms_median": 1000 * statistics.median(server) if server else None,
+            "note": "baseline = 100 ms target (issue 3)"}
+
+
+def _naive_server(result, spec):
+    """The naive player: every frame re-sends the growing trails (axis trail, polhode, herpolhode)."""
+    import viser
+
+    from .scene import AXIS_TRAIL_RADIUS, SceneView, decimate_index
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    stop = threading.Event()
+    traj = result.trajectory
+    idx = decimate_index(len(traj.t))
+    paths = [AXIS_TRAIL_RADIUS * traj.rotation_axis[idx], 1.3 * traj.omega_body[idx] / np.abs(traj.omega_body).max(),
+             traj.omega_inertial[idx] / np.abs(traj.omega_inertial).max()]
+
+    @server.on_client_connect
+    def _(client):
+        view = SceneView(client.scene, "/world", grow_trails=False)
+        view.show(result, spec, overlays={k: k in ("axes", "vectors") for k in view.default_overlays(spec)})
+        def cloud(name, pts, col):
+            client.scene.add_point_cloud(name, pts.astype(np.float32), col, point_size=0.02, point_shape="square",
+                                         precision="float32", point_shading="flat")
+
+        cloud("/world/body/polhode/0", paths[1][:2], (250, 210, 40))
+
+        def play():
+            t0 = time.perf_counter()
+            while not stop.is_set():
+                frac = ((time.perf_counter() - t0) / 20.0) % 1.0
+                i = int(frac * (len(traj.t) - 1))
+                j = max(2, int(np.searchsorted(idx, i)))
+                try:
+                    with client.atomic():
+                        view.set_frame(i)
+                        cloud("/world/naive/axis_trail", paths[0][:j], (240, 120, 30))
+                        cloud("/world/body/polhode/0", paths[1][:j], (250, 210, 40))
+                        cloud("/world/naive/herpolhode", paths[2][:j], (0, 190, 200))
+                except Exception:
+                    return
+                time.sleep(1 / 60)
+
+        threading.Thread(target=play, daemon=True).start()
+
+    return server, stop
+
+
+@register_bench("app-playback-fps")
+def playback_fps():
+    from physics.scenarios import get
+
+    spec = get("middle-axis-flip")
+    given = {"duration": "100", "step": "0.005"}  # 20001 samples → 10⁴-point trails
+    result = spec.simulate_fn(spec.resolve(given))
+    out = {}
+    with _browser() as b:
+        server, sessions = _quiet_server(scenario="middle-axis-flip")
+        try:
+            ctx, page = _open(b, f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1")
+            session = list(sessions.values())[-1]
+            _wait_updates(session, 1)
+            n = session.updates
+            session.request({**session.controls.values(), "duration": 100.0, "step": 0.005})
+            _wait_updates(session, n + 1)
+            time.sleep(1.0)
+            out["theoria"] = page.evaluate(FPS_JS, 4)
+            out["trail_points"] = int(len(session.view._idx))
+            out["samples"] = len(session.result.trajectory.t)
+            ctx.close()
+        finally:
+            with contextlib.redirect_stdout(io.StringIO()):
+                server.stop()
+        server, stop = _naive_server(result, spec)
+        try:
+            ctx, page = _open(b, f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1")
+            time.sleep(1.0)
+            out["naive"] = page.evaluate(FPS_JS, 4)
+            ctx.close()
+        finally:
+            stop.set()
+            with contextlib.redirect_stdout(io.StringIO()):
+                server.stop()
+    fps = out["theoria"]["poses"] / out["theoria"]["seconds"]
+    fps_naive = out["naive"]["poses"] / out["naive"]["seconds"]
+    return {"theoria_s": 1.0 / fps, "baseline_s": 1.0 / max(fps_naive, 1e-9), "theoria_error": None,
+            "baseline_error": None, "fps": fps, "fps_naive_resend": fps_naive, "trail_points": out["trail_points"],
+            "render_fps": out["theoria"]["frames"] / out["theoria"]["seconds"], "samples": out["samples"],
+            "viewport": f"{VIEWPORT['width']}x{VIEWPORT['height']}"}
+
+
+def _long_result(steps=100_000):
+    from physics.integrator import integrate
+    from physics.scenarios import get
+    from physics.scenarios.base import Result
+    from physics.trajectory import Trajectory
+
+    spec = get("free-tumble")
+    I = np.array([2.0, 3.0, 4.0])
+    w0 = np.array([1.0, 0.5, 1.5])
+    h = 0.01
+    t, L, q = integrate(I, w0, steps * h, h, stride=1)
+    traj = Trajectory(t, q, L, I)
+    res = Result("free-tumble", spec.resolve({"duration": str(steps * h), "step": str(h)}), traj,
+                 {"energy_J": float(traj.energy[0])},
+                 plot_series={"ω₁": traj.omega_body[:, 0], "ω₂": traj.omega_body[:, 1], "ω₃": traj.omega_body[:, 2]})
+    return spec, res
+
+
+def _naive_record(res, out, steps):
+    import rerun as rr
+
+    from physics.quaternion import to_xyzw
+
+    traj = res.trajectory
+    rec = rr.RecordingStream("theoria-naive")
+    try:
+        rec.save(out)
+        q = to_xyzw(traj.quat_wxyz)
+        for i in range(steps):
+            rec.set_time("step", sequence=i)
+            rec.set_time("t", duration=float(traj.t[i]))
+            rec.log("/world/body", rr.Transform3D(quaternion=q[i]))
+            rec.log("/world/omega", rr.Arrows3D(vectors=[traj.omega_inertial[i]]))
+            rec.log("/world/L", rr.Arrows3D(vectors=[traj.L_inertial[i]]))
+            rec.log("/series/energy", rr.Scalars(traj.energy[i]))
+            rec.log("/series/momentum_norm", rr.Scalars(traj.momentum_norm[i]))
+            for k, c in enumerate("xyz"):
+                rec.log(f"/series/omega/{c}", rr.Scalars(traj.omega_body[i, k]))
+            for name, v in res.plot_series.items():
+                rec.log(f"/series/plot/{name}", rr.Scalars(v[i]))
+    finally:
+        rec.disconnect()
+
+
+@register_bench("record-1e5-steps")
+def record_steps():
+    from .record import record_result
+
+    steps = 100_000
+    spec, res = _long_result(steps)
+    n = len(res.trajectory.t)
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "run.rrd")
+        t0 = time.perf_counter()
+        record_result(res, spec, path)
+        t_ours = time.perf_counter() - t0
+        size = os.path.getsize(path)
+        sub = 10_000
+        t0 = time.perf_counter()
+        _naive_record(res, os.path.join(d, "naive.rrd"), sub)
+        t_naive = (time.perf_counter() - t0) * (n / sub)
+    return {"theoria_s": t_ours, "baseline_s": t_naive, "theoria_error": None, "baseline_error": None,
+            "steps": n, "size_MB": size / 1e6, "baseline_extrapolated": f"row-by-row on {sub} steps x {n / sub:.1f}"}
