@@ -212,6 +212,16 @@ def playback_fps():
             _wait_updates(session, n + 1)
             time.sleep(1.0)
             out["theoria"] = page.evaluate(FPS_JS, 4)
+            with session._view_lock:  # the same body with only one 10⁴-point path (rotation-axis trail)
+                for k in list(session.view.overlays):
+                    session.view.set_overlay(k, k in ("axes", "vectors", "axis_trail"))
+            time.sleep(1.0)
+            out["one_trail"] = page.evaluate(FPS_JS, 3)
+            with session._view_lock:
+                for k in list(session.view.overlays):
+                    session.view.set_overlay(k, False)
+            time.sleep(1.0)
+            out["no_paths"] = page.evaluate(FPS_JS, 3)
             out["trail_points"] = int(len(session.view._idx))
             out["samples"] = len(session.result.trajectory.t)
             ctx.close()
@@ -232,7 +242,9 @@ def playback_fps():
     fps_naive = out["naive"]["poses"] / out["naive"]["seconds"]
     return {"theoria_s": 1.0 / fps, "baseline_s": 1.0 / max(fps_naive, 1e-9), "theoria_error": None,
             "baseline_error": None, "fps": fps, "fps_naive_resend": fps_naive, "trail_points": out["trail_points"],
-            "render_fps": out["theoria"]["frames"] / out["theoria"]["seconds"], "samples": out["samples"],
+            "render_fps": out["theoria"]["frames"] / out["theoria"]["seconds"],
+            "fps_one_10k_trail": out["one_trail"]["poses"] / out["one_trail"]["seconds"],
+            "fps_body_only": out["no_paths"]["poses"] / out["no_paths"]["seconds"], "samples": out["samples"],
             "viewport": f"{VIEWPORT['width']}x{VIEWPORT['height']}"}
 
 

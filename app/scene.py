@@ -107,10 +107,10 @@ def shape_semi_axes(inertia, exaggerate: float = 1.0) -> np.ndarray:
     return np.clip(ax, 0.12, None)  # a flat body (A + B = C) keeps a visible thickness
 
 
-def banded_ellipsoid(semi_axes, base=(200, 190, 170)) -> trimesh.Trimesh:
+def banded_ellipsoid(semi_axes, base=(200, 190, 170), count: int = 32) -> trimesh.Trimesh:
     """A UV-sphere scaled to the semi-axes, coloured in latitude bands about the body z (C)
     axis with one dark meridian (body x–z half-plane) so that spin is visible."""
-    m = trimesh.creation.uv_sphere(radius=1.0, count=[48, 48])
+    m = trimesh.creation.uv_sphere(radius=1.0, count=[count, count])
     v = m.vertices
     lat = np.arcsin(np.clip(v[:, 2], -1, 1))
     lon = np.arctan2(v[:, 1], v[:, 0])
