@@ -39,7 +39,7 @@ TRAIL_COLOR = (240, 120, 30)
 POLHODE_COLOR = (250, 210, 40)
 HERPOLHODE_COLOR = (0, 190, 200)
 FIGURE_COLOR = (38, 110, 220)
-ORBIT_RADIUS = 3.0
+ORBIT_RADIUS = 2.0
 MAX_DRAW_POINTS = 10000  # points per drawn path (10⁴-point trails)
 TRAIL_CHUNKS = 24  # a path is sent once, in chunks whose visibility grows with time
 AXIS_TRAIL_RADIUS = 1.6
@@ -219,7 +219,7 @@ class SceneView:
                     pass
 
     def clear(self) -> None:
-        for name in list(self._h):
+        for name in sorted(self._h, key=lambda n: -n.count("/")):  # children first
             try:
                 self._h.pop(name).remove()
             except Exception:
@@ -439,7 +439,7 @@ class SceneView:
                 f"{r}/bodies/{name}/label", name, position=(0, 0, 0.2)))
             self._markers[name] = (h, pos)
             hs += [h, lab]
-            self._add_path("bodies", f"{r}/body_trails/{name}", pos[idx], col, 0.03, idx=idx)
+            self._add_path("bodies", f"{r}/body_trails/{name}", pos[idx], col, 0.02, idx=idx)
         self._static["bodies"] = hs
 
     # ---- animating -------------------------------------------------------------------------

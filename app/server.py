@@ -122,9 +122,7 @@ class ClientSession:
         client = self.client
         client.scene.set_up_direction("+z")
         configure_lighting(client.scene)
-        client.camera.position = (3.0, 2.3, 1.8)
-        client.camera.look_at = (0.0, 0.0, 0.0)
-        client.camera.up_direction = (0.0, 0.0, 1.0)
+        self._set_camera(self.spec.kind)
         gui.configure_theme(control_width="large", show_share_button=False)
         order = sorted(self.scenarios.values(), key=lambda s: (s.group, s.name))
         self._labels = {scenario_label(s): s.name for s in order}
@@ -158,6 +156,13 @@ class ClientSession:
                 self.toggles[key] = cb
         self.plot_folder = gui.add_folder("Plot")
         self.plot = None
+
+    def _set_camera(self, kind: str) -> None:
+        """Rotation scenes: an oblique view of the body; orbit scenes: from above the plane."""
+        cam = self.client.camera
+        cam.position = (3.0, 2.3, 1.8) if kind == "rotation" else (0.0, -2.6, 4.2)
+        cam.look_at = (0.0, 0.0, 0.0)
+        cam.up_direction = (0.0, 0.0, 1.0)
 
     def notify(self, title: str, body: str, color: str = "red") -> None:
         try:
@@ -279,6 +284,8 @@ class ClientSession:
             overlays = None
             if not self.view.overlays or self.view._spec is None or self.view._spec.name != spec.name:
                 overlays = self.view.default_overlays(spec)
+                if self.view._spec is not None and self.view._spec.kind != spec.kind:
+                    self._set_camera(spec.kind)
                 for k, cb in self.toggles.items():
                     self._guard = True
                     try:

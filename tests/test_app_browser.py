@@ -253,6 +253,44 @@ def test_two_browsers_hold_independent_states(browser, flip_app):
         b.close()
 
 
+ATTACHED_JS = """(name) => { let o = window.__viserMutable.nodeRefFromName[name]; if (!o) return false;
+  while (o.parent) o = o.parent; return o.type === 'Scene'; }"""
+
+
+def test_switching_to_an_orbit_scenario_draws_its_bodies(browser, tumble_app):
+    """The dropdown (grouped by chapter) switches this browser to an orbit scenario: the rotating
+    body goes, a sphere and a trail per Trajectory.bodies entry come, the parameters follow."""
+    from app.server import scenario_label
+    from physics.scenarios import all_scenarios
+
+    orbit = next((s for s in all_scenarios() if s.kind == "orbit"), None)
+    if orbit is None:
+        pytest.skip("no orbit scenario registered")
+    url, sessions = tumble_app
+    p = Page(browser, url).wait_ready()
+    try:
+        cur = scenario_label(next(iter(s for s in sessions.values())).spec)
+        p.page.evaluate("""(cur) => { const i = Array.from(document.querySelectorAll('input'))
+            .find(i => i.value === cur && i.type !== 'hidden'); i.setAttribute('data-theoria', 'scenario'); }""", cur)
+        p.page.locator('input[data-theoria="scenario"]').click()
+        p.page.get_by_role("option", name=scenario_label(orbit)).click()
+        p.page.wait_for_function("(n) => { const m = window.__viserMutable.nodeRefFromName;"
+                                 " return Object.keys(m).some(k => k.startsWith('/world/bodies/') && k.split('/').length === 4); }",
+                                 arg=None, timeout=WAIT_MS)
+        p.page.wait_for_function(f"(() => !({ATTACHED_JS})('/world/body/mesh'))()", timeout=WAIT_MS)
+        names = p.nodes()
+        bodies = [n for n in names if n.startswith("/world/bodies/") and n.count("/") == 3]
+        trails = [n for n in names if n.startswith("/world/body_trails/") and n.endswith("/0")]
+        assert len(bodies) >= 2 and len(trails) == len(bodies), (bodies, trails)
+        text = p.page.evaluate("document.body.innerText")
+        assert orbit.title in text and orbit.section in text
+        for prm in orbit.params:
+            assert prm.name in text
+        assert p.outside == []
+    finally:
+        p.close()
+
+
 def test_exported_html_plays_from_file(browser, tmp_path):
     from app.export_html import export
     from physics.scenarios import get
