@@ -372,7 +372,14 @@ def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None 
     """A running viser server with one ClientSession per browser; returns (server, sessions)."""
     if scenario is not None:
         get(scenario)  # a bad name raises ParameterError before the server starts
-    server = viser.ViserServer(host=host, port=port, verbose=verbose)
+    if verbose:
+        server = viser.ViserServer(host=host, port=port, verbose=True)
+    else:
+        import contextlib
+        import io
+
+        with contextlib.redirect_stdout(io.StringIO()):  # viser prints its banner even when not verbose
+            server = viser.ViserServer(host=host, port=port, verbose=False)
     sessions: dict[int, ClientSession] = {}
 
     @server.on_client_connect
@@ -398,8 +405,14 @@ def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None 
 def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None) -> None:
     """Run the web app until interrupted, printing the URL to open."""
     server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False)
-    shown = "127.0.0.1" if host in ("127.0.0.1", "localhost") else host
-    print(f"theoria: open http://{shown}:{server.get_port()}/ in a browser (Ctrl-C to stop)", flush=True)
+    port = server.get_port()
+    if host in ("0.0.0.0", "::", ""):
+        import socket
+
+        print(f"theoria: listening on all interfaces, port {port}; open http://{socket.gethostname()}:{port}/ "
+              f"(or http://127.0.0.1:{port}/ on this machine). Ctrl-C to stop.", flush=True)
+    else:
+        print(f"theoria: open http://{host}:{port}/ in a browser (Ctrl-C to stop)", flush=True)
     try:
         while True:
             time.sleep(3600)
