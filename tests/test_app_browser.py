@@ -311,3 +311,32 @@ def test_exported_html_plays_from_file(browser, tmp_path):
         assert p.outside == [], p.outside
     finally:
         p.close()
+
+
+def test_a_failing_scenario_never_kills_the_server(browser):
+    """A scenario whose simulation raises: the browser is told, the server keeps serving."""
+    from physics.scenarios import base
+    from physics.params import Param
+
+    def boom(values, progress=None):
+        raise RuntimeError("deliberate failure in a test scenario")
+
+    spec = base.Scenario("test-broken", "broken", "§0", "ch. 15", "raises", (Param("x", 1.0, 0.0, 2.0),), boom)
+    base.REGISTRY[spec.name] = spec
+    try:
+        server, sessions = _server("test-broken")
+        url = f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1"
+        a = Page(browser, url)
+        try:
+            a.page.wait_for_function("document.body.innerText.includes('deliberate failure')", timeout=WAIT_MS)
+            assert "Error in test-broken" in a.page.evaluate("document.body.innerText")
+        finally:
+            a.close()
+        b = Page(browser, url)  # a new browser is still served
+        try:
+            b.page.wait_for_function("document.body.innerText.includes('deliberate failure')", timeout=WAIT_MS)
+        finally:
+            b.close()
+        server.stop()
+    finally:
+        base.REGISTRY.pop(spec.name, None)

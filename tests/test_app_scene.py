@@ -1,0 +1,145 @@
+"""The scene logic without a browser: a fake viser scene API records every call, so the rule
+"send paths once, animate poses / visibility only" and the in-place updates are checked."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.controls import slider_range
+from app.scene import MAX_DRAW_POINTS, SceneView, densify, shape_semi_axes
+from physics.inertia import ellipsoid_moments
+from physics.params import Param
+from physics.scenarios import get
+from physics.scenarios.base import Result, Scenario
+from physics.trajectory import Trajectory
+
+
+class FakeHandle:
+    def __init__(self, log, kind, name, **props):
+        object.__setattr__(self, "_log", log)
+        object.__setattr__(self, "kind", kind)
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "visible", props.pop("visible", True))
+        for k, v in props.items():
+            object.__setattr__(self, k, v)
+
+    def __setattr__(self, key, value):
+        self._log.append(("set", self.kind, self.name, key, np.shape(value)))
+        object.__setattr__(self, key, value)
+
+    def remove(self):
+        self._log.append(("remove", self.kind, self.name, None, None))
+
+
+class FakeScene:
+    def __init__(self):
+        self.log = []
+
+    def __getattr__(self, method):
+        if not method.startswith("add_"):
+            raise AttributeError(method)
+
+        def add(name, *args, **kw):
+            self.log.append(("add", method, name, None, None))
+            pts = kw.get("points", args[0] if args and isinstance(args[0], np.ndarray) else None)
+            return FakeHandle(self.log, method, name, points=pts)
+
+        return add
+
+
+def _result(name, **given):
+    spec = get(name)
+    return spec, spec.simulate_fn(spec.resolve(given))
+
+
+def test_playback_moves_poses_and_visibility_only():
+    scene = FakeScene()
+    view = SceneView(scene)
+    spec, res = _result("free-tumble")
+    view.show(res, spec)
+    adds = [e for e in scene.log if e[0] == "add"]
+    names = {e[2] for e in adds}
+    assert {"/world/body", "/world/body/mesh", "/world/body/axes", "/world/omega", "/world/L"} <= names
+    assert any(n.startswith("/world/body/polhode/") for n in names)
+    assert any(n.startswith("/world/axis_trail/") for n in names)
+    scene.log.clear()
+    for i in range(0, len(res.trajectory.t), 7):
+        view.set_frame(i)
+    assert not [e for e in scene.log if e[0] != "set"]  # nothing added or removed
+    for _, kind, name, key, shape in scene.log:
+        assert key in ("wxyz", "points", "position", "visible"), (name, key)
+        if key == "points":  # only the two arrows, one arrow each
+            assert kind == "add_arrows" and shape == (1, 2, 3), (name, shape)
+    # the trails grow: chunk visibility switched on in time order
+    vis = [e for e in scene.log if e[3] == "visible" and e[2].startswith("/world/axis_trail/")]
+    assert len(vis) > 10
+
+
+def test_new_parameters_update_in_place_and_overlays_build_lazily():
+    scene = FakeScene()
+    view = SceneView(scene)
+    spec, res = _result("middle-axis-flip")
+    view.show(res, spec)
+    assert not any(e[2].startswith("/world/body/energy_ellipsoid") for e in scene.log)  # off by default
+    scene.log.clear()
+    _, res2 = _result("middle-axis-flip", perturbation="0.2")
+    view.show(res2, spec)
+    assert not [e for e in scene.log if e[0] in ("add", "remove")]  # same nodes, new data
+    assert any(e[3] == "points" and e[2].startswith("/world/body/polhode/") for e in scene.log)
+    scene.log.clear()
+    view.set_overlay("energy_ellipsoid", True)
+    added = {e[2] for e in scene.log if e[0] == "add"}
+    assert "/world/body/energy_ellipsoid" in added and any(n.startswith("/world/body/polhode_on_ellipsoid/")
+                                                           for n in added)
+
+
+def test_switching_kind_clears_and_orbit_bodies_are_drawn():
+    scene = FakeScene()
+    view = SceneView(scene)
+    spec, res = _result("free-tumble")
+    view.show(res, spec)
+    n = 40
+    t = np.linspace(0, 1, n)
+    pos = np.stack([np.cos(t), np.sin(t), 0 * t], 1) * 3.8e8  # astronomical units are rescaled
+    traj = Trajectory(t, np.tile([1.0, 0, 0, 0], (n, 1)), np.zeros((n, 3)), (1.0, 1.0, 1.0),
+                      bodies={"earth": 0 * pos, "moon": pos})
+    orbit = Scenario("demo-orbit", "demo", "§0", "three bodies", "demo", (), lambda v, progress=None: None,
+                     kind="orbit")
+    scene.log.clear()
+    view.show(Result("demo-orbit", {}, traj, {}), orbit)
+    assert any(e[0] == "remove" and e[2] == "/world/body/mesh" for e in scene.log)
+    added = {e[2] for e in scene.log if e[0] == "add"}
+    assert {"/world/bodies/earth", "/world/bodies/moon"} <= added
+    view.set_frame(n - 1)
+    moon = view._h["/world/bodies/moon"]
+    assert np.linalg.norm(moon.position) == pytest.approx(2.0)  # largest distance drawn at ORBIT_RADIUS
+
+
+def test_body_has_the_proportions_of_its_moments():
+    """The drawn ellipsoid (exaggerate = 1) has moments proportional to (A, B, C)."""
+    inertia = np.array([2.0, 3.0, 4.0])
+    semi = shape_semi_axes(inertia)
+    m = ellipsoid_moments(semi)
+    assert np.allclose(m / m.sum(), inertia / inertia.sum(), rtol=1e-12)
+    # exaggeration moves the semi-axes away from their mean, ordering kept
+    ex = shape_semi_axes(np.array([1.0, 1.01, 1.02]), exaggerate=20)
+    plain = shape_semi_axes(np.array([1.0, 1.01, 1.02]))
+    assert np.ptp(ex) > 10 * np.ptp(plain) and np.all(np.argsort(ex) == np.argsort(plain))
+
+
+def test_densify_is_uniform_and_keeps_the_ends():
+    th = np.linspace(0, 2 * np.pi, 50)
+    path = np.stack([np.cos(th), np.sin(th), 0 * th], 1)
+    out, idx = densify(path, np.arange(50.0), 0.01, MAX_DRAW_POINTS)
+    gaps = np.linalg.norm(np.diff(out, axis=0), axis=1)
+    assert np.allclose(out[0], path[0]) and np.allclose(out[-1], path[-1])
+    assert gaps.max() <= 0.0101 and idx[0] == 0 and idx[-1] == 49
+    assert len(densify(path, np.arange(50.0), 1e-6, 1000)[0]) == 1000  # capped
+
+
+def test_controls_choose_sliders_only_for_usable_ranges():
+    assert slider_range(Param("spin", 6.0, -50.0, 50.0, "rad/s", step=0.1)) == (-50.0, 50.0, 0.1)
+    assert slider_range(Param("duration", 30.0, 0.0, 1e6, "s", exclusive_min=True, step=1.0)) is None
+    lo, hi, step = slider_range(Param("dt", 0.5, 0.0, 1.0, "s", exclusive_min=True, step=0.01))
+    assert lo == pytest.approx(0.01) and hi == 1.0  # the excluded minimum is not offered
+    assert slider_range(Param("v", (1, 2, 3), kind="vec3", minimum=0, maximum=5)) is None
