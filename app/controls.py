@@ -60,7 +60,9 @@ def add_param_control(gui, p: Param, value: Any):
         v = min(max(value, lo), hi)
         return gui.add_slider(label, min=lo, max=hi, step=step, initial_value=int(v) if p.kind == "int" else float(v),
                               hint=hint)
-    return gui.add_number(label, int(value) if p.kind == "int" else float(value), step=_step(p), hint=hint)
+    # number inputs: the spec's step if it has one, else viser's own (precision of the value)
+    step = 1 if p.kind == "int" else (float(p.step) if p.step else None)
+    return gui.add_number(label, int(value) if p.kind == "int" else float(value), step=step, hint=hint)
 
 
 class ParamControls:

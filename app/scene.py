@@ -396,9 +396,9 @@ class SceneView:
             ax = ax / np.linalg.norm(ax)
             wxyz = (float(np.cos(ang / 2)), *(float(x) for x in np.sin(ang / 2) * ax))
         pos = tuple(float(x) for x in d * Lhat)
-        disc = trimesh.creation.cylinder(radius=1.5, height=0.002, sections=64)
+        disc = trimesh.creation.cylinder(radius=1.25, height=0.002, sections=64)
         self._static["herpolhode"] = [self._node(f"{r}/invariable_plane", lambda: sc.add_mesh_simple(
-            f"{r}/invariable_plane", disc.vertices, disc.faces, color=(0, 160, 170), opacity=0.1, side="double",
+            f"{r}/invariable_plane", disc.vertices, disc.faces, color=(0, 160, 170), opacity=0.08, side="double",
             position=pos, wxyz=wxyz, cast_shadow=False, receive_shadow=False), position=pos, wxyz=wxyz)]
 
     def _build_axis_trail(self, traj) -> None:
