@@ -311,7 +311,11 @@ class SceneView:
         E = float(traj.energy[0])
         Lmag = float(traj.momentum_norm[0])
         self._E, self._Lmag = E, Lmag
-        self.k_omega = 1.3 / np.sqrt(2 * E / traj.inertia).max() if E > 0 else 1.0
+        if E > 0:  # ω drawn in the scale of the energy ellipsoid: its tip touches the invariable plane
+            self.k_omega = 1.3 / np.sqrt(2 * E / traj.inertia).max()
+        else:  # starts at rest (e.g. initial-axis): the largest ω of the run is drawn 1.3 long
+            wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
+            self.k_omega = 1.3 / wmax if wmax > 0 else 1.0
         # ω and L (moved every frame: one arrow each, tiny messages)
         z = np.zeros((1, 2, 3), np.float32)
         self.omega_arrow = self._node(f"{r}/omega", lambda: sc.add_arrows(
