@@ -114,7 +114,11 @@ def _write(rec, result, spec, traj, n, unit):
                                                         f"C={traj.inertia[2]:.4g}"]), static=True)
         rec.log("/world/body", rr.TransformAxes3D(axis_length=0.6), static=True)
         E0, L0 = float(traj.energy[0]), float(traj.momentum_norm[0])
-        k_w = 1.3 / np.sqrt(2 * E0 / traj.inertia).max() if E0 > 0 else 1.0
+        if E0 > 0:  # the scale of the energy ellipsoid, as in the app
+            k_w = 1.3 / np.sqrt(2 * E0 / traj.inertia).max()
+        else:  # starts at rest: the largest ω of the run is drawn 1.3 long
+            wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
+            k_w = 1.3 / wmax if wmax > 0 else 1.0
         w = k_w * np.asarray(traj.omega_inertial, float)
         Lv = 1.3 * np.asarray(traj.L_inertial, float) / L0 if L0 > 0 else np.zeros((n, 3))
         rec.send_columns("/world/omega", indexes=tcols, columns=rr.Arrows3D.columns(vectors=w))
