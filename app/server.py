@@ -122,7 +122,7 @@ class ClientSession:
         client = self.client
         client.scene.set_up_direction("+z")
         configure_lighting(client.scene)
-        self._set_camera(self.spec.kind)
+        self._set_camera(self.spec)
         gui.configure_theme(control_width="large", show_share_button=False)
         order = sorted(self.scenarios.values(), key=lambda s: (s.group, s.name))
         self._labels = {scenario_label(s): s.name for s in order}
@@ -157,10 +157,16 @@ class ClientSession:
         self.plot_folder = gui.add_folder("Plot")
         self.plot = None
 
-    def _set_camera(self, kind: str) -> None:
-        """Rotation scenes: an oblique view of the body; orbit scenes: from above the plane."""
+    def _set_camera(self, spec) -> None:
+        """Rotation scenes: an oblique view of the body (farther out when the celestial sphere and
+        the attractor's direction are shown); orbit scenes: from above the plane."""
         cam = self.client.camera
-        cam.position = (3.0, 2.3, 1.8) if kind == "rotation" else (0.0, -2.6, 4.2)
+        if spec.kind != "rotation":
+            cam.position = (0.0, -2.6, 4.2)
+        elif spec.group == "ch. 15":
+            cam.position = (3.0, 2.3, 1.8)
+        else:
+            cam.position = (4.8, 3.7, 2.9)
         cam.look_at = (0.0, 0.0, 0.0)
         cam.up_direction = (0.0, 0.0, 1.0)
 
@@ -284,8 +290,8 @@ class ClientSession:
             overlays = None
             if not self.view.overlays or self.view._spec is None or self.view._spec.name != spec.name:
                 overlays = self.view.default_overlays(spec)
-                if self.view._spec is not None and self.view._spec.kind != spec.kind:
-                    self._set_camera(spec.kind)
+                if self.view._spec is not None:
+                    self._set_camera(spec)
                 for k, cb in self.toggles.items():
                     self._guard = True
                     try:
