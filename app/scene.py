@@ -353,7 +353,7 @@ class SceneView:
         if np.count_nonzero(ok) >= 2:
             u = w[ok] / nw[ok]
             s = 1.0 / np.sqrt(np.sum((u / semi) ** 2, axis=1, keepdims=True))
-            self._add_path("polhode", f"{self.root}/body/polhode", 1.015 * s * u, POLHODE_COLOR, 0.03, idx=idx[ok])
+            self._add_path("polhode", f"{self.root}/body/polhode", 1.015 * s * u, POLHODE_COLOR, 0.02, idx=idx[ok])
 
     def _build_energy_ellipsoid(self, traj) -> None:
         """Poinsot: the energy ellipsoid ω·Iω = 2E in ω-space (largest semi-axis drawn 1.3),
@@ -368,7 +368,7 @@ class SceneView:
             side="double", scale=e_semi, cast_shadow=False, receive_shadow=False), scale=e_semi)
         self._static["energy_ellipsoid"] = [h]
         self._add_path("energy_ellipsoid", f"{r}/body/polhode_on_ellipsoid", self.k_omega * traj.omega_body[self._idx],
-                       POLHODE_COLOR, 0.02, idx=self._idx)
+                       POLHODE_COLOR, 0.012, idx=self._idx)
 
     def _build_momentum_sphere(self, traj) -> None:
         """The sphere |L| = const in the body frame, with the path of L on it."""
@@ -389,7 +389,7 @@ class SceneView:
             return
         sc, r = self.scene, self.root
         self._add_path("herpolhode", f"{r}/herpolhode", self.k_omega * traj.omega_inertial[self._idx],
-                       HERPOLHODE_COLOR, 0.02, idx=self._idx)
+                       HERPOLHODE_COLOR, 0.012, idx=self._idx)
         Lhat = traj.L_inertial[0] / self._Lmag
         d = self.k_omega * 2 * self._E / self._Lmag
         z = np.array([0, 0, 1.0])
@@ -407,7 +407,7 @@ class SceneView:
 
     def _build_axis_trail(self, traj) -> None:
         self._add_path("axis_trail", f"{self.root}/axis_trail", AXIS_TRAIL_RADIUS * traj.rotation_axis[self._idx],
-                       TRAIL_COLOR, 0.02, idx=self._idx)
+                       TRAIL_COLOR, 0.012, idx=self._idx)
 
     def _build_celestial(self, traj) -> None:
         """A celestial sphere with the paths of the figure axis and of the rotation axis."""
@@ -417,7 +417,7 @@ class SceneView:
         self._add_path("celestial", f"{r}/celestial/figure_axis", CELESTIAL_RADIUS * traj.figure_axis[self._idx],
                        FIGURE_COLOR, 0.03, idx=self._idx)
         self._add_path("celestial", f"{r}/celestial/rotation_axis", CELESTIAL_RADIUS * traj.rotation_axis[self._idx],
-                       TRAIL_COLOR, 0.02, idx=self._idx)
+                       TRAIL_COLOR, 0.012, idx=self._idx)
 
     def _build_bodies(self, traj) -> None:
         if not traj.bodies:
