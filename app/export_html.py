@@ -16,7 +16,7 @@ import numpy as np
 import viser
 
 from .scene import SceneView
-from .server import configure_lighting
+from .server import camera_position, configure_lighting
 
 FRAMES = 240  # frames in the replay
 FPS = 30.0
@@ -34,7 +34,7 @@ def export_result(result, spec, out: str, frames: int = FRAMES, fps: float = FPS
     try:
         server.scene.set_up_direction("+z")
         configure_lighting(server.scene)
-        server.initial_camera.position = (3.0, 2.3, 1.8)
+        server.initial_camera.position = camera_position(spec)
         server.initial_camera.look_at = (0.0, 0.0, 0.0)
         server.initial_camera.up = (0.0, 0.0, 1.0)
         view = SceneView(server.scene, "/world")

@@ -43,6 +43,16 @@ def configure_lighting(scene) -> None:
     scene.add_light_ambient("/lights/ambient", intensity=1.2)
 
 
+def camera_position(spec) -> tuple[float, float, float]:
+    """Rotation scenes: an oblique view of the body (farther out when the celestial sphere and
+    the attractor's direction are shown); orbit scenes: from above the plane."""
+    if spec.kind != "rotation":
+        return (0.0, -2.6, 4.2)
+    if spec.group == "ch. 15":
+        return (3.0, 2.3, 1.8)
+    return (4.8, 3.7, 2.9)
+
+
 class _Stale(Exception):
     """A newer request arrived: abandon this simulation."""
 
@@ -158,15 +168,8 @@ class ClientSession:
         self.plot = None
 
     def _set_camera(self, spec) -> None:
-        """Rotation scenes: an oblique view of the body (farther out when the celestial sphere and
-        the attractor's direction are shown); orbit scenes: from above the plane."""
         cam = self.client.camera
-        if spec.kind != "rotation":
-            cam.position = (0.0, -2.6, 4.2)
-        elif spec.group == "ch. 15":
-            cam.position = (3.0, 2.3, 1.8)
-        else:
-            cam.position = (4.8, 3.7, 2.9)
+        cam.position = camera_position(spec)
         cam.look_at = (0.0, 0.0, 0.0)
         cam.up_direction = (0.0, 0.0, 1.0)
 
