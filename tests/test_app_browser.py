@@ -174,13 +174,6 @@ def test_page_loads_offline_and_draws_the_body(browser, tumble_app):
                   "/world/omega", "/world/L", "/world/axis_trail/0", "/world/herpolhode/0",
                   "/world/body/polhode/0"):
             assert n in names, n
-        # the polhode is a child of the body frame: it turns with the body (same world matrix)
-        d = p.page.evaluate("""(() => { const m = window.__viserMutable.nodeRefFromName;
-            const a = m['/world/body'], b = m['/world/body/polhode/0'];
-            a.updateWorldMatrix(true, false); b.updateWorldMatrix(true, false);
-            const x = a.matrixWorld.elements, y = b.matrixWorld.elements;
-            return [x.reduce((s, v, i) => s + Math.abs(v - y[i]), 0), Math.abs(x[0] - 1) + Math.abs(x[5] - 1)]; })()""")
-        assert d[0] < 1e-9 and d[1] > 1e-6, d  # equal, and not the identity (the body has turned)
         time.sleep(1.0)  # let a few frames render
         pix = _canvas_pixels(p.page)
         assert pix.std() > 10.0, pix.std()  # a blank canvas has std ≈ 0
@@ -195,6 +188,13 @@ def test_page_loads_offline_and_draws_the_body(browser, tumble_app):
         p.page.wait_for_function("(q0) => { const q = window.__viserMutable.nodeRefFromName['/world/body'].quaternion.toArray();"
                                  " return Math.abs(q[0]-q0[0]) + Math.abs(q[1]-q0[1]) + Math.abs(q[3]-q0[3]) > 1e-3; }",
                                  arg=q0, timeout=WAIT_MS)
+        # the polhode is a child of the body frame: it turns with the body (same world matrix)
+        d = p.page.evaluate("""(() => { const m = window.__viserMutable.nodeRefFromName;
+            const a = m['/world/body'], b = m['/world/body/polhode/0'];
+            a.updateWorldMatrix(true, false); b.updateWorldMatrix(true, false);
+            const x = a.matrixWorld.elements, y = b.matrixWorld.elements;
+            return [x.reduce((s, v, i) => s + Math.abs(v - y[i]), 0), Math.abs(x[0] - 1) + Math.abs(x[5] - 1)]; })()""")
+        assert d[0] < 1e-9 and d[1] > 1e-6, d  # equal, and not the identity (the body has turned)
     finally:
         p.close()
 
