@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import io
 import os
-import shutil
+import tempfile
 import time
 from pathlib import Path
 
@@ -22,7 +22,10 @@ CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
         "--disable-background-networking", "--disable-component-update", "--no-first-run"]
 WAIT_MS = 120_000  # generous: 2 shared cores, software WebGL (not a performance limit)
-SCREENSHOTS = Path(__file__).resolve().parent.parent / "docs" / "screenshots"
+# docs/screenshots/ is refreshed only on request (THEORIA_SCREENSHOTS=1), so that a test run does
+# not modify the working tree; otherwise the screenshots go to a temporary directory.
+SCREENSHOTS = (Path(__file__).resolve().parent.parent / "docs" / "screenshots" if os.environ.get("THEORIA_SCREENSHOTS")
+               else Path(tempfile.gettempdir()) / "theoria-screenshots")
 
 SIGNATURE_JS = """(name) => {
   const o = window.__viserMutable && window.__viserMutable.nodeRefFromName[name];
