@@ -59,7 +59,70 @@ OVERLAYS = {
     "momentum_sphere": ("momentum sphere (path of L on the body)", False, False),
     "celestial": ("celestial sphere + pole paths", False, True),
     "bodies": ("other bodies + trails", True, True),
+    "scenario": ("scenario drawings (orbit, markers, arcs)", True, True),
 }
+
+
+class SceneExtra:
+    """What one scenario adds to the generic scene (app/scene_extras/*.py).
+
+    Subclass, decorate with `register_extra("scenario-name", ...)`. `build` runs once per result
+    (when the "scenario" overlay is on): create nodes with `self.node(...)` / paths with
+    `self.path(...)` under `self.name(...)`, so that they are cached, updated in place, pruned
+    and shown/hidden with the overlay. `set_frame` moves poses only. `options` are checkboxes the
+    app shows in a "Scene options" folder; a change calls `set_option` (and `build` again if it
+    returns True).
+    """
+
+    options: dict[str, tuple[str, bool]] = {}
+
+    def __init__(self, view: "SceneView"):
+        self.view = view
+        self.values = {k: v[1] for k, v in self.options.items()}
+
+    # helpers over the view's node cache
+    def name(self, *parts: str) -> str:
+        return "/".join((self.view.root, "extra") + parts)
+
+    def node(self, name: str, create, **update):
+        h = self.view._node(name, create, **update)
+        self.view._static.setdefault("scenario", []).append(h)
+        return h
+
+    def path(self, name: str, points, color, thickness=0.02, idx=None) -> None:
+        self.view._add_path("scenario", name, points, color, thickness, idx=idx)
+
+    @property
+    def scene(self):
+        return self.view.scene
+
+    def build(self, traj, result) -> None:  # pragma: no cover - interface
+        pass
+
+    def set_frame(self, i: int) -> None:
+        pass
+
+    def set_option(self, key: str, value: bool) -> bool:
+        self.values[key] = bool(value)
+        return True
+
+
+SCENE_EXTRAS: dict[str, type[SceneExtra]] = {}
+
+
+def register_extra(*names: str):
+    def deco(cls):
+        for n in names:
+            SCENE_EXTRAS[n] = cls
+        return cls
+
+    return deco
+
+
+def extra_for(name: str) -> type[SceneExtra] | None:
+    from . import scene_extras  # noqa: F401  (registers every module)
+
+    return SCENE_EXTRAS.get(name)
 
 
 def palette(k: int) -> tuple[int, int, int]:
@@ -191,6 +254,7 @@ class SceneView:
         self._labels = []
         self.body_frame = self.omega_arrow = self.L_arrow = None
         self.k_omega = 1.0
+        self.extra: SceneExtra | None = None
 
     # ---- node cache --------------------------------------------------------------------------
     def _node(self, name: str, create, **update):
@@ -226,6 +290,7 @@ class SceneView:
                 pass
         self._paths, self._static, self._built, self._markers = {}, {}, set(), {}
         self.body_frame = self.omega_arrow = self.L_arrow = None
+        self.extra = None
         self.n = 0
 
     # ---- building --------------------------------------------------------------------------
@@ -250,6 +315,11 @@ class SceneView:
         self._touched = set()
         self._paths, self._static, self._built = {}, {}, set()
         self._rotation = spec.kind == "rotation"
+        cls = extra_for(spec.name)
+        if cls is None:
+            self.extra = None
+        elif type(self.extra) is not cls:
+            self.extra = cls(self)
         if self._rotation:
             self._build_body(traj)
         for name, on in self.overlays.items():
@@ -267,8 +337,17 @@ class SceneView:
         self._built.add(overlay)
         traj = self._result.trajectory
         fn = getattr(self, f"_build_{overlay}", None)
-        if fn is not None and (self._rotation or overlay == "bodies"):
+        if fn is not None and (self._rotation or overlay in ("bodies", "scenario")):
             fn(traj)
+
+    def _build_scenario(self, traj) -> None:
+        if self.extra is not None:
+            self.extra.build(traj, self._result)
+
+    def set_option(self, key: str, value: bool) -> None:
+        """A scene option of the scenario's extra changed: rebuild its drawings if it asks."""
+        if self.extra is not None and self.extra.set_option(key, value) and self._result is not None:
+            self.show(self._result, self._spec)
 
     def _cloud(self, name, pts, color, size):
         pts = np.asarray(pts, np.float32)
@@ -484,6 +563,8 @@ class SceneView:
                 self._labels[1].position = tuple(float(x) for x in Lv * 1.1)
         for h, pos in self._markers.values():
             h.position = pos[i]
+        if self.extra is not None and self.overlays.get("scenario", True):
+            self.extra.set_frame(i)
         for paths in self._paths.values():
             for p in paths:
                 p.set_time_index(i)

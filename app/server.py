@@ -164,6 +164,9 @@ class ClientSession:
                 cb = gui.add_checkbox(label, initial_value=True)
                 cb.on_update(lambda e, key=key: self._safe(self._on_toggle, key))
                 self.toggles[key] = cb
+        self.options_folder = gui.add_folder("Scene options")
+        self._option_handles: list = []
+        self._options_key = None
         self.plot_folder = gui.add_folder("Plot")
         self.plot = None
 
@@ -302,6 +305,7 @@ class ClientSession:
                     finally:
                         self._guard = False
             self.view.show(result, spec, overlays=overlays, exaggerate=self.exag.value)
+            self._sync_scene_options()
             self.result, self.good_values = result, values
             self.table.content = comparison_markdown(result)
             self._update_plot(result)
@@ -310,6 +314,29 @@ class ClientSession:
             self.updates += 1
             self._status(f"simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
                          f"(update #{self.updates})")
+
+    def _sync_scene_options(self) -> None:
+        """Checkboxes for the options of the scenario's scene extra (app/scene_extras)."""
+        extra = self.view.extra
+        key = type(extra).__name__ if extra is not None else None
+        if key == self._options_key:
+            return
+        self._options_key = key
+        for h in self._option_handles:
+            h.remove()
+        self._option_handles = []
+        if extra is None:
+            return
+        with self.options_folder:
+            for k, (label, _) in extra.options.items():
+                cb = self.client.gui.add_checkbox(label, initial_value=extra.values[k])
+                cb.on_update(lambda e, k=k, cb=cb: self._safe(self._on_option, k, cb))
+                self._option_handles.append(cb)
+
+    def _on_option(self, key: str, cb) -> None:
+        with self._view_lock, self.client.atomic():
+            self.view.set_option(key, cb.value)
+            self.view.set_frame(self._frame_index())
 
     def _update_plot(self, result) -> None:
         traj = result.trajectory

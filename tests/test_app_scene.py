@@ -143,3 +143,39 @@ def test_controls_choose_sliders_only_for_usable_ranges():
     lo, hi, step = slider_range(Param("dt", 0.5, 0.0, 1.0, "s", exclusive_min=True, step=0.01))
     assert lo == pytest.approx(0.01) and hi == 1.0  # the excluded minimum is not offered
     assert slider_range(Param("v", (1, 2, 3), kind="vec3", minimum=0, maximum=5)) is None
+
+
+def test_scene_extra_hook_builds_moves_and_prunes():
+    """A scenario's SceneExtra is built with the "scenario" overlay, moved by set_frame, asked to
+    rebuild on an option change, and its nodes disappear when another scenario is shown."""
+    from app import scene as scene_mod
+
+    calls = []
+
+    class Extra(scene_mod.SceneExtra):
+        options = {"corotating": ("co-rotating frame", False)}
+
+        def build(self, traj, result):
+            calls.append(("build", self.values["corotating"]))
+            self.node(self.name("marker"), lambda: self.scene.add_icosphere(self.name("marker"), radius=0.1))
+
+        def set_frame(self, i):
+            calls.append(("frame", i))
+
+    scene_mod.SCENE_EXTRAS["middle-axis-flip"] = Extra
+    try:
+        fake = FakeScene()
+        view = SceneView(fake)
+        spec, res = _result("middle-axis-flip")
+        view.show(res, spec)
+        assert isinstance(view.extra, Extra) and ("build", False) in calls
+        view.set_frame(5)
+        assert ("frame", 5) in calls
+        view.set_option("corotating", True)
+        assert ("build", True) in calls
+        spec2, res2 = _result("free-tumble")
+        view.show(res2, spec2)
+        assert view.extra is None
+        assert ("remove", "add_icosphere", "/world/extra/marker", None, None) in fake.log
+    finally:
+        scene_mod.SCENE_EXTRAS.pop("middle-axis-flip", None)
