@@ -120,7 +120,7 @@ def check_table(rows) -> str:
     for r in rows:
         lines.append(
             f"{r.id:<22} {r.section:<16} {_fmt3(r.euler):>14} {_fmt3(r.simulated):>14} {_fmt3(r.modern):>14} "
-            f"{_fmt3(r.rel_error, 2):>10} {r.tolerance:>8.1g}  {'pass' if r.passed else 'FAIL'}  {r.title}"
+            f"{_fmt3(r.rel_error, 2):>10} {r.tolerance:>8.2g}  {'pass' if r.passed else 'FAIL'}  {r.title}"
             + (f" [{r.unit}]" if r.unit else "")
         )
     return "\n".join(lines)

@@ -101,3 +101,16 @@ def test_check_json_rows_e1_to_e4():
         assert set(r) >= {"id", "title", "section", "euler", "simulated", "modern", "rel_error", "pass"}
         assert r["pass"], r
     assert code == 0
+
+
+def test_every_check_row_passes_and_covers_design_table():
+    """`theoria check`: every row of design.md's table E1–E13 exists and passes."""
+    code, out, err = run_cli("check", "--json")
+    rows = json.loads(out)["results"]
+    failed = [(r["id"], r["rel_error"], r["tolerance"], r["note"]) for r in rows if not r["pass"]]
+    assert not failed, failed
+    heads = {r["id"].split(".")[0] for r in rows}
+    assert heads >= {f"E{k}" for k in range(1, 14)}, sorted(heads)
+    for r in rows:  # no NaN or infinity reaches the JSON: a missing value is null
+        assert r["rel_error"] is not None and r["rel_error"] <= r["tolerance"], r
+    assert code == 0
