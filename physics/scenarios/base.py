@@ -38,6 +38,8 @@ class Result:
     notes: list[str] = field(default_factory=list)
     # key quantities over time for the live plot: name → (N,) on trajectory.t
     plot_series: dict[str, np.ndarray] = field(default_factory=dict)
+    # data for drawing that is not a time series (e.g. a zero-velocity grid): name → anything
+    extras: dict[str, Any] = field(default_factory=dict)
 
     def to_json(self, spec: "Scenario") -> dict:
         out = {
