@@ -90,9 +90,13 @@ class Scenario:
     summary: str  # what to look for, one paragraph
     params: tuple[Param, ...]
     simulate_fn: Callable[..., Result]
-    euler_formula: str = ""  # shown beside the scene (markdown)
+    euler_formula: str = ""  # shown beside the scene: plain Unicode text (no TeX: neither viser's
+    # markdown nor rerun's text panel renders math)
     kind: str = "rotation"  # "rotation" scenes draw a body; "orbit" scenes draw bodies only
     check: Callable[[dict[str, Any]], None] | None = None  # cross-parameter validation
+    # named starting points, each named after what it shows ("Brick: the flip"): (name, {param: value});
+    # the values are partial (the rest keep their defaults) and go through `resolve` like any input
+    presets: tuple[tuple[str, dict[str, Any]], ...] = ()
 
     def resolve(self, given: dict[str, Any] | None = None) -> dict[str, Any]:
         values = resolve(self.params, given)
@@ -103,6 +107,13 @@ class Scenario:
     def simulate(self, given: dict[str, Any] | None = None, progress=None) -> Result:
         values = self.resolve(given)
         return self.simulate_fn(values, progress=progress)
+
+    def preset(self, name: str) -> dict[str, Any]:
+        """The full, validated values of preset `name` (defaults for the parameters it leaves out)."""
+        for n, given in self.presets:
+            if n == name:
+                return self.resolve(given)
+        raise ParameterError("preset", name, "one of " + ", ".join(n for n, _ in self.presets))
 
     def param(self, name: str) -> Param:
         for p in self.params:

@@ -178,11 +178,12 @@ register(Scenario(
     title="The Earth under the Sun and the Moon: precession and nutation",
     section="§844–849 (modern values)",
     group="ch. 16",
-    summary=("The Earth's real figure (dynamical ellipticity H), spin and obliquity; the Sun and the Moon "
-             "from a Sun–Earth–Moon REBOUND integration, the Moon's node regressing in 18.6 years. The "
-             "pole turns westward around the ecliptic pole at about 50.4″ a year (a cycle of ~25,700 "
-             "years) and nods: 17″ in longitude and 9″ in obliquity with the Moon's node, 1.3″ twice a "
-             "year, 0.2″ twice a month. Each term beside the IAU value and Euler's."),
+    summary=("The Earth with its real figure (dynamical ellipticity H), spin and tilt, pulled by the "
+            "Sun and the Moon (their orbits from a Sun–Earth–Moon REBOUND integration, the Moon's node "
+            "regressing in 18.6 years). The pole turns westward around the pole of the ecliptic at "
+            "about 50.4″ a year (a whole cycle in ~25,700 years) and nods: 17″ in longitude and 9″ in "
+            "obliquity with the Moon's node, 1.3″ twice a year, 0.2″ twice a month. The table puts "
+            "each term beside the IAU value and Euler's."),
     params=(
         Param("years", 100.0, 0.0, 400.0, "yr", "length of the run from J2000", exclusive_min=True, step=1.0),
         Param("step_days", 0.5, 0.0, 3.0, "day", "integrator step (the spin is solved exactly; resolve the month)",
@@ -193,9 +194,13 @@ register(Scenario(
               exclusive_min=True),
     ),
     simulate_fn=_earth,
-    euler_formula=(r"mean precession $N\cos n$ per centre, $N = \frac{3GM(C-A)}{2A\varepsilon s^3}$ (§846); "
-                   r"nutation in $2\varphi$: $\frac{\varepsilon N\sin n(\varepsilon+2\delta\cos n)}{2\delta(\varepsilon\varepsilon-4\delta\delta)}$"
-                   r" in obliquity, $\frac{\varepsilon N(\varepsilon\cos n+2\delta)}{2\delta(\varepsilon\varepsilon-4\delta\delta)}$ in longitude (§844)"),
+    euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)\n"
+                   "nutation in 2φ: εN sin n (ε + 2δ cos n) / (2δ(εε − 4δδ)) in obliquity, εN (ε cos n + 2δ) / (2δ(εε − 4δδ)) in longitude (§844)"),
+    presets=(
+        ("Earth: a century of precession and nutation", {}),
+        ("Earth: one 18.6-year nod", {"years": 18.6}),
+        ("Earth: one year, the half-year nod", {"years": 1.0}),
+    ),
 ))
 
 
@@ -259,12 +264,19 @@ register(Scenario(
     title="A whole precession cycle: the pole among the stars",
     section="§846 (modern values)",
     group="ch. 16",
-    summary=("One run over ~25,800 years: the celestial pole circles the ecliptic pole at 23.4°, passing "
-             "Polaris now, Thuban (5,000 years ago), Vega in about 12,000 years."),
+    summary=("One run over ~25,800 years: the Earth's axis, tilted 23.4°, circles the pole of the "
+            "ecliptic once. On the celestial sphere the pole passes Polaris now, was near Thuban 5,000 "
+            "years ago and will be near Vega in about 12,000 years. A long run: the progress bar shows "
+            "how far it has got."),
     params=(
         Param("years", 25800.0, 0.0, 30000.0, "yr", "length of the run from J2000", exclusive_min=True, step=100.0),
         Param("step_days", 2.0, 0.0, 5.0, "day", "integrator step", exclusive_min=True, step=0.5),
         Param("sample_years", 5.0, 0.0, 1000.0, "yr", "spacing of the stored states", exclusive_min=True),
     ),
     simulate_fn=_earth_long,
+    euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)"),
+    presets=(
+        ("Earth: 25,800 years", {}),
+        ("Earth: to Vega, 13,000 years", {"years": 13000.0}),
+    ),
 ))

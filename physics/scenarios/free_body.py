@@ -87,10 +87,11 @@ register(Scenario(
     title="The body left to itself",
     section="§805, §808",
     group="ch. 15",
-    summary=("A body with three different moments, thrown spinning and left alone. Its angular "
-             "momentum L stays fixed in space while ω wanders: on the body it traces the polhode, "
-             "in space the herpolhode on the invariable plane. Euler's vis viva (§805) and |L| "
-             "stay constant."),
+    summary=("A body with three different moments A < B < C, thrown spinning and left alone. Look at "
+            "the two arrows: the angular momentum L (purple) stays fixed in space while the rotation "
+            "axis ω (orange) wanders. On the body, ω traces a closed curve, the polhode (yellow); in "
+            "space its tip runs on a fixed plane, the invariable plane, tracing the herpolhode (cyan). "
+            "Euler's vis viva (the energy, §805) and |L| stay constant."),
     params=(
         Param("inertia", (2.0, 3.0, 4.0), **_INERTIA),
         Param("omega0", (1.0, 0.5, 1.5), kind="vec3", minimum=-50, maximum=50, unit="rad/s",
@@ -100,8 +101,15 @@ register(Scenario(
     ),
     simulate_fn=_free_tumble,
     check=_check_body,
-    euler_formula=(r"$dx + \frac{cc-bb}{aa}\,yz\,dt = 0$ and cyclic (§808); "
-                   r"$aa\,xx + bb\,yy + cc\,zz = \text{const}$ (vis viva, §805)"),
+    euler_formula=("dx + (cc − bb)/aa · yz dt = 0, and the same for y and z in turn (§808)\n"
+                   "aa·xx + bb·yy + cc·zz = const (vis viva, §805)\n"
+                   "x, y, z: rates about the principal axes; aa, bb, cc: the moments A, B, C"),
+    presets=(
+        ("Tumble: ω wanders widely", {}),
+        ("Tumble: spin near the long axis, a small polhode", {"omega0": (2.0, 0.3, 0.3)}),
+        ("Tumble: spin near the short axis, a small polhode", {"omega0": (0.3, 0.3, 2.0)}),
+        ("Symmetric top (A = B): a steady cone", {"inertia": (3.0, 3.0, 4.0), "omega0": (1.0, 0.0, 1.5)}),
+    ),
 ))
 
 
@@ -147,10 +155,11 @@ register(Scenario(
     title="Brick: the flip about the middle axis",
     section="§805, §808",
     group="ch. 15",
-    summary=("Spin a body about the axis of its middle moment and it cannot stay: it turns over, "
-             "again and again at regular intervals (the Dzhanibekov or tennis-racket effect). "
-             "The interval comes from Euler's §808 quadrature, which Jacobi's elliptic functions "
-             "give as 2K(k)/λ."),
+    summary=("Spin a brick (or a tennis racket) about the axis of its middle moment B and it cannot "
+            "stay there: after a quiet while it turns over, then again, at regular intervals (the "
+            "Dzhanibekov or tennis-racket effect). Watch the body flip while L stays fixed. The time "
+            "between flips follows from Euler's quadrature of §808 (in modern terms 2K(k)/λ, with "
+            "Jacobi's complete elliptic integral K); the smaller the first nudge, the longer the wait."),
     params=(
         Param("inertia", (1.0, 2.0, 3.0), **_INERTIA),
         Param("spin", 6.0, -50.0, 50.0, "rad/s", "initial rate about the middle axis", step=0.1),
@@ -161,8 +170,13 @@ register(Scenario(
     ),
     simulate_fn=_middle_axis_flip,
     check=_check_flip,
-    euler_formula=(r"$dt = -\frac{\mathfrak{A}\,dx\sqrt{\mathfrak{BC}}}{\sqrt{\mathfrak{A}xx-\mathfrak{A}a^2+\mathfrak{B}b^2}"
-                   r"\sqrt{\mathfrak{A}xx-\mathfrak{A}a^2+\mathfrak{C}c^2}}$ (§808)"),
+    euler_formula=("dt = −𝔄 dx √(𝔅ℭ) / [ √(𝔄xx − 𝔄a² + 𝔅b²) · √(𝔄xx − 𝔄a² + ℭc²) ] (§808)"),
+    presets=(
+        ("Brick: the flip", {}),
+        ("Brick: a big nudge, frequent flips", {"perturbation": 0.2}),
+        ("Brick: a tiny nudge (10⁻⁶), rare flips", {"perturbation": 1e-06}),
+        ("Brick: nearly symmetric, slow flips", {"inertia": (1.0, 1.9, 2.0)}),
+    ),
 ))
 
 
@@ -208,9 +222,11 @@ register(Scenario(
     title="A body at rest set turning",
     section="§806, §807",
     group="ch. 15",
-    summary=("A body at rest feels moments P, Q, R about its principal axes. It does not start to "
-             "turn about the axis of the moment, but about the axis with cosines ∝ P/A : Q/B : R/C "
-             "(§806), with angular acceleration √(P²/A² + Q²/B² + R²/C²). Later the axis wanders."),
+    summary=("A body at rest is given constant moments (torques) P, Q, R about its principal axes. It "
+            "does not start to turn about the axis of the torque, but about the axis whose direction "
+            "cosines are in the ratio P/A : Q/B : R/C (§806), tilted toward the axes that are easiest "
+            "to turn, with angular acceleration √(P²/A² + Q²/B² + R²/C²). As it gains speed the axis "
+            "wanders away."),
     params=(
         Param("inertia", (1.0, 2.0, 2.5), **_INERTIA),
         Param("torque", (1.0, 1.0, 1.0), kind="vec3", minimum=-1e3, maximum=1e3, unit="N m",
@@ -222,5 +238,11 @@ register(Scenario(
     ),
     simulate_fn=_initial_axis,
     check=_check_initial,
-    euler_formula=r"$\cos\alpha : \cos\beta : \cos\gamma = \frac{P}{aa} : \frac{Q}{bb} : \frac{R}{cc}$ (§806)",
+    euler_formula=("cos α : cos β : cos γ = P/aa : Q/bb : R/cc (§806)\n"
+                   "α, β, γ: angles of the starting axis with the principal axes; aa, bb, cc: the moments A, B, C"),
+    presets=(
+        ("Start: equal torques, an unequal axis", {}),
+        ("Start: torque at 45° between A and B, axis at 27°", {"torque": (1.0, 1.0, 0.0)}),
+        ("Start: torque about C only, turns about C", {"torque": (0.0, 0.0, 1.0)}),
+    ),
 ))

@@ -103,10 +103,12 @@ register(Scenario(
     title="Hyperion: chaotic tumbling (spin–orbit surface of section)",
     section="§833 (beyond Euler)",
     group="ch. 16",
-    summary=("Euler's libration equation without his approximations, for an elongated moon on an "
-             "eccentric orbit. Each start is marked at every periapse passage: smooth curves and "
-             "islands (the synchronous, 1:2, 3:2, 2:1 resonances) are regular motion, the scattered "
-             "sea is chaos (Wisdom, Peale & Mignard 1984)."),
+    summary=("Euler's libration equation with none of his approximations, for an elongated moon on an "
+            "eccentric orbit (like Saturn's moon Hyperion). The plot is a surface of section: each of "
+            "many starts is marked once per orbit, at periapse, by its angle and spin rate. Smooth "
+            "curves and closed islands (the synchronous, 1:2, 3:2 and 2:1 spin–orbit resonances) are "
+            "regular motion; the scattered sea of dots is chaos (Wisdom, Peale & Mignard 1984). The "
+            "body drawn follows one start, the probe."),
     params=(
         Param("eccentricity", 0.1, 0.0, 0.5, "", "orbital eccentricity (Hyperion 0.1)"),
         Param("omega0", 0.89, 0.0, 1.5, "", "ω₀ = √(3(B−A)/C) (Hyperion ≈ 0.89, WPM 1984)", exclusive_min=True),
@@ -118,5 +120,11 @@ register(Scenario(
         Param("probe_orbits", 20.0, 1.0, 200.0, "", "orbits drawn"),
     ),
     simulate_fn=_hyperion,
-    euler_formula=r"$\ddot\theta = -\frac{\omega_0^2}{2}\left(\frac{a}{r}\right)^3\sin 2(\theta - f)$",
+    euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f)\n"
+                   "θ: the body's long axis, f: the moon's direction seen from the planet, r: its distance"),
+    presets=(
+        ("Hyperion: chaotic tumbling", {}),
+        ("Nearly circular orbit: mostly regular", {"eccentricity": 0.01}),
+        ("Hyperion: a probe in the synchronous island", {"probe_rate": 1.0}),
+    ),
 ))

@@ -103,10 +103,11 @@ register(Scenario(
     title="A body at rest pulled by a distant mass",
     section="§820–822",
     group="ch. 16",
-    summary=("A body at rest, F in a given direction: the gravity-gradient torque (§815) starts it "
-             "turning about the axis with cosines ∝ P/A : Q/B : R/C (§820). With F in the AB plane "
-             "it starts about C (§821). Watch the rotation axis leave Euler's starting axis as the "
-             "body turns."),
+    summary=("A body at rest and a distant mass F in a given direction. F pulls harder on the near "
+            "parts of the body than on the far ones, which gives a small torque (the gravity-gradient "
+            "torque, §815). The body starts turning about the axis with cosines ∝ P/A : Q/B : R/C "
+            "(§820); with F in the plane of the A and B axes it starts about C (§821). Watch the "
+            "rotation axis drift from Euler's starting axis as the body turns."),
     params=(
         Param("inertia", (2.0, 3.0, 4.0), 1e-6, 1e6, "kg m^2", "principal moments A, B, C", kind="vec3"),
         Param("direction", (1.0, 0.6, 0.4), -1.0, 1.0, "", "direction of F in the body frame (x, y, z)", kind="vec3"),
@@ -115,9 +116,13 @@ register(Scenario(
         Param("turn_deg", 10.0, 1e-3, 90.0, "deg", "simulate until the body would have turned this far"),
     ),
     simulate_fn=_gravity_start,
-    euler_formula=(r"$P = 3GM(C-B)\cos\eta\cos\vartheta/s^3$ etc. (§815); "
-                   r"$\cos\alpha : \cos\beta : \cos\gamma = P/A : Q/B : R/C$ (§820)"),
+    euler_formula=("P = 3GM (C − B) cos η cos ϑ / s³, and the same for Q and R in turn (§815)\n"
+                   "cos α : cos β : cos γ = P/A : Q/B : R/C (§820)"),
     check=lambda v: _check_gravity_start(v),
+    presets=(
+        ("Pull: F oblique", {}),
+        ("Pull: F in the AB plane, starts about C (§821)", {"direction": (1.0, 0.6, 0.0)}),
+    ),
 ))
 
 
@@ -240,10 +245,12 @@ register(Scenario(
     title="Libration in a circular orbit (Problem 93)",
     section="§825–831",
     group="ch. 16",
-    summary=("F goes round uniformly in the plane normal to the body's C axis. The arc ζ between "
-             "the A axis and F obeys a pendulum equation in 2ζ: the body stays locked, librates "
-             "about F, creeps to 90° along the separatrix, or circulates (Euler's four cases). "
-             "Drag the initial spin across the separatrix and watch the phase portrait change."),
+    summary=("A mass F goes round the body at a steady rate, in the plane of the body's A and B axes. "
+            "The angle ζ between the A axis and F obeys a pendulum equation in 2ζ (§825). Depending on "
+            "the start, the body stays locked facing F, swings to and fro about F (libration), creeps "
+            "toward 90° along the dividing curve (the separatrix), or turns round and round relative "
+            "to F (circulation): Euler's four cases. Drag the initial spin across the separatrix and "
+            "watch the phase portrait change."),
     params=(
         Param("asymmetry", 0.05, -0.45, 0.45, "", "(B − A)/C; negative: B < A, Euler's case II"),
         Param("orbital_rate", 1.0, 0.0, 100.0, "rad/unit", "angular rate δ of F (GM = δ²s³)", exclusive_min=True),
@@ -255,8 +262,15 @@ register(Scenario(
         Param("steps_per_period", 400, 50, 20000, "", "integrator steps per period", kind="int"),
     ),
     simulate_fn=_libration_circular,
-    euler_formula=(r"$\ddot\zeta + N\sin 2\zeta = 0,\ N = \frac{3GM(B-A)}{2Cs^3}$ (§825); "
-                   r"small oscillations $T = 2\pi/\sqrt{2N}$ (§831)"),
+    euler_formula=("ζ̈ + N sin 2ζ = 0, N = 3GM (B − A) / (2C s³) (§825)\n"
+                   "small swings: period T = 2π / √(2N) (§831)"),
+    presets=(
+        ("Libration: swinging about F", {}),
+        ("Libration: locked", {"preset": "locked"}),
+        ("Libration: the separatrix", {"preset": "separatrix"}),
+        ("Libration: circulating", {"spin_ratio": 2.0}),
+        ("Libration: case II (B < A)", {"asymmetry": -0.05}),
+    ),
 ))
 
 
@@ -358,10 +372,11 @@ register(Scenario(
     title="Forced libration in an eccentric orbit (Problem 94)",
     section="§833–838",
     group="ch. 16",
-    summary=("F moves on a Kepler ellipse: its uneven motion forces the body to swing, "
-             "ζ ≈ A²α/(A²−2N)·sin At (§833), on top of any free libration (§838). Raise the "
-             "eccentricity to see where Euler's first-order formula fails; bring (B−A)/C toward 1/3 "
-             "to approach the resonance A² = 2N."),
+    summary=("Now F moves on a Kepler ellipse, fast near periapse and slow far away. Its uneven motion "
+            "forces the body to swing, ζ ≈ A²α/(A² − 2N) · sin At (§833), on top of any free swing "
+            "left from the start (§838). Raise the eccentricity to see where Euler's first-order "
+            "formula stops matching; bring (B − A)/C toward 1/3 to approach the resonance A² = 2N, "
+            "where his amplitude blows up."),
     params=(
         Param("asymmetry", 0.05, -0.45, 0.45, "", "(B − A)/C"),
         Param("eccentricity", 0.05, 0.0, 0.5, "", "eccentricity e of F's orbit"),
@@ -371,7 +386,12 @@ register(Scenario(
         Param("steps_per_orbit", 400, 50, 20000, "", "integrator steps per orbit", kind="int"),
     ),
     simulate_fn=_libration_eccentric,
-    euler_formula=r"$\zeta = \frac{A^2\alpha}{A^2-2N}\sin At + \frac{N\alpha\beta}{4(A^2-2N)}\sin 2At$ (§833–835)",
+    euler_formula=("ζ = A²α/(A² − 2N) · sin At + Nαβ/(4(A² − 2N)) · sin 2At (§833–835)"),
+    presets=(
+        ("Forced swing: a nearly circular orbit", {}),
+        ("Forced swing: e = 0.3, beyond Euler's first order", {"eccentricity": 0.3}),
+        ("Forced swing: near the resonance A² = 2N", {"asymmetry": 0.3}),
+    ),
 ))
 
 
@@ -418,10 +438,11 @@ register(Scenario(
     title="How good is Euler's first-order torque?",
     section="§815–818",
     group="ch. 16",
-    summary=("Euler keeps only the first term in size/distance (§816). Integrating the pull over a "
-             "homogeneous ellipsoid exactly shows the relative error of his torque and of his extra "
-             "force on the centre (§818) falling as (size/s)²; it reaches ~6% when F is only two body "
-             "sizes away."),
+    summary=("Euler keeps only the first term of the pull in powers of size/distance (§816). Here the "
+            "pull of F is integrated exactly over a homogeneous ellipsoid and compared with his "
+            "formula at many distances: the relative error of his torque, and of the small extra force "
+            "on the centre (§818), falls as (size/distance)². It reaches about 6% when F is only two "
+            "body sizes away."),
     params=(
         Param("semi_axes", (1.0, 0.8, 0.6), 1e-3, 1e3, "m", "semi-axes a, b, c of the ellipsoid", kind="vec3"),
         Param("direction", (0.6, 0.5, 0.3), -1.0, 1.0, "", "direction of F in the body frame", kind="vec3"),
@@ -430,6 +451,11 @@ register(Scenario(
         Param("n_points", 12, 3, 60, "", "number of distances", kind="int"),
     ),
     simulate_fn=_gg_accuracy,
-    euler_formula=r"$\tau = \frac{3GM}{s^3}\hat s\times I\hat s + O\!\left(\frac{\text{size}^2}{s^2}\right)$ (§815–816)",
+    euler_formula=("τ = (3GM/s³) ŝ × I ŝ + O(size²/s²) (§815–816)"),
     check=lambda v: _check_ratios(v),
+    presets=(
+        ("Accuracy: F from 100 to 2 body sizes away", {}),
+        ("Accuracy: a long needle", {"semi_axes": (1.0, 0.2, 0.2)}),
+        ("Accuracy: nearly a sphere", {"semi_axes": (1.0, 0.98, 0.96)}),
+    ),
 ))

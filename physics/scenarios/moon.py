@@ -156,10 +156,11 @@ register(Scenario(
     title="The Moon's libration seen from the Earth",
     section="§833–839 (modern values)",
     group="ch. 16",
-    summary=("The Moon keeps nearly the same face to the Earth, but the face wobbles by up to ~8° in "
-             "longitude (uneven orbital motion, §833) and ~7° in latitude (the tilted axis). The Moon's "
-             "own rotation departs from uniform by only arcseconds — the physical libration, which "
-             "Euler's forced-libration formula predicts term by term from the moments (B−A)/C."),
+    summary=("The Moon keeps nearly the same face toward the Earth, but seen from the Earth the face "
+            "wobbles: up to ~8° east–west (it turns steadily while it moves unevenly on its ellipse, "
+            "§833) and ~7° north–south (its axis is tilted). The Moon's own rotation departs from "
+            "uniform by only arcseconds: the physical libration, which Euler's forced-libration "
+            "formula predicts term by term from the moments (B − A)/C (table)."),
     params=(
         Param("years", 6.0, 0.2, 40.0, "yr", "time span"),
         Param("start_year", 2025.0, 1900.0, 2100.0, "yr", "start epoch (TT, years)"),
@@ -172,5 +173,9 @@ register(Scenario(
                    "rotating uniformly (a large free libration, period ~2.9 yr)"),
     ),
     simulate_fn=_moon,
-    euler_formula=r"$\tau_k = -\alpha_k\frac{2N}{A_k^2-2N}\sin(A_k t+\mathfrak A_k)$, $2N = 3\frac{B-A}{C}\frac{GM_\oplus}{s^3}$ (§833, §836)",
+    euler_formula=("τₖ = −αₖ · 2N/(Aₖ² − 2N) · sin(Aₖt + 𝔄ₖ), 2N = 3 (B − A)/C · GM⊕/s³ (§833, §836)"),
+    presets=(
+        ("Moon: the face wobbles", {}),
+        ("Moon: started uniform, a free libration", {"start": "uniform"}),
+    ),
 ))

@@ -105,10 +105,11 @@ register(Scenario(
     title="The pole of rotation near a principal axis",
     section="§840–843",
     group="ch. 16",
-    summary=("A body spins about (nearly) its principal axis A while a distant centre of force F "
-             "pulls on it. Euler computes the momentary change: the spin changes only if B ≠ C, "
-             "and the pole of rotation O leaves A at right angles to the arc AF, faster the more "
-             "oblique F is (§842: 2N cos ζ sin ζ). Compare his rates with the simulated ones."),
+    summary=("A body spins fast about (nearly) its principal axis A while a distant mass F pulls on it. "
+            "Euler computes the first instants: the spin rate changes only if the moments B and C "
+            "differ, and the pole of rotation O leaves A at right angles to the arc AF, fastest when F "
+            "is 45° from the axis (§842: rate 2N cos ζ sin ζ). The table compares his rates with the "
+            "simulated ones."),
     params=(
         Param("moments", (1.2, 1.0, 1.0), kind="vec3", minimum=1e-6, maximum=1e6, unit="kg m^2",
               help="Euler's aa, bb, cc: moments about A (the spin axis, body x), B, C"),
@@ -121,11 +122,15 @@ register(Scenario(
         Param("steps_per_turn", 200, 4, 1e5, "1", "integrator steps per turn", kind="int"),
     ),
     simulate_fn=_pole_near_axis,
-    euler_formula=(r"$d\gamma' = \frac{6gee(cc-bb)\,dt\cos\eta\cos\vartheta}{aa\,s^3}$, "
-                   r"$\gamma' d\beta = -\frac{6gee(aa-cc)\,dt\cos\zeta\cos\vartheta}{bb\,s^3}$, "
-                   r"$\gamma' d\gamma = -\frac{6gee(bb-aa)\,dt\cos\zeta\cos\eta}{cc\,s^3}$ (§840; "
-                   r"$6gee = 3GM$); $bb=cc$: $Oo = 2N\cos\zeta\sin\zeta\,dt$, "
-                   r"$N=\frac{3gee(aa-cc)}{\gamma' cc s^3}$ (§842–843)"),
+    euler_formula=("dγ' = 6gee (cc − bb) dt cos η cos ϑ / (aa s³) (§840)\n"
+                   "γ' dβ = −6gee (aa − cc) dt cos ζ cos ϑ / (bb s³)\n"
+                   "γ' dγ = −6gee (bb − aa) dt cos ζ cos η / (cc s³)   (6gee = 3GM)\n"
+                   "bb = cc: Oo = 2N cos ζ sin ζ dt, N = 3gee (aa − cc) / (γ' cc s³) (§842–843)"),
+    presets=(
+        ("Pole: F at 40°, B = C", {}),
+        ("Pole: F at 45°, the fastest drift", {"zeta_deg": 45.0}),
+        ("Pole: B ≠ C, the spin changes", {"moments": (1.2, 1.0, 0.8)}),
+    ),
 ))
 
 
@@ -303,11 +308,12 @@ register(Scenario(
     title="Precession and nutation under a centre on a circle",
     section="§844–849",
     group="ch. 16",
-    summary=("An oblate body spins fast (ε) while a centre of force goes round it on a circle (δ). "
-             "Its axis turns slowly backward around the pole of the circle at the mean rate N cos n "
-             "(precession) and nods twice per revolution of the centre (nutation in 2φ). Slide ε/δ "
-             "toward 2 and watch Euler's formulas blow up (§849) while the body does something finite "
-             "but no longer small."),
+    summary=("An oblate body (flattened like the Earth) spins fast at rate ε while a mass F goes round "
+            "it on a circle at rate δ. The figure axis turns slowly backward around the pole of F's "
+            "orbit (precession, at the mean rate N cos n) and nods twice per revolution of F "
+            "(nutation, in 2φ): watch the axis trace its path on the celestial sphere. Slide ε/δ down "
+            "toward 2: Euler's nutation formulas blow up there (§849) while the simulated body does "
+            "something finite but no longer small."),
     params=(
         Param("eps_over_delta", 20.0, 0.05, 1000.0, "1", "spin ε over the orbital rate δ of the centre", step=0.1),
         Param("flattening", 0.1, 0.0, 0.5, "1", "flattening f of a homogeneous spheroid, c = a(1 − f)",
@@ -321,9 +327,13 @@ register(Scenario(
     ),
     simulate_fn=_precession_circular,
     check=_check_circular,
-    euler_formula=(r"$ZA = n - \frac{\varepsilon N\sin n(\varepsilon+2\delta\cos n)}{2\delta(\varepsilon\varepsilon-4\delta\delta)}"
-                   r"\cos 2\varphi + h\sin\frac{\varepsilon}{\delta}(\varphi+\zeta)$, "
-                   r"$XZA = m - Nt\cos n + \frac{\varepsilon N(\varepsilon\cos n+2\delta)}{2\delta(\varepsilon\varepsilon-4\delta\delta)}"
-                   r"\sin 2\varphi + \frac{h}{\sin n}\cos\frac{\varepsilon}{\delta}(\varphi+\zeta)$, "
-                   r"$N = \frac{3gee(aa-cc)}{\varepsilon\,cc\,s^3}$ (§844, §847)"),
+    euler_formula=("ZA = n − εN sin n (ε + 2δ cos n) / (2δ(εε − 4δδ)) · cos 2φ + h sin(ε/δ · (φ + ζ)) (§844)\n"
+                   "XZA = m − Nt cos n + εN (ε cos n + 2δ) / (2δ(εε − 4δδ)) · sin 2φ + h/sin n · cos(ε/δ · (φ + ζ))\n"
+                   "N = 3gee (aa − cc) / (ε cc s³) (§847)"),
+    presets=(
+        ("Precession: fast spin, small nods", {}),
+        ("Precession: ε/δ = 3, big nods", {"eps_over_delta": 3.0}),
+        ("Precession: ε/δ = 2.2, Euler's nutation fails", {"eps_over_delta": 2.2}),
+        ("Precession: with a free wobble h", {"h": 0.02}),
+    ),
 ))

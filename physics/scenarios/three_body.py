@@ -168,9 +168,11 @@ register(Scenario(
     title="Three bodies on a line: Euler's quintic",
     section="Euler 1767, §1–§11",
     group=GROUP,
-    summary=("Three masses stay on a line if the ratio of their spacings is the single positive root α of "
-             "Euler's quintic. Watch them turn rigidly, collapse from rest (distances ∝ cos²φ) or fly apart, "
-             "the ratio held by a direct integration; with a massless third body the roots give L1, L2, L3."),
+    summary=("Three masses can stay on one straight line if the ratio of their spacings is the single "
+            "positive root α of Euler's quintic. Watch them turn rigidly as a line, collapse from rest "
+            "(all distances shrinking ∝ cos²φ) or fly apart, the ratio held by a direct integration of "
+            "the three bodies. With a massless third body the roots give the Lagrange points L1, L2, "
+            "L3."),
     params=(
         Param("masses", (3.0, 1.0, 2.0), 1e-6, 1e6, "G=1 mass", "masses A, B, C in their order on the line",
               kind="vec3"),
@@ -189,10 +191,17 @@ register(Scenario(
         Param("distance_km", col.EARTH_MOON_DISTANCE_KM, 1.0, 1e10, "km", "restricted case: primary–secondary distance"),
     ),
     simulate_fn=_collinear,
-    euler_formula=(r"$(A+B)\alpha^5+(3A+2B)\alpha^4+(3A+B)\alpha^3-(B+3C)\alpha^2-(2B+3C)\alpha-(B+C)=0$"
-                   r" (§7, Eq. 33); $\ddot p=-\tfrac{D}{2}p^{-2}$, $\tfrac D2=A+B+\tfrac{C}{(\alpha+1)^2}-\tfrac{C}{\alpha^2}$;"
-                   r" Case II: $p\propto\cos^2\varphi$, $t=n^3a^2(\varphi+\sin\varphi\cos\varphi)$"),
+    euler_formula=("(A+B)α⁵ + (3A+2B)α⁴ + (3A+B)α³ − (B+3C)α² − (2B+3C)α − (B+C) = 0 (§7, Eq. 33)\n"
+                   "p̈ = −(D/2) p⁻², D/2 = A + B + C/(α+1)² − C/α²\n"
+                   "Case II: p ∝ cos²φ, t = n³a² (φ + sin φ cos φ)"),
     kind="orbit",
+    presets=(
+        ("Collinear: turning as a rigid line", {}),
+        ("Collinear: collapse from rest", {"motion": "collapse"}),
+        ("Collinear: flying apart", {"motion": "expansion"}),
+        ("Earth–Moon L1", {"motion": "restricted", "lagrange_point": "L1"}),
+        ("Earth–Moon L2", {"motion": "restricted", "lagrange_point": "L2"}),
+    ),
 ))
 
 
@@ -314,15 +323,22 @@ register(Scenario(
     title="The Moon kept in syzygy with the Sun",
     section="Euler 1766, §5–§16",
     group=GROUP,
-    summary=("Four times farther out, the Moon could stay in line with the Sun (today's Sun–Earth L1/L2). "
-             "Euler found its swing about that line, frequency √(√28 − 1) ≈ 2.07 times the Sun's motion "
-             "(Hill's, a century early). The same equation has a real root: watch the Moon leave after a few swings."),
+    summary=("Four times farther out than it is, the Moon could stay lined up with the Sun and the "
+            "Earth (today's Sun–Earth Lagrange points L1 and L2). Euler found its small swing about "
+            "that line, at √(√28 − 1) ≈ 2.07 times the Sun's motion: Hill's result, a century early. "
+            "The same equation shows that the line-up is unstable: nudge the Moon along the unstable "
+            "direction and watch it leave after a few swings."),
     params=_syzygy_params(),
     simulate_fn=_syzygy,
-    euler_formula=(r"$m(1-\alpha)^2=\alpha^2-\alpha^2(1-\alpha)^3$ (§7); "
-                   r"$\eta=A\sin\omega,\ v=b(1-0.3117A\cos\omega)$, $\omega=\alpha\zeta$, "
-                   r"$\alpha^4+2\alpha^2=27$ (§16)"),
+    euler_formula=("m(1 − α)² = α² − α²(1 − α)³ (§7)\n"
+                   "η = A sin ω, v = b(1 − 0.3117 A cos ω), ω = αζ, α⁴ + 2α² = 27 (§16)"),
     kind="orbit",
+    presets=(
+        ("Syzygy: the small swing (Hill)", {}),
+        ("Syzygy: Euler's own start", {"start": "euler"}),
+        ("Syzygy: beyond the Earth (opposition)", {"side": "opposition"}),
+        ("Syzygy: the Moon leaves", {"escape_seed": 0.01, "duration_yr": 6.0}),
+    ),
 ))
 
 
@@ -437,10 +453,11 @@ register(Scenario(
     title="The Moon perturbed by the Sun, by its elements",
     section="Euler 1768, §XIII–§XXXIV",
     group=GROUP,
-    summary=("Euler wrote the Moon's motion as eight equations for its orbital elements and could not "
-             "integrate them. Here they are integrated for decades: the orbit plane turns backwards once in "
-             "18.6 years while its tilt nods between 5.0° and 5.3°, and the perigee advances once in 8.85 years — "
-             "twice what the first-order theory gives."),
+    summary=("Euler wrote the Moon's motion as eight equations for its orbital elements (the size, "
+            "shape, tilt and orientation of its orbit) and could not integrate them. Here they are "
+            "integrated for decades. Look at the plot: the orbit plane turns backwards once in 18.6 "
+            "years while its tilt nods between 5.0° and 5.3°, and the perigee advances once in 8.85 "
+            "years, twice as fast as first-order theory gives."),
     params=(
         Param("duration_yr", 40.0, 1.0, 200.0, "yr", "length of the run"),
         Param("step_days", 0.025, 0.005, 0.2, "d", "fixed RK4 step (the error scales as step⁴)"),
@@ -452,10 +469,15 @@ register(Scenario(
               help="exact 1/w³, or Euler's §XXXIII expansion to second order in v/u in the element equations"),
     ),
     simulate_fn=_lunar,
-    euler_formula=(r"$d\psi=-\frac{n v^3 u\,d\varnothing\sin\sigma\sin(\theta-\psi)}{p}\left(\frac1{w^3}-\frac1{u^3}\right)$, "
-                   r"$\frac{d\omega}{\sin\omega}=\frac{d\psi}{\tan\sigma}$, $d\sigma=d\varnothing-d\psi\cos\omega$ (§XXVIII)"),
+    euler_formula=("dψ = −n v³ u d∅ sin σ sin(θ − ψ)/p · (1/w³ − 1/u³) (§XXVIII)\n"
+                   "dω / sin ω = dψ / tan σ, dσ = d∅ − dψ cos ω"),
     kind="orbit",
     check=lambda v: (_ for _ in ()).throw(ParameterError("sample_days", v["sample_days"],
                                                          f"at least step_days = {v['step_days']:g} d"))
     if v["sample_days"] < v["step_days"] else None,
+    presets=(
+        ("Moon's orbit: node and perigee over 40 years", {}),
+        ("Moon's orbit: one node cycle", {"duration_yr": 19.0}),
+        ("Moon's orbit: Euler's series for the Sun's force", {"solar_force": "euler-series"}),
+    ),
 ))
