@@ -27,12 +27,15 @@ import viser
 from physics.params import ParameterError
 from physics.scenarios import all_scenarios, get
 
+from . import gallery
 from .controls import ParamControls
 from .scene import OVERLAYS, SceneView
 
 PLAY_HZ = 60.0  # playback tick (the client renders at display rate; messages go out each 1/60 s)
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
 UPLOT_POINTS = 2000
+PROGRESS_SHOW_AFTER = 0.4  # s: the progress bar appears only for runs longer than this
+PROGRESS_EVERY = 0.15  # s: at most this often a progress message goes to the browser
 
 
 def configure_lighting(scene) -> None:
@@ -44,13 +47,8 @@ def configure_lighting(scene) -> None:
 
 
 def camera_position(spec) -> tuple[float, float, float]:
-    """Rotation scenes: an oblique view of the body (farther out when the celestial sphere and
-    the attractor's direction are shown); orbit scenes: from above the plane."""
-    if spec.kind != "rotation":
-        return (0.0, -2.6, 4.2)
-    if spec.group == "ch. 15":
-        return (3.0, 2.3, 1.8)
-    return (4.8, 3.7, 2.9)
+    """The scenario's curated camera position (app/gallery.py CAMERAS)."""
+    return gallery.camera_for(spec)[0]
 
 
 class _Stale(Exception):
@@ -58,7 +56,7 @@ class _Stale(Exception):
 
 
 def scenario_label(spec) -> str:
-    return f"[{spec.group}] {spec.name}: {spec.title}"
+    return gallery.label(spec)
 
 
 def _fmt(x) -> str:
@@ -75,9 +73,8 @@ def _fmt(x) -> str:
 
 def info_markdown(spec, result=None) -> str:
     lines = [f"### {spec.title}", f"**{spec.section}** · {spec.group} · `{spec.name}`", "", spec.summary, ""]
-    if spec.euler_formula:
-        # viser's markdown renders no TeX: show the formula as source
-        lines += ["**Euler:** `" + spec.euler_formula.replace("`", "'") + "`", ""]
+    if spec.euler_formula:  # plain Unicode text: viser's markdown renders no TeX
+        lines += [gallery.formula_markdown(spec.euler_formula), ""]
     return "\n".join(lines)
 
 
@@ -111,6 +108,7 @@ class ClientSession:
         self.playing = True
         self.clock = 0.0  # playback time as a fraction of the run, 0..1
         self._guard = False  # set while the code itself moves the scrubber
+        self._pguard = False  # set while the code itself sets the preset or the parameter controls
         self._view_lock = threading.RLock()  # the worker rebuilds while the player animates
         self._lock = threading.Lock()
         self._cv = threading.Condition(self._lock)
@@ -134,14 +132,19 @@ class ClientSession:
         configure_lighting(client.scene)
         self._set_camera(self.spec)
         gui.configure_theme(control_width="large", show_share_button=False)
-        order = sorted(self.scenarios.values(), key=lambda s: (s.group, s.name))
+        order = gallery.ordered(self.scenarios.values())
         self._labels = {scenario_label(s): s.name for s in order}
         self.dd = gui.add_dropdown("Scenario", list(self._labels), initial_value=scenario_label(self.spec),
-                                   hint="grouped by chapter / paper")
+                                   hint="Euler's ch. 15, ch. 16, then the three-body papers, in § order")
         self.dd.on_update(lambda e: self._safe(self._on_scenario))
+        self.presets = gui.add_dropdown("Presets", self._preset_options(self.spec),
+                                        initial_value=self._preset_options(self.spec)[0],
+                                        hint="starting points named after what they show")
+        self.presets.on_update(lambda e: self._safe(self._on_preset))
         self.info = gui.add_markdown(info_markdown(self.spec))
         self.table = gui.add_markdown("")
         self.status = gui.add_markdown("*simulating…*")
+        self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
         with gui.add_folder("Playback"):
             self.play_btn = gui.add_button("Pause")
             self.play_btn.on_click(lambda e: self._safe(self._toggle_play))
@@ -154,7 +157,7 @@ class ClientSession:
             self.time_md = gui.add_markdown("t = 0")
         self.params_parent = gui.add_folder("Parameters (§)")
         with self.params_parent:
-            self.controls = ParamControls(gui, self.spec, on_change=lambda name: self.request())
+            self.controls = ParamControls(gui, self.spec, on_change=self._on_param)
         with gui.add_folder("Overlays", expand_by_default=False):
             self.exag = gui.add_slider("exaggerate shape", min=1.0, max=20.0, step=0.5, initial_value=1.0,
                                        hint="multiplies the departures of the semi-axes from their mean")
@@ -170,11 +173,62 @@ class ClientSession:
         self.plot_folder = gui.add_folder("Plot")
         self.plot = None
 
-    def _set_camera(self, spec) -> None:
+    def _follow_camera(self) -> None:
+        """Apply the scene extra's moving camera (SceneExtra.follow_camera, e.g. the Moon seen
+        from the Earth) while it returns one; give the scenario's view back when it stops."""
+        extra = self.view.extra
+        want = extra.follow_camera(self.result.trajectory, self.view.frame) \
+            if extra is not None and self.result is not None else None
         cam = self.client.camera
-        cam.position = camera_position(spec)
-        cam.look_at = (0.0, 0.0, 0.0)
+        if want is None:
+            if getattr(self, "_following", False):
+                self._following = False
+                cam.fov = np.radians(75.0)  # viser's default
+                self._set_camera(self.spec)
+            return
+        self._following = True
+        if "fov_deg" in want and abs(cam.fov - np.radians(want["fov_deg"])) > 1e-6:
+            cam.fov = np.radians(want["fov_deg"])
+        cam.up_direction = want.get("up", (0.0, 0.0, 1.0))
+        cam.position = want["position"]
+        cam.look_at = want.get("look_at", (0.0, 0.0, 0.0))
+
+    def _set_camera(self, spec) -> None:
+        position, look_at = gallery.camera_for(spec)
+        cam = self.client.camera
+        cam.position = position
+        cam.look_at = look_at
         cam.up_direction = (0.0, 0.0, 1.0)
+
+    # ---- presets -----------------------------------------------------------------------------
+    @staticmethod
+    def _preset_options(spec) -> list[str]:
+        return gallery.preset_names(spec) + [gallery.CUSTOM]
+
+    def _on_preset(self) -> None:
+        """A preset chosen: its values (validated by Scenario.resolve) go into the controls and
+        are simulated at once."""
+        if self._pguard or self.presets.value == gallery.CUSTOM:
+            return
+        values = self.spec.preset(self.presets.value)
+        self._pguard = True
+        try:
+            self.controls.set_values(values)
+        finally:
+            self._pguard = False
+        self.request(dict(values))
+
+    def _on_param(self, name: str) -> None:
+        """A parameter moved by hand: the preset no longer describes the values."""
+        if self._pguard:
+            return
+        if self.presets.value != gallery.CUSTOM:
+            self._pguard = True
+            try:
+                self.presets.value = gallery.CUSTOM
+            finally:
+                self._pguard = False
+        self.request()
 
     def notify(self, title: str, body: str, color: str = "red") -> None:
         try:
@@ -199,7 +253,14 @@ class ClientSession:
         self.spec = self.scenarios[name]
         self.controls.remove()
         with self.params_parent:
-            self.controls = ParamControls(self.client.gui, self.spec, on_change=lambda n: self.request())
+            self.controls = ParamControls(self.client.gui, self.spec, on_change=self._on_param)
+        self._pguard = True
+        try:
+            options = self._preset_options(self.spec)
+            self.presets.options = options
+            self.presets.value = options[0]
+        finally:
+            self._pguard = False
         self.info.content = info_markdown(self.spec)
         self.good_values = None
         self.view.overlays = {}
@@ -263,6 +324,20 @@ class ClientSession:
                 self.notify(f"Error in {name}", f"{type(e).__name__}: {e} — keeping the last good state")
                 self._status(f"error: {type(e).__name__}: {e}")
 
+    def _show_progress(self, pct: float | None, text: str | None = None) -> None:
+        """Progress of a long run in the panel (None hides the bar)."""
+        try:
+            if pct is None:
+                self.progress.visible = False
+                return
+            self.progress.value = pct
+            if not self.progress.visible:
+                self.progress.visible = True
+            if text:
+                self._status(text)
+        except Exception:
+            pass
+
     def _status(self, text: str) -> None:
         try:
             self.status.content = f"*{text}*"
@@ -275,17 +350,34 @@ class ClientSession:
         self._status(f"simulating {name}…")
         self.timing["start"] = time.perf_counter()
 
-        def progress(_frac):
+        t0 = time.perf_counter()
+        shown = {"t": 0.0, "pct": -1.0}
+
+        def progress(frac):
             if self._gen != gen or self._closed:
                 raise _Stale()
+            now = time.perf_counter()
+            if now - t0 < PROGRESS_SHOW_AFTER or now - shown["t"] < PROGRESS_EVERY:
+                return  # throttled: short runs never show the bar, long ones ≤ 1/PROGRESS_EVERY msgs/s
+            try:
+                pct = min(max(100.0 * float(frac), 0.0), 100.0)
+            except (TypeError, ValueError):
+                return
+            if not np.isfinite(pct) or abs(pct - shown["pct"]) < 0.5:
+                return
+            shown["t"], shown["pct"] = now, pct
+            self._show_progress(pct, f"simulating {name}… {pct:.0f}%")
 
-        t0 = time.perf_counter()
         try:
-            result = spec.simulate_fn(values, progress=progress)
-        except TypeError as e:  # a simulate_fn without the progress keyword
-            if "progress" not in str(e):
-                raise
-            result = spec.simulate_fn(values)
+            try:
+                result = spec.simulate_fn(values, progress=progress)
+            except TypeError as e:  # a simulate_fn without the progress keyword
+                if "progress" not in str(e):
+                    raise
+                result = spec.simulate_fn(values)
+        finally:
+            if shown["pct"] >= 0:
+                self._show_progress(None)
         t_sim = time.perf_counter() - t0
         self.timing["simulated"] = time.perf_counter()
         if self._gen != gen:
@@ -310,6 +402,7 @@ class ClientSession:
             self.table.content = comparison_markdown(result)
             self._update_plot(result)
             self.view.set_frame(self._frame_index())
+            self._follow_camera()
             self.timing["shown"] = time.perf_counter()
             self.updates += 1
             self._status(f"simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
@@ -337,10 +430,12 @@ class ClientSession:
         with self._view_lock, self.client.atomic():
             self.view.set_option(key, cb.value)
             self.view.set_frame(self._frame_index())
+            self._follow_camera()
 
     def _update_plot(self, result) -> None:
         traj = result.trajectory
-        series = dict(result.plot_series) or {"energy": traj.energy}
+        extra = self.view.extra
+        series = dict(extra.plot_series(result) if extra is not None else result.plot_series) or {"energy": traj.energy}
         idx = np.unique(np.linspace(0, len(traj.t) - 1, min(UPLOT_POINTS, len(traj.t))).round().astype(int))
         data = (np.asarray(traj.t)[idx],) + tuple(np.asarray(v, float)[idx] for v in series.values())
         from .scene import palette
@@ -372,6 +467,7 @@ class ClientSession:
         if force or i != self.view.frame:
             with self._view_lock, self.client.atomic():
                 self.view.set_frame(i)
+                self._follow_camera()
 
     def _play(self) -> None:
         last = time.perf_counter()

@@ -1,0 +1,324 @@
+"""The gallery (issue 7, item 1) without a browser: order, labels, cameras, presets, Euler's
+formulas as readable text, no stale scene objects after switching through every scenario, and a
+browser session (fake viser client) choosing presets, switching scenarios and showing progress."""
+from __future__ import annotations
+
+import contextlib
+import math
+import threading
+import time
+import types
+
+import numpy as np
+import pytest
+
+from app import gallery
+from app.scene import SceneView
+from physics.params import Param, ParameterError
+from physics.scenarios import all_scenarios, get
+from physics.scenarios import base as scen_base
+from tests.test_app_scene import FakeScene
+
+# small runs of the scenarios whose defaults take seconds (the scene logic does not depend on length)
+QUICK = {
+    "earth": {"years": 0.5},
+    "earth-long-view": {"years": 200.0, "sample_years": 5.0},
+    "hyperion": {"n_starts": 4, "n_orbits": 20, "probe_orbits": 2.0},
+    "moon": {"years": 0.5},
+    "lunar-perturbation": {"duration_yr": 1.0},
+    "precession-circular": {"orbits": 10.0},
+    "libration-eccentric": {"orbits": 3.0},
+}
+
+
+def test_order_follows_groups_then_sections():
+    specs = gallery.ordered(all_scenarios())
+    groups = [s.group for s in specs]
+    # contiguous groups in the order ch. 15, ch. 16, three bodies
+    seen = [g for k, g in enumerate(groups) if k == 0 or groups[k - 1] != g]
+    assert seen == [g for g in gallery.GROUP_ORDER if g in groups]
+    for g in gallery.GROUP_ORDER:
+        keys = [gallery.section_key(s.section) for s in specs if s.group == g]
+        assert keys == sorted(keys), g
+    names = [s.name for s in specs]
+    assert names.index("free-tumble") < names.index("middle-axis-flip") < names.index("initial-axis")
+    assert names.index("gravity-start") < names.index("libration-circular") < names.index("pole-near-axis")
+    labels = [gallery.label(s) for s in specs]
+    assert len(set(labels)) == len(labels)
+    for s, lab in zip(specs, labels):
+        assert lab.startswith(s.group) and "§" in lab and s.title in lab
+
+
+def test_section_key_reads_arabic_roman_and_years():
+    assert gallery.section_key("§805, §808")[1] == 805
+    assert gallery.section_key("Euler 1768, §XIII–§XXXIV")[:2] == (1768, 13)
+    assert gallery.section_key("§833 (beyond Euler)") > gallery.section_key("§833–838")
+
+
+def test_every_scenario_has_a_curated_camera():
+    for s in all_scenarios():
+        assert s.name in gallery.CAMERAS, s.name
+        pos, look = (np.asarray(v, float) for v in gallery.camera_for(s))
+        assert np.all(np.isfinite(pos)) and np.all(np.isfinite(look))
+        d = np.linalg.norm(pos - look)
+        assert 1.5 < d < 12.0, (s.name, d)  # outside the body (radius 1), the scene (radius ≤ 2.4) in view
+        fwd = (look - pos) / d
+        assert abs(fwd[2]) < 0.999, s.name  # not looking straight along +z (the up direction)
+
+
+def test_presets_are_named_and_valid():
+    for s in all_scenarios():
+        assert len(s.presets) >= 2, s.name
+        names = [n for n, _ in s.presets]
+        assert len(set(names)) == len(names), s.name
+        for n, given in s.presets:
+            assert n.strip() and n != gallery.CUSTOM
+            assert set(given) <= {p.name for p in s.params}, (s.name, n)
+            values = s.preset(n)  # through Scenario.resolve: ranges and cross-parameter checks
+            assert values == s.resolve(given)
+        with pytest.raises(ParameterError) as e:
+            s.preset("no such preset")
+        assert "preset" in str(e.value)
+
+
+def test_presets_differ_from_each_other():
+    for s in all_scenarios():
+        seen = [s.preset(n) for n, _ in s.presets]
+        for i in range(len(seen)):
+            for j in range(i):
+                assert seen[i] != seen[j], (s.name, s.presets[i][0], s.presets[j][0])
+
+
+def test_euler_formulas_are_readable_text_not_tex():
+    for s in all_scenarios():
+        f = s.euler_formula
+        assert f.strip(), s.name
+        for tex in ("$", "\\frac", "\\sqrt", "\\cos", "\\alpha", "^{", "_{", "\\,"):
+            assert tex not in f, (s.name, tex)
+        md = gallery.formula_markdown(f)
+        assert md.count("\n> ") == len([ln for ln in f.split("\n") if ln.strip()])
+        assert "§" in f or "§" in s.section
+        assert "\n" not in s.summary.strip(), s.name  # one paragraph
+
+
+def _alive(scene: FakeScene) -> set[str]:
+    alive: set[str] = set()
+    for op, _kind, name, *_ in scene.log:
+        if op == "add":
+            alive.add(name)
+        elif op == "remove":
+            alive.discard(name)
+    return alive
+
+
+def test_switching_through_all_scenarios_leaves_no_stale_objects():
+    """After each switch (as the app does it: overlays reset to the scenario's defaults), the scene
+    holds exactly the nodes a fresh scene showing only that scenario would hold."""
+    scene = FakeScene()
+    view = SceneView(scene)
+    specs = gallery.ordered(all_scenarios())
+    order = specs + specs[:1]  # end where we started: the first scenario's nodes come back
+    for spec in order:
+        res = spec.simulate_fn(spec.resolve(QUICK.get(spec.name, {})))
+        view.show(res, spec, overlays=view.default_overlays(spec))
+        view.set_frame(len(res.trajectory.t) // 2)
+        fresh_scene = FakeScene()
+        fresh = SceneView(fresh_scene)
+        fresh.show(res, spec, overlays=fresh.default_overlays(spec))
+        assert _alive(scene) == _alive(fresh_scene), spec.name
+        assert set(view._h) == _alive(scene), spec.name
+        if spec.kind == "rotation":
+            assert "/world/body/mesh" in view._h, spec.name
+        else:
+            assert "/world/body/mesh" not in view._h, spec.name
+            assert any(n.startswith("/world/bodies/") for n in view._h) or view.extra is not None, spec.name
+
+
+# ---- a session with a fake viser client ------------------------------------------------------
+
+
+class FakeGuiHandle:
+    def __init__(self, kind, label=None, value=None, **props):
+        object.__setattr__(self, "_cbs", [])
+        object.__setattr__(self, "kind", kind)
+        object.__setattr__(self, "label", label)
+        object.__setattr__(self, "value", value)
+        object.__setattr__(self, "visible", props.pop("visible", True))
+        object.__setattr__(self, "removed", False)
+        object.__setattr__(self, "history", [])
+        for k, v in props.items():
+            object.__setattr__(self, k, v)
+
+    def __setattr__(self, key, value):
+        object.__setattr__(self, key, value)
+        self.history.append((key, value))
+        if key == "value":  # viser calls the update callbacks synchronously on assignment
+            for cb in list(self._cbs):
+                cb(types.SimpleNamespace(target=self, client=None))
+        if key == "options" and self.value not in value:
+            self.value = value[0]
+
+    def on_update(self, cb):
+        self._cbs.append(cb)
+        return cb
+
+    on_click = on_update
+
+    def remove(self):
+        object.__setattr__(self, "removed", True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *a):
+        return False
+
+
+class FakeGui:
+    def __init__(self):
+        self.handles: list[FakeGuiHandle] = []
+
+    def configure_theme(self, **kw):
+        pass
+
+    def __getattr__(self, method):
+        if not method.startswith("add_"):
+            raise AttributeError(method)
+        kind = method[4:]
+
+        def add(*args, **kw):
+            label = args[0] if args and isinstance(args[0], str) and kind not in ("markdown",) else None
+            if "initial_value" in kw:
+                value = kw.pop("initial_value")
+            elif kind in ("number", "vector3") and len(args) > 1:
+                value = args[1]
+            elif kind == "dropdown":
+                value = args[1][0]
+            elif kind == "progress_bar":
+                value = args[0]
+            else:
+                value = None
+            if kind == "dropdown":
+                kw["options"] = tuple(args[1])
+            if kind == "markdown":
+                kw["content"] = args[0]
+            h = FakeGuiHandle(kind, label, value, **kw)
+            self.handles.append(h)
+            return h
+
+        return add
+
+    def find(self, kind, label):
+        hs = [h for h in self.handles if h.kind == kind and h.label == label and not h.removed]
+        assert hs, (kind, label)
+        return hs[-1]
+
+
+class FakeClientScene(FakeScene):
+    def set_up_direction(self, *a, **kw):
+        pass
+
+    def configure_environment_map(self, *a, **kw):
+        pass
+
+    def configure_default_lights(self, *a, **kw):
+        pass
+
+
+class FakeClient:
+    client_id = 0
+
+    def __init__(self):
+        self.scene = FakeClientScene()
+        self.gui = FakeGui()
+        self.camera = types.SimpleNamespace(position=None, look_at=None, up_direction=None)
+        self.notes = []
+        self._lock = threading.RLock()
+
+    def atomic(self):
+        return self._lock
+
+    def add_notification(self, title, body, **kw):
+        self.notes.append((title, body))
+
+
+@contextlib.contextmanager
+def _session(scenario):
+    from app.server import ClientSession
+
+    client = FakeClient()
+    s = ClientSession(None, client, scenario)
+    try:
+        yield s, client
+    finally:
+        s.close()
+
+
+def _wait(cond, timeout=60.0):
+    t0 = time.time()
+    while not cond():
+        assert time.time() - t0 < timeout, "timed out"
+        time.sleep(0.01)
+
+
+def test_preset_sets_the_controls_and_simulates_then_a_hand_change_leaves_it():
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        spec = get("middle-axis-flip")
+        assert list(s.presets.options) == [n for n, _ in spec.presets] + [gallery.CUSTOM]
+        n = s.updates
+        name, given = spec.presets[1]  # a big nudge
+        s.presets.value = name
+        _wait(lambda: s.updates > n and s.good_values == spec.resolve(given))
+        assert s.controls.values()["perturbation"] == pytest.approx(given["perturbation"])
+        assert s.presets.value == name  # the preset's own control updates did not reset it
+        assert s.result.params["perturbation"] == pytest.approx(given["perturbation"])
+        # a hand change: the dropdown says so and the new value is simulated
+        n = s.updates
+        s.controls.handles["spin"].value = 4.0
+        assert s.presets.value == gallery.CUSTOM
+        _wait(lambda: s.updates > n and s.good_values["spin"] == 4.0)
+
+
+def test_switching_scenario_in_the_session_updates_presets_camera_and_scene():
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        target = get("collinear")
+        n = s.updates
+        s.dd.value = gallery.label(target)
+        _wait(lambda: s.updates > n and s.view._spec is not None and s.view._spec.name == "collinear")
+        assert s.presets.value == target.presets[0][0]
+        assert "/world/body/mesh" not in s.view._h
+        pos, look = gallery.camera_for(target)
+        assert client.camera.position is not None and client.camera.up_direction == (0.0, 0.0, 1.0)
+        assert "(A+B)α⁵" in s.info.content and "$" not in s.info.content
+        with s._view_lock:
+            assert set(s.view._h) == {n for n in _alive(client.scene) if n.startswith("/world")}
+
+
+def test_long_run_shows_throttled_progress_then_hides_it(monkeypatch):
+    from app import server as server_mod
+
+    steps = 40
+
+    def slow(values, progress=None):
+        for k in range(steps):
+            time.sleep(0.02)
+            if progress is not None:
+                progress((k + 1) / steps)
+        return get("free-tumble").simulate_fn(get("free-tumble").resolve({"duration": 2.0}))
+
+    spec = scen_base.Scenario("test-slow", "slow", "§0", "ch. 15", "a slow run", (Param("x", 1.0, 0.0, 2.0),),
+                              slow, euler_formula="x = 1", presets=(("Slow: one", {}), ("Slow: two", {"x": 2.0})))
+    monkeypatch.setitem(scen_base.REGISTRY, "test-slow", spec)
+    monkeypatch.setattr(server_mod, "PROGRESS_SHOW_AFTER", 0.1)
+    with _session("test-slow") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        bar = s.progress
+        values = [v for k, v in bar.history if k == "value"]
+        shown = [v for k, v in bar.history if k == "visible"]
+        assert values, "no progress shown for a 0.8 s run"
+        assert values == sorted(values) and 0 < values[-1] <= 100
+        # throttled: at most one update per PROGRESS_EVERY seconds over the ~0.8 s run
+        assert len(values) <= math.ceil(steps * 0.02 / server_mod.PROGRESS_EVERY) + 1
+        assert shown[0] is True and shown[-1] is False and bar.visible is False
