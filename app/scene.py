@@ -106,6 +106,16 @@ class SceneExtra:
         self.values[key] = bool(value)
         return True
 
+    def plot_series(self, result) -> dict:
+        """The time series the app plots against t (override to leave out point clouds such as a
+        separatrix or a surface of section, which the extra draws itself)."""
+        return result.plot_series
+
+    def follow_camera(self, traj, i: int) -> dict | None:
+        """A camera the app applies at every frame i while this returns one (e.g. the Moon seen
+        from the Earth): dict(position, look_at, up, fov_deg). None leaves the camera alone."""
+        return None
+
 
 SCENE_EXTRAS: dict[str, type[SceneExtra]] = {}
 
