@@ -33,9 +33,9 @@ CAMERAS: dict[str, tuple[Vec, Vec]] = {
     "earth": ((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
     "earth-long-view": ((3.6, -3.2, 4.4), (0.0, 0.0, 0.6)),  # the pole's circle near the top of the sphere
     # three bodies: from above the plane of motion, a little tilted
-    "collinear": ((0.0, -2.2, 4.6), (0.0, 0.0, 0.0)),
-    "syzygy": ((0.0, -2.2, 4.6), (0.0, 0.0, 0.0)),
-    "lunar-perturbation": ((0.0, -3.4, 3.4), (0.0, 0.0, 0.0)),
+    "collinear": ((0.0, -0.9, 3.4), (0.0, 0.0, 0.0)),  # from above: L1–L5, zero-velocity curves
+    "syzygy": ((0.8, -0.6, 2.4), (0.8, 0.0, 0.0)),  # co-rotating: Earth, syzygy point, Sun on +x
+    "lunar-perturbation": ((0.9, -3.1, 2.1), (0.0, 0.0, 0.35)),  # oblique: orbit plane, node line, normal
 }
 
 

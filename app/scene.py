@@ -102,6 +102,20 @@ class SceneExtra:
     def set_frame(self, i: int) -> None:
         pass
 
+    # what the generic "bodies" overlay draws for this scenario
+    def bodies(self, traj) -> dict | None:
+        """name → (N,3) positions to draw as spheres + trails instead of traj.bodies (e.g. in a
+        co-rotating frame, or without marker points the extra draws itself); None: traj.bodies."""
+        return None
+
+    def span(self, traj) -> float | None:
+        """Distance drawn at ORBIT_RADIUS (trajectory units); None: the largest body distance."""
+        return None
+
+    def trail(self, name: str) -> bool:
+        """Whether the generic overlay draws the trail of body `name`."""
+        return True
+
     def set_option(self, key: str, value: bool) -> bool:
         self.values[key] = bool(value)
         return True
@@ -509,21 +523,24 @@ class SceneView:
                        TRAIL_COLOR, 0.012, idx=self._idx)
 
     def _build_bodies(self, traj) -> None:
-        if not traj.bodies:
+        bodies = self.extra.bodies(traj) if self.extra is not None else None
+        bodies = traj.bodies if bodies is None else bodies
+        if not bodies:
             return
         sc, r, idx = self.scene, self.root, self._idx
-        allpos = np.concatenate([np.asarray(p, float) for p in traj.bodies.values()])
+        allpos = np.concatenate([np.asarray(p, float) for p in bodies.values()])
         if self._rotation:  # a distant attractor is drawn by its direction, not its distance
             def scale_fn(p):
                 return ORBIT_RADIUS * p / np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-300)
         else:
-            span = float(np.max(np.linalg.norm(allpos, axis=1))) or 1.0
+            span = (self.extra.span(traj) if self.extra is not None else None) or \
+                float(np.max(np.linalg.norm(allpos, axis=1))) or 1.0
 
             def scale_fn(p):
                 return ORBIT_RADIUS * p / span
         hs = []
         self._markers = {}
-        for k, (name, pos) in enumerate(traj.bodies.items()):
+        for k, (name, pos) in enumerate(bodies.items()):
             pos = scale_fn(np.asarray(pos, float))
             col = palette(k)
             h = self._node(f"{r}/bodies/{name}", lambda col=col, name=name: sc.add_icosphere(
@@ -532,7 +549,8 @@ class SceneView:
                 f"{r}/bodies/{name}/label", name, position=(0, 0, 0.2)))
             self._markers[name] = (h, pos)
             hs += [h, lab]
-            self._add_path("bodies", f"{r}/body_trails/{name}", pos[idx], col, 0.02, idx=idx)
+            if self.extra is None or self.extra.trail(name):
+                self._add_path("bodies", f"{r}/body_trails/{name}", pos[idx], col, 0.02, idx=idx)
         self._static["bodies"] = hs
 
     # ---- animating -------------------------------------------------------------------------

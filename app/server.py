@@ -51,6 +51,24 @@ def camera_position(spec) -> tuple[float, float, float]:
     return gallery.camera_for(spec)[0]
 
 
+# the control panel covers the right ~30 % of the canvas: orbit scenes are centred in the free part
+PANEL_SHIFT = 0.3
+
+
+def camera_view(spec) -> tuple[tuple, tuple]:
+    """(camera position, look-at point): the gallery's camera; orbit scenes are moved left of the
+    control panel by shifting the camera to the right (along the screen's right direction) by
+    PANEL_SHIFT of its distance."""
+    position, look_at = (np.asarray(v, float) for v in gallery.camera_for(spec))
+    if spec.kind != "rotation":
+        fwd = look_at - position
+        right = np.cross(fwd, (0.0, 0.0, 1.0))
+        if np.linalg.norm(right) > 0:
+            shift = PANEL_SHIFT * np.linalg.norm(fwd) * right / np.linalg.norm(right)
+            position, look_at = position + shift, look_at + shift
+    return tuple(float(x) for x in position), tuple(float(x) for x in look_at)
+
+
 class _Stale(Exception):
     """A newer request arrived: abandon this simulation."""
 
@@ -194,7 +212,7 @@ class ClientSession:
         cam.look_at = want.get("look_at", (0.0, 0.0, 0.0))
 
     def _set_camera(self, spec) -> None:
-        position, look_at = gallery.camera_for(spec)
+        position, look_at = camera_view(spec)
         cam = self.client.camera
         cam.position = position
         cam.look_at = look_at

@@ -113,6 +113,8 @@ def _collinear(values, progress=None):
     traj = orbit_trajectory(t, bodies, "G=1 units", series={"ratio_BC_over_AB": ratio, "spacing_AB": d1})
     for k, name in enumerate(("L1", "L2", "L3")):
         traj.series[f"{name}_x_over_distance"] = np.full(len(t), Lx[k])
+    if motion == "rotating":  # angle of the frame turning with the line (for the co-rotating view)
+        traj.series["frame_angle_rad"] = Om * t
     return Result("collinear", values, traj, metrics, comps, notes,
                   plot_series={"BC/AB (simulated)": ratio, "α (Euler)": np.full(len(t), alpha),
                                "AB spacing (simulated)": d1, "AB spacing (Euler)": p_euler})
@@ -158,9 +160,14 @@ def _restricted(values, alpha):
              "zero-velocity curves: levels of 2Ω = x² + y² + 2(1−μ)/r1 + 2μ/r2 through the points "
              "(physics.three_body.collinear.zero_velocity_grid, jacobi_constant_* metrics)"]
     traj = orbit_trajectory(t, bodies, "orbits/2π", series={"satellite_corotating_x": xs,
-                                                            "satellite_corotating_y": ys})
+                                                            "satellite_corotating_y": ys,
+                                                            "frame_angle_rad": t})
+    # zero-velocity curves: 2Ω on a grid of the turning plane, levels through L1–L5 (= C_J there)
+    X, Y, Z = col.zero_velocity_grid(mr, n=241, extent=1.6)
+    extras = {"zero_velocity": {"x": X[0], "y": Y[:, 0], "two_omega": Z, "levels": CJ},
+              "lagrange_points": {k: (float(x), float(y)) for k, (x, y) in pts.items()}}
     return Result("collinear", values, traj, metrics, comps, notes,
-                  plot_series={"satellite drift from the point (distances)": drift})
+                  plot_series={"satellite drift from the point (distances)": drift}, extras=extras)
 
 
 register(Scenario(
@@ -291,10 +298,12 @@ def _syzygy(values, progress=None):
     sun = 3.0 * b_lunar * np.stack([c, s, np.zeros_like(t)], axis=1)
     traj = orbit_trajectory(t / (2 * math.pi), {"sun": sun, "earth": np.zeros_like(moon), "moon": moon}, "yr",
                             series={"moon_corotating_x": xr, "moon_corotating_y": yr,
-                                    "eta_deg": np.degrees(eta), "distance_over_b": v / alpha})
+                                    "eta_deg": np.degrees(eta), "distance_over_b": v / alpha,
+                                    "frame_angle_rad": t})  # the Sun's direction turns at rate 1
     return Result("syzygy", values, traj, metrics, comps, notes, plot_series={
         "η simulated (deg)": np.degrees(eta), "η Euler A sin αζ (deg)": np.degrees(eta_e),
-        "v/b simulated": v / alpha, "v/b Euler 1 − 0.3117 A cos αζ": v_e / alpha})
+        "v/b simulated": v / alpha, "v/b Euler 1 − 0.3117 A cos αζ": v_e / alpha},
+        extras={"syzygy_point_lunar": (sgn * b_lunar, 0.0, 0.0)})
 
 
 EULER_N2 = 175.0
@@ -436,7 +445,8 @@ def _lunar(values, progress=None):
     years = tt / le.YEAR_DAYS
     series = {"node_longitude_deg": np.degrees(np.mod(psi, 2 * np.pi)), "inclination_deg": np.degrees(om),
               "perigee_longitude_deg": np.degrees(np.mod(na["varpi"][sl], 2 * np.pi)), "eccentricity": Es[:, 1],
-              "orbit_normal_x": normal[:, 0], "orbit_normal_y": normal[:, 1], "orbit_normal_z": normal[:, 2]}
+              "orbit_normal_x": normal[:, 0], "orbit_normal_y": normal[:, 1], "orbit_normal_z": normal[:, 2],
+              "frame_angle_rad": np.unwrap(np.arctan2(sunpos[:, 1], sunpos[:, 0]))}  # the Sun's longitude
     traj = orbit_trajectory(years, {"sun": sund, "earth": np.zeros((len(tt), 3)), "moon": P[sl]}, "yr", series)
     plot = {
         "node longitude (deg, simulated)": node_deg,
