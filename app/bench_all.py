@@ -4,3 +4,4 @@ from . import bench_libration  # noqa: F401
 from . import bench_three_body  # noqa: F401
 from . import bench_precession  # noqa: F401
 from . import bench_app  # noqa: F401
+from . import bench_classroom  # noqa: F401
