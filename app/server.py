@@ -449,6 +449,8 @@ class ClientSession:
             self.view.set_option(key, cb.value)
             self.view.set_frame(self._frame_index())
             self._follow_camera()
+            if self.result is not None:  # an option may choose what the plot shows
+                self._update_plot(self.result)
 
     def _update_plot(self, result) -> None:
         traj = result.trajectory

@@ -146,3 +146,20 @@ def test_lunar_plane_follows_node_and_inclination():
     view.set_frame(3)
     assert view._h["/world/extra/moon_trail"].points.shape == shape
     _playback_only_sets(scene, view)
+
+
+def test_plot_choices_read_the_physics_series():
+    _, view, res = _show("syzygy")
+    ps = view.extra.plot_series(res)
+    A = res.params["amplitude_deg"]
+    euler = ps["η/A Euler: sin αζ"]
+    assert np.allclose(euler * A, res.plot_series["η Euler A sin αζ (deg)"])
+    assert np.max(np.abs(euler)) == pytest.approx(1.0, abs=1e-3)  # Euler's curve at unit amplitude
+    sim = next(v for k, v in ps.items() if k.startswith("η/A simulated"))
+    assert np.max(np.abs(sim)) <= view.extra.PLOT_CLIP
+    view.set_option("plot_per_amplitude", False)
+    assert view.extra.plot_series(res) is res.plot_series
+    _, view, res = _show("lunar-perturbation", duration_yr="3")
+    assert list(view.extra.plot_series(res)) == [k for k in res.plot_series if not k.startswith("inclination")]
+    view.set_option("plot_inclination", True)
+    assert list(view.extra.plot_series(res)) == ["inclination (deg)"]

@@ -24,7 +24,7 @@ import trimesh
 from ..scene import ORBIT_RADIUS, SceneExtra, register_extra
 
 LEVEL_COLORS = {"L1": (230, 70, 70), "L2": (240, 160, 40), "L3": (70, 140, 240)}
-MARKER_COLOR = (235, 235, 245)
+MARKER_COLOR = (250, 250, 255)
 LINE_COLOR = (150, 150, 165)
 
 
@@ -130,7 +130,7 @@ class _OrbitExtra(SceneExtra):
         pos = tuple(float(v) for v in position)
         return self.node(n, lambda: self.scene.add_label(n, text, position=pos), text=text, position=pos)
 
-    def marker(self, name, position, color, radius=0.045):
+    def marker(self, name, position, color, radius=0.05):
         n = self.name(*name.split("/"))
         pos = tuple(float(v) for v in position)
         return self.node(n, lambda: self.scene.add_icosphere(n, radius=radius, color=color, position=pos,
@@ -227,7 +227,9 @@ class Syzygy(_OrbitExtra):
     frame (default)."""
 
     options = {"corotating": ("co-rotating frame (Sun fixed on +x)", True),
-               "inset": ("magnified swing about the syzygy point (inset)", True)}
+               "inset": ("magnified swing about the syzygy point (inset)", True),
+               "plot_per_amplitude": ("plot in units of the amplitude A (Euler's curve visible)", True)}
+    PLOT_CLIP = 4.0  # |η/A| shown up to this (the escape is read in the scene)
     INSET_OFFSET = (0.0, 0.75, 0.0)  # scene units from the syzygy point
     INSET_AMPLITUDE = 0.18  # the first swing drawn this large (scene units)
     INSET_CLIP = 0.55  # the magnified path is drawn while within this radius
@@ -286,6 +288,22 @@ class Syzygy(_OrbitExtra):
             if getattr(self, "_dot_on", None) != on:
                 self.inset_dot.visible = self._dot_on = on
 
+    def plot_series(self, result) -> dict:
+        """η/A and (v/b − 1)/A beside Euler's sin αζ and −0.3117 cos αζ (§16), clipped at
+        ±PLOT_CLIP: in degrees the escape (tens of degrees) flattens the first swings of 0.05°."""
+        ps = result.plot_series
+        A = float(result.params.get("amplitude_deg", 0.0))
+        keys = ("η simulated (deg)", "η Euler A sin αζ (deg)", "v/b simulated", "v/b Euler 1 − 0.3117 A cos αζ")
+        if not self.values.get("plot_per_amplitude", True) or A <= 0 or not all(k in ps for k in keys):
+            return ps
+        Ar, c = np.radians(A), self.PLOT_CLIP
+        return {
+            f"η/A simulated (clipped at ±{c:g})": np.clip(np.asarray(ps[keys[0]]) / A, -c, c),
+            "η/A Euler: sin αζ": np.asarray(ps[keys[1]]) / A,
+            f"(v/b − 1)/A simulated (clipped at ±{c:g})": np.clip((np.asarray(ps[keys[2]]) - 1) / Ar, -c, c),
+            "(v/b − 1)/A Euler: −0.3117 cos αζ": (np.asarray(ps[keys[3]]) - 1) / Ar,
+        }
+
     def readout_text(self, i: int) -> str:
         tr = self.traj
         eta, v = tr.series.get("eta_deg"), tr.series.get("distance_over_b")
@@ -298,13 +316,18 @@ class Syzygy(_OrbitExtra):
 class LunarPerturbation(_OrbitExtra):
     """The Moon's orbit plane turning: disc, node line, normal and the trace of the normal."""
 
+    options = {"plot_inclination": ("plot the inclination (else node and perigee longitudes)", False)}
     TRAIL_DAYS = 27.3
     NORMAL_LENGTH = 1.7  # lunar distances: the tip traces a circle of radius 1.7 sin i
 
+    skip_bodies = ("sun",)  # drawn as a direction from the Earth (its distance is 389 lunar distances)
+
     def trail(self, name: str) -> bool:
-        # 40 years of the Moon fill a disc: a one-month trail is drawn instead; the Sun's yearly
-        # circle (drawn at 3 lunar distances, outside the frame) is left out
-        return name not in ("moon", "sun")
+        return name != "moon"  # 40 years of the Moon fill a disc: a one-month trail is drawn instead
+
+    def bodies(self, traj):
+        b = super().bodies(traj)  # Moon first: the palette's pale yellow, the Earth its green
+        return {k: b[k] for k in sorted(b, key=lambda n: n != "moon")}
 
     def span(self, traj) -> float:
         moon = np.asarray(traj.bodies["moon"], float) if "moon" in traj.bodies else None
@@ -347,7 +370,23 @@ class LunarPerturbation(_OrbitExtra):
         days = dt * (365.25 if traj.time_unit == "yr" else 1.0)
         self.nk = int(np.clip(np.ceil(self.TRAIL_DAYS / max(days, 1e-9)), 2, 400))
         self.moon_trail = self.segments_node("moon_trail", self._trail(0), (240, 240, 250), 0.014)
+        # the direction of the Sun (turning once a year)
+        self.sun_dir = None
+        if "sun" in traj.bodies:
+            sun = np.asarray(traj.bodies["sun"], float)
+            self.sun_dir = (1.35 * R * sun / np.linalg.norm(sun, axis=1, keepdims=True)).astype(np.float32)
+            self.sun_line = self.segments_node("sun_line", [[[0, 0, 0], self.sun_dir[0]]], (240, 200, 60), 0.006)
+            self.sun_mark = self.marker("sun_dir", self.sun_dir[0], (250, 210, 60), 0.06)
+            self.label("sun_dir/label", "to the Sun", (0.0, 0.0, 0.1))
         self.readout = self.label("readout", "", (-1.6 * R, 0.0, 1.3 * R))
+
+    def plot_series(self, result) -> dict:
+        """One y-axis: the longitudes (hundreds of degrees over decades) or the inclination
+        (5.0°–5.3°), not both."""
+        ps = result.plot_series
+        inc = {k: v for k, v in ps.items() if k.startswith("inclination")}
+        rest = {k: v for k, v in ps.items() if not k.startswith("inclination")}
+        return (inc or ps) if self.values.get("plot_inclination", False) else (rest or ps)
 
     def _trail(self, i: int) -> np.ndarray:
         a = max(0, i - self.nk + 1)
@@ -362,6 +401,9 @@ class LunarPerturbation(_OrbitExtra):
         super().set_frame(i)
         self.plane.wxyz = rot_zx(self.node_lon[i], self.inc[i])
         self.moon_trail.points = self._trail(i)
+        if self.sun_dir is not None:
+            self.sun_line.points = np.array([[[0, 0, 0], self.sun_dir[i]]], np.float32)
+            self.sun_mark.position = tuple(float(x) for x in self.sun_dir[i])
 
     def readout_text(self, i: int) -> str:
         tr = self.traj

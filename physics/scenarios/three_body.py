@@ -157,8 +157,13 @@ def _restricted(values, alpha):
                          f"table − quintic root = {tt['L_error_km'][k]:+.1f} km") for k, n in enumerate(("L1", "L2", "L3"))]
     notes = [f"satellite released at {values['lagrange_point']}: largest drift {drift.max():.2e} distances in "
              f"{values['turns']:g} turns (L1–L3 are unstable; L4/L5 stable for μ < 0.0385)",
-             "zero-velocity curves: levels of 2Ω = x² + y² + 2(1−μ)/r1 + 2μ/r2 through the points "
-             "(physics.three_body.collinear.zero_velocity_grid, jacobi_constant_* metrics)"]
+             "zero-velocity curves (drawn in the scene): levels of 2Ω = x² + y² + 2(1−μ)/r1 + 2μ/r2 through "
+             "L1, L2, L3 (jacobi_constant_* metrics); a satellite with Jacobi constant C_J = 2Ω − v² (v: speed in "
+             "the turning frame) stays where 2Ω ≥ C_J and cannot cross the curve 2Ω = C_J",
+             "The translator's Earth–Moon table (end of the 1767 paper) is off: with its own inputs the quintic "
+             f"gives L1 = {tt['L_km'][0]:.0f} km (table {tt['L_km_table'][0]:.0f}, {tt['L_error_km'][0]:+.0f} km), "
+             f"L2 = {tt['L_km'][1]:.0f} km (table {tt['L_km_table'][1]:.0f}, {tt['L_error_km'][1]:+.0f} km), "
+             f"L3 = {tt['L_km'][2]:.0f} km (table {tt['L_km_table'][2]:.0f}, {tt['L_error_km'][2]:+.0f} km)."]
     traj = orbit_trajectory(t, bodies, "orbits/2π", series={"satellite_corotating_x": xs,
                                                             "satellite_corotating_y": ys,
                                                             "frame_angle_rad": t})
