@@ -42,6 +42,14 @@ FIGURE_COLOR = (38, 110, 220)
 ORBIT_RADIUS = 2.0
 MAX_DRAW_POINTS = 10000  # points per drawn path (10⁴-point trails)
 TRAIL_CHUNKS = 24  # a path is sent once, in chunks whose visibility grows with time
+# A path point is not drawn again where an earlier point of the same path already is: points are
+# quantised to cells of REPEAT_CELL × their size and only the first (in time) of each cell is kept.
+# viser draws a point `size` wide on each side of its centre (its gl_PointSize uses tan(fov/2), not
+# 2 tan(fov/2)), so a dropped point lies within 0.61 of a drawn point's width of one that is drawn
+# already at that time: the picture is the same, but a path that retraces itself (a periodic
+# polhode) costs far fewer points, and software WebGL pays per point.
+REPEAT_CELL = 0.7
+VECTOR_LENGTH_TOL = 0.02  # ω / L arrows: geometry re-sent only when the length changes by 2 %
 AXIS_TRAIL_RADIUS = 1.6
 # Paths live in scene units of order 1 (body ≈ 1, celestial sphere 2.4, orbits ≤ 3), where
 # float16 is good to ~1e-3 of a unit, far below a point's size: half the bytes per update.
@@ -175,6 +183,30 @@ def densify(path: np.ndarray, idx: np.ndarray, spacing: float, max_points: int):
     u = np.linspace(0.0, s[-1], n)
     out = np.stack([np.interp(u, s, path[:, k]) for k in range(3)], axis=1)
     return out, np.interp(u, s, idx)
+
+
+def drop_repeats(path: np.ndarray, idx: np.ndarray, cell: float):
+    """Keep, in order, the first point of `path` in each cubic cell of side `cell` (and its idx)."""
+    if len(path) < 2 or cell <= 0:
+        return path, idx
+    key = np.floor(np.asarray(path, float) / cell).astype(np.int64)
+    _, first = np.unique(key, axis=0, return_index=True)
+    keep = np.sort(first)
+    return path[keep], idx[keep]
+
+
+def z_to(v) -> tuple[float, float, float, float]:
+    """Unit quaternion (w, x, y, z) turning +z onto the direction of v (identity for v = 0)."""
+    v = np.asarray(v, float)
+    n = np.linalg.norm(v)
+    if n == 0 or not np.isfinite(n):
+        return (1.0, 0.0, 0.0, 0.0)
+    x, y, z = v / n
+    if z < -1 + 1e-12:
+        return (0.0, 1.0, 0.0, 0.0)
+    q = np.array([1.0 + z, -y, x, 0.0])
+    q /= np.linalg.norm(q)
+    return tuple(float(c) for c in q)
 
 
 def segments(path: np.ndarray) -> np.ndarray:
@@ -384,8 +416,9 @@ class SceneView:
         """Send `path` (samples at trajectory indices `idx`) once, as TRAIL_CHUNKS chunks whose
         visibility follows the playback time.
 
-        Paths are drawn as dense clouds of round points (resampled along the arc so that the
-        gaps are under the point size, at most MAX_DRAW_POINTS): in software WebGL a 10⁴-point
+        Paths are drawn as dense clouds of square points (resampled along the arc so that the
+        gaps are under the point size, at most MAX_DRAW_POINTS; points that would land on an
+        earlier point of the path are dropped, see REPEAT_CELL): in software WebGL a 10⁴-point
         fat line (three's Line2) renders at a few frames per second, a 10⁴-point cloud at ~30.
         """
         path = np.asarray(path, float)
@@ -393,13 +426,19 @@ class SceneView:
             return
         idx = np.arange(len(path)) if idx is None else np.asarray(idx, float)
         path, idx = densify(path, idx, 0.6 * thickness, MAX_DRAW_POINTS)
+        path, idx = drop_repeats(path, idx, REPEAT_CELL * thickness)
         k = TRAIL_CHUNKS if self.grow_trails else 1
-        bounds = np.unique(np.linspace(0, len(path), k + 1).round().astype(int))
+        # TRAIL_CHUNKS chunks of equal time span (after drop_repeats the points are not uniform in
+        # time); always the same number of chunks, so a new result updates the same nodes in place
+        # (a chunk left without a new point repeats the previous point)
+        grid = np.linspace(idx[0], idx[-1], k + 1)
+        bounds = np.concatenate([[0], np.searchsorted(idx, grid[1:-1], side="left"), [len(path)]]).astype(int)
         handles, starts = [], []
-        for j in range(len(bounds) - 1):
+        for j in range(k):
             a, b = bounds[j], bounds[j + 1]
-            handles.append(self._cloud(f"{name}/{j}", path[a:b], color, thickness))
-            starts.append(int(idx[a]) if self.grow_trails else 0)
+            pts = path[a:b] if b > a else path[max(a - 1, 0):max(a - 1, 0) + 1]
+            handles.append(self._cloud(f"{name}/{j}", pts, color, thickness))
+            starts.append(int(np.ceil(grid[j])) if self.grow_trails else 0)
         self._paths.setdefault(overlay, []).append(_Path(handles, np.asarray(starts)))
 
     def _build_body(self, traj) -> None:
@@ -419,17 +458,31 @@ class SceneView:
         else:  # starts at rest (e.g. initial-axis): the largest ω of the run is drawn 1.3 long
             wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
             self.k_omega = 1.3 / wmax if wmax > 0 else 1.0
-        # ω and L (moved every frame: one arrow each, tiny messages)
-        z = np.zeros((1, 2, 3), np.float32)
-        self.omega_arrow = self._node(f"{r}/omega", lambda: sc.add_arrows(
-            f"{r}/omega", z, OMEGA_COLOR, shaft_radius=0.025, head_radius=0.06, head_length=0.12))
-        self.L_arrow = self._node(f"{r}/L", lambda: sc.add_arrows(
-            f"{r}/L", z, L_COLOR, shaft_radius=0.025, head_radius=0.06, head_length=0.12))
-        self._labels = [self._node(f"{r}/omega_label", lambda: sc.add_label(f"{r}/omega_label", "ω")),
-                        self._node(f"{r}/L_label", lambda: sc.add_label(f"{r}/L_label", "L"))]
+        # ω and L: an arrow along +z of its own frame, with its label; playback turns the frame
+        # (a pose update, no geometry) and re-sends the arrow only when its length changes by
+        # more than VECTOR_LENGTH_TOL
+        self._vectors = {}
+        for key, color, text in (("omega", OMEGA_COLOR, "ω"), ("L", L_COLOR, "L")):
+            frame = self._node(f"{r}/{key}", lambda key=key: sc.add_frame(f"{r}/{key}", show_axes=False))
+            arrow = self._node(f"{r}/{key}/arrow", lambda key=key, color=color: sc.add_arrows(
+                f"{r}/{key}/arrow", np.zeros((1, 2, 3), np.float32), color, shaft_radius=0.025, head_radius=0.06,
+                head_length=0.12))
+            label = self._node(f"{r}/{key}/label", lambda key=key, text=text: sc.add_label(f"{r}/{key}/label", text))
+            self._vectors[key] = [frame, arrow, label, -1.0]
+        self.omega_arrow, self.L_arrow = self._vectors["omega"][0], self._vectors["L"][0]
+        self._labels = [self._vectors["omega"][2], self._vectors["L"][2]]
 
     def _build_vectors(self, traj) -> None:
-        self._static["vectors"] = [self.omega_arrow, self.L_arrow] + self._labels
+        self._static["vectors"] = [self.omega_arrow, self.L_arrow]
+
+    def _set_vector(self, key: str, v) -> None:
+        frame, arrow, label, drawn = self._vectors[key]
+        length = float(np.linalg.norm(v))
+        frame.wxyz = z_to(v)
+        if drawn < 0 or abs(length - drawn) > VECTOR_LENGTH_TOL * max(drawn, 1e-9):
+            arrow.points = np.array([[[0, 0, 0], [0, 0, length]]], np.float32)
+            label.position = (0.0, 0.0, 1.1 * length)
+            self._vectors[key][3] = length
 
     def _build_axes(self, traj) -> None:
         sc, r, semi, I = self.scene, self.root, self._semi, traj.inertia
@@ -585,10 +638,8 @@ class SceneView:
                 w = self.k_omega * traj.omega_inertial[i]
                 Lm = traj.momentum_norm[i]
                 Lv = 1.3 * traj.L_inertial[i] / Lm if Lm > 0 else np.zeros(3)
-                self.omega_arrow.points = np.array([[[0, 0, 0], w]], np.float32)
-                self.L_arrow.points = np.array([[[0, 0, 0], Lv]], np.float32)
-                self._labels[0].position = tuple(float(x) for x in w * 1.1)
-                self._labels[1].position = tuple(float(x) for x in Lv * 1.1)
+                self._set_vector("omega", w)
+                self._set_vector("L", Lv)
         for h, pos in self._markers.values():
             h.position = pos[i]
         if self.extra is not None and self.overlays.get("scenario", True):

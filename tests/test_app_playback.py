@@ -1,0 +1,68 @@
+"""Playback cost (issue 3 frame rate): paths that retrace themselves send far fewer points with
+the picture unchanged, and the ω / L arrows move by pose updates, re-sending geometry rarely."""
+from __future__ import annotations
+
+import numpy as np
+
+from app.scene import REPEAT_CELL, SceneView, drop_repeats, z_to
+from physics.quaternion import rotate
+from physics.scenarios import get
+from tests.test_app_scene import FakeScene
+
+
+def test_drop_repeats_keeps_the_picture_at_every_time():
+    rng = np.random.default_rng(1)
+    th = np.linspace(0, 40 * np.pi, 20000)  # a circle traced 20 times, with a little noise
+    path = np.stack([np.cos(th), np.sin(th), 0 * th], 1) + 1e-4 * rng.standard_normal((len(th), 3))
+    idx = np.arange(len(th), dtype=float)
+    cell = 0.01
+    kept, kidx = drop_repeats(path, idx, cell)
+    assert len(kept) < len(path) / 5  # the retraced laps cost almost nothing
+    assert np.all(np.diff(kidx) > 0) and kidx[0] == 0  # time order, first point kept
+    # every dropped point lies within one cell diagonal of a point kept no later than itself
+    from scipy.spatial import cKDTree
+
+    for t in (500, 3000, 19999):
+        shown = kept[kidx <= t]
+        d, _ = cKDTree(shown).query(path[: t + 1])
+        assert d.max() <= np.sqrt(3) * cell + 1e-12
+    # a path that never comes back keeps all its points
+    line = np.stack([np.linspace(0, 10, 1000), 0 * th[:1000], 0 * th[:1000]], 1)
+    assert len(drop_repeats(line, idx[:1000], cell)[0]) == 1000
+
+
+def test_z_to_turns_z_onto_the_vector():
+    for v in ([1, 2, 3], [0, 0, -5], [0, 0, 2], [1e-3, 0, -1], [-1, 0, 0]):
+        q = np.array(z_to(v))
+        assert np.isclose(np.linalg.norm(q), 1.0)
+        assert np.allclose(rotate(q, [0, 0, 1.0]), np.asarray(v) / np.linalg.norm(v), atol=1e-9)
+
+
+def test_periodic_polhode_sends_fewer_points_and_arrows_move_by_pose():
+    spec = get("middle-axis-flip")
+    res = spec.simulate_fn(spec.resolve({"duration": "100", "step": "0.005"}))  # the bench run
+    scene = FakeScene()
+    view = SceneView(scene)
+    view.show(res, spec)
+    sent = {n: len(h.points) for n, h in view._h.items() if h.kind == "add_point_cloud"}
+    polhode = sum(v for n, v in sent.items() if n.startswith("/world/body/polhode/"))
+    assert polhode < 0.5 * 10000  # 9 flips retrace the same two loops
+    assert len([n for n in sent if n.startswith("/world/body/polhode/")]) == 24
+    # the ω / L arrows: direction by the frame's pose, geometry only when the length changes
+    scene.log.clear()
+    n = len(res.trajectory.t)
+    frames = range(0, n, 10)
+    for i in frames:
+        view.set_frame(i)
+    pts = [e for e in scene.log if e[3] == "points"]
+    poses = [e for e in scene.log if e[3] == "wxyz" and e[2] in ("/world/omega", "/world/L")]
+    assert len(poses) == 2 * len(frames)
+    assert len(pts) < 0.2 * len(poses)
+    # the drawn ω arrow points along ω with the scene's scale (within the length tolerance)
+    i = n // 3
+    view.set_frame(i)
+    fr, arrow = view._h["/world/omega"], view._h["/world/omega/arrow"]
+    drawn = rotate(np.asarray(fr.wxyz), arrow.points[0, 1].astype(float))
+    want = view.k_omega * res.trajectory.omega_inertial[i]
+    assert np.allclose(drawn, want, rtol=0.03, atol=1e-3 * np.linalg.norm(want))
+    assert REPEAT_CELL < 2 / np.sqrt(3)  # a dropped point lies within a drawn point's width (2 × size)
