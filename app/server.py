@@ -470,7 +470,9 @@ class ClientSession:
         if self.plot is not None:
             self.plot.remove()
         with self.plot_folder:
-            self.plot = self.client.gui.add_uplot(data, ser, title=result.scenario, aspect=1.6)
+            # x is the simulation time, not a date (uPlot's default x scale is a clock)
+            self.plot = self.client.gui.add_uplot(data, ser, title=result.scenario, aspect=1.6,
+                                                  scales={"x": {"time": False}})
 
     # ---- playback ----------------------------------------------------------------------------
     def _frame_index(self) -> int:

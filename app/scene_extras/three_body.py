@@ -297,11 +297,11 @@ class Syzygy(_OrbitExtra):
         if not self.values.get("plot_per_amplitude", True) or A <= 0 or not all(k in ps for k in keys):
             return ps
         Ar, c = np.radians(A), self.PLOT_CLIP
-        return {
-            f"η/A simulated (clipped at ±{c:g})": np.clip(np.asarray(ps[keys[0]]) / A, -c, c),
+        return {  # Euler's curve first, the simulation drawn over it
             "η/A Euler: sin αζ": np.asarray(ps[keys[1]]) / A,
-            f"(v/b − 1)/A simulated (clipped at ±{c:g})": np.clip((np.asarray(ps[keys[2]]) - 1) / Ar, -c, c),
+            f"η/A simulated (clipped at ±{c:g})": np.clip(np.asarray(ps[keys[0]]) / A, -c, c),
             "(v/b − 1)/A Euler: −0.3117 cos αζ": (np.asarray(ps[keys[3]]) - 1) / Ar,
+            f"(v/b − 1)/A simulated (clipped at ±{c:g})": np.clip((np.asarray(ps[keys[2]]) - 1) / Ar, -c, c),
         }
 
     def readout_text(self, i: int) -> str:
