@@ -369,7 +369,8 @@ class ClientSession:
         self.timing["start"] = time.perf_counter()
 
         t0 = time.perf_counter()
-        shown = {"t": 0.0, "pct": -1.0}
+        shown = {"t": 0.0, "pct": -1.0, "done": False}
+        bar_lock = threading.Lock()
 
         def progress(frac):
             if self._gen != gen or self._closed:
@@ -383,9 +384,21 @@ class ClientSession:
                 return
             if not np.isfinite(pct) or abs(pct - shown["pct"]) < 0.5:
                 return
-            shown["t"], shown["pct"] = now, pct
-            self._show_progress(pct, f"simulating {name}… {pct:.0f}%")
+            with bar_lock:
+                if shown["done"]:
+                    return
+                shown["t"], shown["pct"] = now, pct
+                self._show_progress(pct, f"simulating {name}… {pct:.0f}%")
 
+        def still_running():  # a long run that reports no progress yet (e.g. a setup phase) shows the bar at 0
+            with bar_lock:
+                if not shown["done"] and shown["pct"] < 0 and self._gen == gen and not self._closed:
+                    shown["pct"] = 0.0
+                    self._show_progress(0.0)
+
+        timer = threading.Timer(PROGRESS_SHOW_AFTER, still_running)
+        timer.daemon = True
+        timer.start()
         try:
             try:
                 result = spec.simulate_fn(values, progress=progress)
@@ -394,8 +407,11 @@ class ClientSession:
                     raise
                 result = spec.simulate_fn(values)
         finally:
-            if shown["pct"] >= 0:
-                self._show_progress(None)
+            timer.cancel()
+            with bar_lock:
+                shown["done"] = True
+                if shown["pct"] >= 0:
+                    self._show_progress(None)
         t_sim = time.perf_counter() - t0
         self.timing["simulated"] = time.perf_counter()
         if self._gen != gen:

@@ -320,5 +320,31 @@ def test_long_run_shows_throttled_progress_then_hides_it(monkeypatch):
         assert values, "no progress shown for a 0.8 s run"
         assert values == sorted(values) and 0 < values[-1] <= 100
         # throttled: at most one update per PROGRESS_EVERY seconds over the ~0.8 s run
-        assert len(values) <= math.ceil(steps * 0.02 / server_mod.PROGRESS_EVERY) + 1
+        assert len(values) <= math.ceil(steps * 0.02 / server_mod.PROGRESS_EVERY) + 2
         assert shown[0] is True and shown[-1] is False and bar.visible is False
+
+
+def test_long_run_without_progress_reports_still_shows_the_bar(monkeypatch):
+    """A run in a phase that reports nothing (e.g. the REBOUND calibration before a long
+    integration) shows the bar at 0 after PROGRESS_SHOW_AFTER and hides it at the end."""
+    from app import server as server_mod
+
+    def silent(values, progress=None):
+        time.sleep(0.6)
+        return get("free-tumble").simulate_fn(get("free-tumble").resolve({"duration": 2.0}))
+
+    spec = scen_base.Scenario("test-silent", "silent", "§0", "ch. 15", "a silent run", (Param("x", 1.0, 0.0, 2.0),),
+                              silent, euler_formula="x = 1", presets=(("Silent: one", {}), ("Silent: two", {"x": 2.0})))
+    monkeypatch.setitem(scen_base.REGISTRY, "test-silent", spec)
+    monkeypatch.setattr(server_mod, "PROGRESS_SHOW_AFTER", 0.1)
+    with _session("test-silent") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        _wait(lambda: s.progress.visible is False)
+        shown = [v for k, v in s.progress.history if k == "visible"]
+        assert shown == [True, False]
+    # a quick run never shows it
+    monkeypatch.setattr(server_mod, "PROGRESS_SHOW_AFTER", 5.0)
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        time.sleep(0.2)
+        assert [v for k, v in s.progress.history if k == "visible"] == []
