@@ -124,7 +124,7 @@ class _Ch16(SceneExtra):
     def _points(self, key, pts, color, size=0.02):
         name = self.name(key)
         pts = _f32(pts)
-        col = _f32(color) if np.ndim(color) == 2 else color
+        col = np.asarray(color, np.uint8) if np.ndim(color) == 2 else color  # per point: uint8 0–255
         return self.node(name, lambda: self.scene.add_point_cloud(name, pts, col, point_size=size,
                                                                   point_shape="circle"), points=pts)
 
@@ -288,12 +288,12 @@ class HyperionExtra(_FAndZeta):
         y1 = max(float(np.max(w)) if len(w) else 3.0, max((p + h for p, h in widths.items()), default=0.0))
         pad = 0.05 * (y1 - y0)
         right, up, look = self._screen()
-        p = Panel(look - 4.1 * right + 0.1 * up, right, up, (0.0, np.pi), (y0 - pad, y1 + pad), size=3.2)
+        p = Panel(look - 4.5 * right + 0.1 * up, right, up, (0.0, np.pi), (y0 - pad, y1 + pad), size=3.2)
         self._segs("section/frame", p.frame(), PANEL_COLOR, 0.01)
         # chaotic (λ > 0.05 per orbit, the scenario's own threshold for chaotic_fraction) red, regular blue
         chaotic = ly > 0.05
         col = np.where(chaotic[:, None], np.array([215, 60, 40]), np.array([40, 90, 200])).astype(np.uint8)
-        self._points("section/points", p.map(th, w), col, 0.014)
+        self._points("section/points", p.map(th, w), col, 0.028)
         lines, labels = [], []
         for q, h in sorted(widths.items()):
             for y in (q - h, q + h):
@@ -302,7 +302,7 @@ class HyperionExtra(_FAndZeta):
             if y0 - pad <= q <= y1 + pad:
                 labels.append((q, h))
         if lines:
-            self._segs("section/resonance_zones", np.concatenate(lines), (20, 150, 60), 0.008)
+            self._segs("section/resonance_zones", np.concatenate(lines), (20, 150, 60), 0.014)
         names = {0.5: "1:2", 1.0: "1:1", 1.5: "3:2", 2.0: "2:1", 2.5: "5:2"}
         for q, h in labels:
             self._label(f"section/res_{q:g}", f"{names.get(q, f'{q:g}')} ± {h:.2f}", p.map(np.pi, q) + 0.25 * right)
@@ -330,7 +330,7 @@ MARIA = (
 BRIGHT_CRATERS = ((-43, -11, 3), (10, -20, 2), (24, -47, 2))  # Tycho, Copernicus, Aristarchus
 
 
-def moon_mesh(count: int = 96) -> trimesh.Trimesh:
+def moon_mesh(count: int = 160) -> trimesh.Trimesh:
     """A unit UV sphere with the near side's maria as dark vertex colours; body x toward the
     Earth (selenographic longitude 0), y east, z north (as physics.moon.mean_frame)."""
     m = trimesh.creation.uv_sphere(radius=1.0, count=[count, count])
@@ -368,20 +368,28 @@ class MoonExtra(_Ch16):
             name = f"{r}/body/moon_surface"
             self.node(name, lambda: self.scene.add_mesh_trimesh(name, mesh, scale=semi, cast_shadow=False,
                                                                 receive_shadow=False), scale=semi)
-        self._eline = None
-        if self.values.get("earth_line", True) and not self.values.get("earth_view", True):
-            self._eline = self._segs("earth_direction", np.zeros((1, 2, 3)), (40, 120, 220), 0.015)
-            # the prime meridian (longitude 0, facing the mean Earth) on the body
-            lat = np.linspace(-np.pi / 2, np.pi / 2, 60)
-            mer = 1.012 * np.stack([np.cos(lat), np.zeros_like(lat), np.sin(lat)], 1) * np.asarray(semi)
+        self._eline = self._light = None
+        if self.values.get("earth_line", True):
+            if not self.values.get("earth_view", True):
+                self._eline = self._segs("earth_direction", np.zeros((1, 2, 3)), (40, 120, 220), 0.015)
+            # the prime meridian and the equator on the body: their crossing (longitude 0, the
+            # mean sub-Earth point) wanders about the disc centre by the libration
+            th = np.linspace(-np.pi / 2, np.pi / 2, 61)
+            mer = np.stack([np.cos(th), np.zeros_like(th), np.sin(th)], 1)
+            equ = np.stack([np.cos(th), np.sin(th), np.zeros_like(th)], 1)
+            segs = _f32(1.01 * np.concatenate([segments(mer), segments(equ)]) * np.asarray(semi))
             name = f"{r}/body/prime_meridian"
-            segs = _f32(segments(mer))
-            self.node(name, lambda: self.scene.add_line_segments(name, segs, (230, 60, 40), thickness=0.012),
+            self.node(name, lambda: self.scene.add_line_segments(name, segs, (230, 60, 40), thickness=0.01),
                       points=segs)
+        if self.values.get("earth_view", True):  # a full Moon: lit from the Earth's side
+            name = self.name("earth_light")
+            self._light = self.node(name, lambda: self.scene.add_light_directional(name, intensity=2.0))
 
     def set_frame(self, i):
         if self._eline is not None:
             self._eline.points = _f32([[[0, 0, 0], 1.9 * self._earth[i]]])
+        if self._light is not None:
+            self._light.position = _tuple(5.0 * self._earth[i])
 
     def bodies(self, traj):
         """Seen from the Earth, the Earth's marker would stand in front of the camera: none."""
@@ -439,10 +447,12 @@ class _PoleExtra(_Ch16):
         axis = _unit(self._pole_axis(traj))
         n = len(axis)
         idx = np.unique(np.linspace(0, n - 1, min(n, 4000)).round().astype(int))
-        # generators of the cone: lines from the centre to the pole path, 24 of them along the run
-        gens = np.linspace(0, n - 1, 24).round().astype(int)
-        segs = np.stack([np.zeros((len(gens), 3)), radius * axis[gens]], 1)
-        self._segs("cone/generators", segs, (120, 160, 230), 0.006)
+        # generators of the cone: lines from near the centre to the pole path, 24 along the run
+        # (none when the camera sits at the centre: they would fill the view)
+        if not self.values.get("pole_view", False):
+            gens = np.linspace(0, n - 1, 24).round().astype(int)
+            segs = np.stack([0.45 * radius * axis[gens], radius * axis[gens]], 1)
+            self._segs("cone/generators", segs, (120, 160, 230), 0.006)
         # the mean cone: the circle at the mean polar angle about the orbit pole
         p, _ = _pole_angles(axis)
         th = np.linspace(0, 2 * np.pi, 181)
@@ -459,7 +469,7 @@ class _PoleExtra(_Ch16):
             self._wig = 1.01 * radius * path
             self._wdot = self._dot("wiggle_now", WIGGLE_COLOR, 0.04)
             mid = self._wig[len(self._wig) // 2]
-            self._label("wiggle_label", f"nutation ×{k:g} (departure from the mean cone magnified)",
+            self._label("wiggle_label", f"nutation ×{k:g}",
                         mid * 1.08 + np.array([0, 0, 0.15]))
 
     def _frame_cone(self, i):
@@ -528,6 +538,11 @@ class EarthExtra(_PoleExtra):
     def build(self, traj, result):
         r = self.view.root
         long_view = result.scenario == "earth-long-view"
+        mesh = self.view._h.get(f"{r}/body/mesh")
+        if mesh is not None:  # the planetarium view looks out through the Earth: hide its mesh
+            want = not self.values.get("pole_view", False)
+            if mesh.visible != want:
+                mesh.visible = want
         R = CELESTIAL_RADIUS
         if self.values.get("stars", True):
             from ..bright_stars import load_bright_stars
@@ -546,7 +561,7 @@ class EarthExtra(_PoleExtra):
             self._build_cone(traj, wiggle=not long_view)
             self._year_marks(traj, R)
         self._frame_lines = None
-        if self.values.get("frame", True):
+        if self.values.get("frame", True) and not self.values.get("pole_view", False):
             th = np.linspace(0, 2 * np.pi, 181)
             eq = 1.08 * np.stack([np.cos(th), np.sin(th), np.zeros_like(th)], 1) * np.asarray(self.view._semi)
             name = f"{r}/body/equator"
@@ -578,10 +593,12 @@ class EarthExtra(_PoleExtra):
         for y in marks:
             i = int(np.argmin(np.abs(t - y)))
             pts.append(R * 1.005 * axis[i])
-            keys.append((int(round(2000 + y)), R * 1.04 * axis[i]))
+            out = np.array([axis[i, 0], axis[i, 1], 0.0])  # away from the ecliptic pole
+            keys.append((int(round(2000 + y)), R * axis[i] + 0.1 * _unit(out)))
         self._points("pole_years/points", np.array(pts), (200, 30, 60), 0.05)
+        every = 1 if self.values.get("pole_view", False) else 2  # the oblique view has less room
         for k, (yr, pos) in enumerate(keys):
-            if k % 2 == 0 or step >= 2000:
+            if k % every == 0 and k < len(keys) - 1 or k == 0:
                 self._label(f"pole_years/{k}", f"AD {yr}", pos)
 
     def set_frame(self, i):
@@ -596,9 +613,14 @@ class EarthExtra(_PoleExtra):
             self._frame_lines.points = segs
 
     def follow_camera(self, traj, i):
-        """Planetarium view: from just above the Earth's centre toward the north ecliptic pole,
-        so the pole's circle of 23.4° and its stars fill the view (the Earth mesh is seen from
-        inside and not drawn)."""
+        """Planetarium view toward the north ecliptic pole from just below the (hidden) Earth, so
+        the pole's circle of 23.4° and its stars fill the view."""
         if not self.values.get("pole_view", False):
             return None
-        return dict(position=(0.0, -0.35, 0.2), look_at=(0.0, 0.55, 2.2), up=(0.0, 1.0, 0.0), fov_deg=70.0)
+        # shifted along the screen's right (−x here) so the circle sits left of the control panel
+        return dict(position=(-0.45, 0.0, -1.2), look_at=(-0.45, 0.0, CELESTIAL_RADIUS), up=(0.0, 1.0, 0.0),
+                    fov_deg=60.0)
+
+    def trail(self, name):
+        """The Moon's direction sampled every few years is a scatter, not a path: no trail."""
+        return not (name == "moon" and self.view._spec is not None and self.view._spec.name == "earth-long-view")
