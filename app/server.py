@@ -104,7 +104,8 @@ def comparison_markdown(result) -> str:
         lines += ["| | Euler says | simulated | modern | unit |", "|---|---|---|---|---|"]
         for c in result.comparisons:
             note = f" ({c.note})" if c.note else ""
-            lines.append(f"| {c.label}{note} | {_fmt(c.euler)} | {_fmt(c.simulated)} | {_fmt(c.modern)} | {c.unit} |")
+            label = (c.label + note).replace("|", "\\|")  # a | in a label (|H(p,e)|) would split the row
+            lines.append(f"| {label} | {_fmt(c.euler)} | {_fmt(c.simulated)} | {_fmt(c.modern)} | {c.unit} |")
         lines.append("")
     if result.metrics:
         lines.append("**Metrics:** " + ", ".join(f"{k} = {_fmt(v)}" for k, v in result.metrics.items()))
