@@ -34,7 +34,7 @@ CAMERAS: dict[str, tuple[Vec, Vec]] = {
     "earth-long-view": ((3.6, -3.2, 4.4), (0.0, 0.0, 0.6)),  # the pole's circle near the top of the sphere
     # three bodies: from above the plane of motion, a little tilted
     "collinear": ((0.0, -0.9, 3.4), (0.0, 0.0, 0.0)),  # from above: L1–L5, zero-velocity curves
-    "syzygy": ((0.8, -0.6, 2.4), (0.8, 0.0, 0.0)),  # co-rotating: Earth, syzygy point, Sun on +x
+    "syzygy": ((0.4, -0.8, 3.1), (0.4, 0.0, 0.0)),  # co-rotating: Sun on +x, both syzygy points in view
     "lunar-perturbation": ((0.9, -3.1, 2.1), (0.0, 0.0, 0.35)),  # oblique: orbit plane, node line, normal
 }
 
