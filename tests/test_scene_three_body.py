@@ -163,3 +163,24 @@ def test_plot_choices_read_the_physics_series():
     assert list(view.extra.plot_series(res)) == [k for k in res.plot_series if not k.startswith("inclination")]
     view.set_option("plot_inclination", True)
     assert list(view.extra.plot_series(res)) == ["inclination (deg)"]
+
+
+def test_orbit_cameras_are_shifted_clear_of_the_panel():
+    """Orbit scenes: camera and look-at point moved by the same vector, to the screen's right
+    (so the scene sits left of the control panel); rotation scenes keep the gallery's view."""
+    from app import gallery
+    from app.server import PANEL_SHIFT, camera_view
+    from physics.scenarios import get
+
+    for name in ("collinear", "syzygy", "lunar-perturbation"):
+        spec = get(name)
+        p0, l0 = (np.array(v, float) for v in gallery.camera_for(spec))
+        p1, l1 = (np.array(v) for v in camera_view(spec))
+        shift = l1 - l0
+        assert np.allclose(p1 - p0, shift)
+        fwd = l0 - p0
+        assert np.linalg.norm(shift) == pytest.approx(PANEL_SHIFT * np.linalg.norm(fwd))
+        assert abs(shift @ fwd) < 1e-9 and abs(shift[2]) < 1e-12
+        assert np.cross(shift, fwd)[2] > 0  # right × forward = up: to the right of the view
+    spec = get("free-tumble")
+    assert camera_view(spec) == tuple(tuple(float(x) for x in v) for v in gallery.camera_for(spec))

@@ -68,7 +68,7 @@ def test_three_body_scene_reaches_the_browser(browser, name, values, options, no
             s.clock = when
             s._show_clock(force=True)
             p.dismiss_software_webgl_note()
-            time.sleep(2.0)
+            time.sleep(4.0)  # labels are WebGL text whose glyphs are built in the page: give them time
             pix = _canvas_pixels(p.page)
             assert pix.std() > 5.0, pix.std()
             SCREENSHOTS.mkdir(parents=True, exist_ok=True)

@@ -190,7 +190,7 @@ class Collinear(_OrbitExtra):
             # markers L1–L5 and the zero-velocity curves, in co-rotating coordinates under `rot`
             for name, (x, y) in pts.items():
                 self.marker(f"rot/L/{name}", (k * x, k * y, 0.0), MARKER_COLOR)
-                self.label(f"rot/L/{name}/label", name, (0.0, 0.0, 0.09))
+                self.label(f"rot/L/{name}/label", name, (0.0, -0.11, 0.0))  # below: clear of the bodies' labels
             if zv is not None:
                 for name, col in LEVEL_COLORS.items():
                     if name in zv["levels"]:
