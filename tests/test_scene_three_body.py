@@ -184,3 +184,21 @@ def test_orbit_cameras_are_shifted_clear_of_the_panel():
         assert np.cross(shift, fwd)[2] > 0  # right × forward = up: to the right of the view
     spec = get("free-tumble")
     assert camera_view(spec) == tuple(tuple(float(x) for x in v) for v in gallery.camera_for(spec))
+
+
+def test_lunar_height_exaggeration_keeps_moon_and_plane_coplanar():
+    scene, view, res = _show("lunar-perturbation", duration_yr="2")
+    view.set_option("exaggerate", True)
+    f = view.extra.EXAGGERATION
+    tr, s = res.trajectory, res.trajectory.series
+    for i in (5, view.n // 3, view.n - 1):
+        view.set_frame(i)
+        q = np.array(view._h["/world/extra/plane"].wxyz)
+        n = quaternion.rotate(q, np.array([0.0, 0.0, 1.0]))
+        moon = view._markers["moon"][1][i]
+        # the Moon lies in the drawn plane to the osculating plane's tolerance (the Moon is in its
+        # osculating plane exactly), and the drawn tilt is atan(f tan i)
+        assert abs(moon @ n) < 1e-6 * np.linalg.norm(moon)
+        assert np.degrees(np.arccos(n[2])) == pytest.approx(np.degrees(np.arctan(f * np.tan(np.radians(
+            s["inclination_deg"][i])))), abs=1e-9)
+        assert f"i = {s['inclination_deg'][i]:.3f}°" in view.extra.readout.text  # the read-out stays true

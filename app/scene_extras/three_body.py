@@ -316,7 +316,9 @@ class Syzygy(_OrbitExtra):
 class LunarPerturbation(_OrbitExtra):
     """The Moon's orbit plane turning: disc, node line, normal and the trace of the normal."""
 
-    options = {"plot_inclination": ("plot the inclination (else node and perigee longitudes)", False)}
+    options = {"plot_inclination": ("plot the inclination (else node and perigee longitudes)", False),
+               "exaggerate": ("heights ×5 (tilt drawn as atan(5 tan i); read-out true)", False)}
+    EXAGGERATION = 5.0
     TRAIL_DAYS = 27.3
     NORMAL_LENGTH = 1.7  # lunar distances: the tip traces a circle of radius 1.7 sin i
 
@@ -325,8 +327,15 @@ class LunarPerturbation(_OrbitExtra):
     def trail(self, name: str) -> bool:
         return name != "moon"  # 40 years of the Moon fill a disc: a one-month trail is drawn instead
 
+    def factor(self) -> float:
+        """Vertical exaggeration: heights above the ecliptic multiplied by f, an affine map that
+        takes a plane of tilt i to one of tilt atan(f tan i), so Moon, trail and disc stay coplanar."""
+        return self.EXAGGERATION if self.values.get("exaggerate", False) else 1.0
+
     def bodies(self, traj):
         b = super().bodies(traj)  # Moon first: the palette's pale yellow, the Earth its green
+        if "moon" in b and self.factor() != 1.0:
+            b["moon"] = b["moon"] * np.array([1.0, 1.0, self.factor()])
         return {k: b[k] for k in sorted(b, key=lambda n: n != "moon")}
 
     def span(self, traj) -> float:
@@ -338,7 +347,9 @@ class LunarPerturbation(_OrbitExtra):
         self.inc = np.radians(np.asarray(s["inclination_deg"], float))
         self.node_lon = np.radians(np.asarray(s["node_longitude_deg"], float))
         moon = np.asarray(traj.bodies["moon"], float)
-        self.moon = (k * moon).astype(np.float32)
+        f = self.factor()
+        self.moon = (k * moon * np.array([1.0, 1.0, f])).astype(np.float32)
+        self.inc_drawn = np.arctan(f * np.tan(self.inc)) if f != 1.0 else self.inc
         R = 1.2 * k * float(np.max(np.linalg.norm(moon, axis=1)))
         # fixed references: the ecliptic circle and the equinox direction
         th = np.linspace(0, 2 * np.pi, 97)
@@ -362,6 +373,9 @@ class LunarPerturbation(_OrbitExtra):
         self.segments_node("plane/normal", [[[0, 0, 0], [0, 0, L]]], (150, 110, 230), 0.008)
         self.label("plane/normal_label", "orbit normal", (0.0, 0.0, 1.05 * L))
         nrm = np.stack([s["orbit_normal_x"], s["orbit_normal_y"], s["orbit_normal_z"]], 1)
+        if f != 1.0:  # the normal of the stretched plane
+            si = np.sin(self.inc_drawn)
+            nrm = np.stack([si * np.sin(self.node_lon), -si * np.cos(self.node_lon), np.cos(self.inc_drawn)], 1)
         idx = self.view._idx
         self.path(self.name("normal_trace"), L * nrm[idx], (150, 110, 230), 0.012, idx=idx)
         self.segments_node("pole", [[[0, 0, 0], [0, 0, 1.1 * L]]], (120, 120, 130), 0.004)
@@ -399,7 +413,7 @@ class LunarPerturbation(_OrbitExtra):
         if getattr(self, "traj", None) is None:
             return
         super().set_frame(i)
-        self.plane.wxyz = rot_zx(self.node_lon[i], self.inc[i])
+        self.plane.wxyz = rot_zx(self.node_lon[i], self.inc_drawn[i])
         self.moon_trail.points = self._trail(i)
         if self.sun_dir is not None:
             self.sun_line.points = np.array([[[0, 0, 0], self.sun_dir[i]]], np.float32)
