@@ -289,6 +289,7 @@ class HyperionExtra(_FAndZeta):
         pad = 0.05 * (y1 - y0)
         right, up, look = self._screen()
         p = Panel(look - 4.5 * right + 0.1 * up, right, up, (0.0, np.pi), (y0 - pad, y1 + pad), size=3.2)
+        self._section_panel = p
         self._segs("section/frame", p.frame(), PANEL_COLOR, 0.01)
         # chaotic (λ > 0.05 per orbit, the scenario's own threshold for chaotic_fraction) red, regular blue
         chaotic = ly > 0.05
@@ -465,6 +466,7 @@ class _PoleExtra(_Ch16):
         self._wig = None
         if wiggle and self.values.get("wiggle", True):
             path, k = magnified_wiggle(traj.t, axis)
+            self.wiggle_factor = k
             self.path(self.name("wiggle"), 1.01 * radius * path[idx], WIGGLE_COLOR, 0.02, idx=idx)
             self._wig = 1.01 * radius * path
             self._wdot = self._dot("wiggle_now", WIGGLE_COLOR, 0.04)
