@@ -98,6 +98,7 @@ class _OrbitExtra(SceneExtra):
     co-rotating frame (children drawn in co-rotating coordinates) and a read-out label."""
 
     skip_bodies: tuple[str, ...] = ()
+    uses_rot = True  # draws children of the co-rotating frame node
 
     def corotating(self, traj) -> bool:
         return bool(self.values.get("corotating", False)) and "frame_angle_rad" in traj.series
@@ -140,7 +141,7 @@ class _OrbitExtra(SceneExtra):
         self.traj, self.result = traj, result
         self.k = self.scale(traj)
         self.theta = np.asarray(traj.series.get("frame_angle_rad", np.zeros(len(traj.t))), float)
-        self.rot = self.rot_frame()
+        self.rot = self.rot_frame() if self.uses_rot else None
         self._rot_wxyz = None
         self.readout = None
         self.build_scene(traj, result)
@@ -155,7 +156,7 @@ class _OrbitExtra(SceneExtra):
         if getattr(self, "traj", None) is None:
             return
         want = (1.0, 0.0, 0.0, 0.0) if self.corotating(self.traj) else rot_z(self.theta[i])
-        if getattr(self, "_rot_wxyz", None) != want:
+        if self.rot is not None and getattr(self, "_rot_wxyz", None) != want:
             self.rot.wxyz = self._rot_wxyz = want
         if self.readout is not None:
             text = self.readout_text(i)
@@ -206,7 +207,6 @@ class Collinear(_OrbitExtra):
             # the line through the three bodies: the bodies start on x and turn with the frame
             P = [np.asarray(traj.bodies[n], float) for n in ("A", "B", "C") if n in traj.bodies]
             ext = 1.15 * k * max(np.max(np.abs(p[:, 0])) for p in P) if P else ORBIT_RADIUS
-            self.line_scale = ext
             self.segments_node("rot/line", [[[-ext, 0, 0], [ext, 0, 0]]], LINE_COLOR, 0.006)
             self.readout = self.label("readout", "", (-ORBIT_RADIUS, ORBIT_RADIUS, 0.0))
 
@@ -322,6 +322,7 @@ class LunarPerturbation(_OrbitExtra):
     TRAIL_DAYS = 27.3
     NORMAL_LENGTH = 1.7  # lunar distances: the tip traces a circle of radius 1.7 sin i
 
+    uses_rot = False
     skip_bodies = ("sun",)  # drawn as a direction from the Earth (its distance is 389 lunar distances)
 
     def trail(self, name: str) -> bool:
