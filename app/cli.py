@@ -193,6 +193,16 @@ def cmd_export(args) -> int:
     return 0
 
 
+def cmd_replay(args) -> int:
+    from app.replay import ReplayError, replay
+
+    try:
+        return replay(args.file, check_only=args.check, web_viewer=args.web_viewer)
+    except ReplayError as e:  # corrupt, truncated or foreign file: one line, exit 2
+        sys.stderr.write(f"theoria: error: {e}\n")
+        return 2
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # argparse's usage errors also exit 2, in one line
         sys.stderr.write(f"theoria: error: {message}\n")
@@ -225,6 +235,12 @@ def build_parser() -> argparse.ArgumentParser:
         else:
             s.add_argument("--out", required=True)
         s.set_defaults(fn=fn)
+
+    s = sub.add_parser("replay", help="open a theoria .rrd (rerun viewer) or .html export; refuses other files")
+    s.add_argument("file")
+    s.add_argument("--check", action="store_true", help="only validate the file (exit 0 if it is theoria's)")
+    s.add_argument("--web-viewer", action="store_true", help="rerun's web viewer instead of the native one")
+    s.set_defaults(fn=cmd_replay)
 
     s = sub.add_parser("check", help="every result of Euler's: Euler / simulated / modern")
     s.add_argument("ids", nargs="*")

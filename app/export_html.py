@@ -19,6 +19,9 @@ from .scene import SceneView
 from .server import camera_position, configure_lighting
 
 FRAMES = 240  # frames in the replay
+# identifies theoria's own export (checked by `theoria replay FILE.html`, app/replay.py)
+MARKER = '<meta name="generator" content="theoria export_html" data-theoria-scenario="{name}" />'
+
 FPS = 30.0
 
 
@@ -50,6 +53,7 @@ def export_result(result, spec, out: str, frames: int = FRAMES, fps: float = FPS
     finally:
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
+    html = html.replace("<head>", "<head>\n    " + MARKER.format(name=spec.name), 1)
     with open(out, "w", encoding="utf-8") as f:
         f.write(html)
     return {"path": out, "frames": int(len(idx)), "bytes": len(html.encode())}

@@ -21,11 +21,20 @@ class ParameterError(ValueError):
 
 
 def _show(value: Any) -> str:
+    """The value as it appears in the one-line message: control characters escaped, long text
+    (a 400-digit integer, a pasted paragraph) cut to SHOW_MAX characters (found by tests/test_fuzz.py)."""
     if isinstance(value, (list, tuple)):
-        return ",".join(_show(v) for v in value)
-    if isinstance(value, float):
-        return f"{value:g}"
-    return str(value)
+        text = ",".join(_show(v) for v in value)
+    elif isinstance(value, float):
+        text = f"{value:g}"
+    else:
+        text = str(value)
+    if not text.isprintable():
+        text = repr(text)[1:-1]
+    return text if len(text) <= SHOW_MAX else text[: SHOW_MAX - 1] + "…"
+
+
+SHOW_MAX = 60
 
 
 @dataclass(frozen=True)
@@ -84,6 +93,8 @@ class Param:
     def _number(self, part: Any, whole: Any) -> float:
         try:
             v = float(part)
+        except OverflowError:  # an int beyond float range (10**400): as infinite as "inf"
+            raise ParameterError(self.name, whole, "a finite number, " + self.allowed()) from None
         except (TypeError, ValueError):
             raise ParameterError(self.name, whole, "a number, " + self.allowed()) from None
         if not math.isfinite(v):

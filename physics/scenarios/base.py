@@ -40,6 +40,14 @@ class Result:
     plot_series: dict[str, np.ndarray] = field(default_factory=dict)
     # data for drawing that is not a time series (e.g. a zero-velocity grid): name → anything
     extras: dict[str, Any] = field(default_factory=dict)
+    # "ok", or "diverged": non-finite values appeared at some time and only the finite part before
+    # it is kept (set by `guard_result`, which every Scenario.simulate_fn goes through)
+    status: str = "ok"
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def diverged(self) -> bool:
+        return self.status == "diverged"
 
     def to_json(self, spec: "Scenario") -> dict:
         out = {
@@ -60,6 +68,8 @@ class Result:
                 for c in self.comparisons
             ],
             "notes": list(self.notes),
+            "status": self.status,
+            "warnings": list(self.warnings),
         }
         if self.trajectory is not None and spec.kind == "rotation":
             out["final_state"] = self.trajectory.final_state()
@@ -81,6 +91,89 @@ def _jsonable(v):
     return v
 
 
+DIVERGENCE_LIMIT = 1e100  # |x| beyond this in a trajectory is an overflow in the making, not physics
+
+
+class Diverged(ParameterError):
+    """The run has no finite sample at all: these parameter values cannot be simulated."""
+
+
+def _first_bad(a) -> int | None:
+    """Index of the first sample (axis 0) holding a non-finite or absurdly large value."""
+    a = np.asarray(a)
+    if a.ndim == 0 or a.size == 0 or not np.issubdtype(a.dtype, np.number):
+        return None
+    flat = a.reshape(len(a), -1)
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(flat) | (np.abs(flat) > DIVERGENCE_LIMIT)
+    rows = np.flatnonzero(bad.any(axis=1))
+    return int(rows[0]) if rows.size else None
+
+
+def guard_result(result):
+    """Divergence check applied centrally to every scenario's result (issue 7, faults).
+
+    A run in which NaN, ±inf or values beyond DIVERGENCE_LIMIT appear (a step too large, a body
+    thrown out, an overflow) is not drawn as garbage: the trajectory and the plot series are cut
+    just before the first bad sample, `status` becomes "diverged", and a warning "diverged at
+    t=..." goes into `warnings` and `notes` (the app shows the notes beside the scene; the JSON
+    carries status and warnings). With no finite sample at all, `Diverged` (a ParameterError)
+    is raised: the CLI exits 2 with one line, the app keeps the last good state.
+    """
+    import dataclasses
+
+    tr = getattr(result, "trajectory", None)
+    if not isinstance(result, Result) or tr is None:
+        return result
+    n = len(tr.t)
+    per_sample = {"t": tr.t, "attitude": tr.quat_wxyz, "angular momentum": tr.L_body, "ω": tr.omega_body}
+    per_sample.update({f"position of {k}": v for k, v in tr.bodies.items()})
+    per_sample.update({f"series {k}": v for k, v in tr.series.items()})
+    per_sample.update({f"plot {k}": v for k, v in result.plot_series.items()})
+    first: dict[str, int] = {}
+    for name, arr in per_sample.items():
+        arr = np.asarray(arr)
+        if arr.ndim >= 1 and len(arr) == n:
+            k = _first_bad(arr)
+            if k is not None:
+                first[name] = k
+    if not first:
+        return result
+    k = min(first.values())
+    what = ", ".join(name for name, i in first.items() if i == k)
+    t_bad = tr.t[k] if np.isfinite(tr.t[k]) else (tr.t[k - 1] if k > 0 else float("nan"))
+    unit = tr.time_unit
+    if k == 0:
+        raise Diverged("parameters", "these values",
+                       f"diverged at the start (non-finite {what}); try a smaller step or less extreme values")
+
+    def cut(d):
+        return {key: (np.asarray(v)[:k] if np.ndim(v) >= 1 and len(v) == n else v) for key, v in d.items()}
+
+    result.trajectory = dataclasses.replace(
+        tr, t=tr.t[:k], quat_wxyz=tr.quat_wxyz[:k], L_body=tr.L_body[:k], bodies=cut(tr.bodies), series=cut(tr.series))
+    result.plot_series = cut(result.plot_series)
+    msg = (f"diverged at t={t_bad:.6g} {unit}: non-finite or overflowing {what}; showing the finite part "
+           f"up to t={tr.t[k - 1]:.6g} {unit} ({k} of {n} samples)")
+    result.status = "diverged"
+    result.warnings.append(msg)
+    result.notes.append(msg)
+    return result
+
+
+def _guarded(fn):
+    if getattr(fn, "__theoria_guarded__", False):
+        return fn
+    import functools
+
+    @functools.wraps(fn)
+    def simulate_fn(values, *args, **kwargs):
+        return guard_result(fn(values, *args, **kwargs))
+
+    simulate_fn.__theoria_guarded__ = True
+    return simulate_fn
+
+
 @dataclass(frozen=True)
 class Scenario:
     name: str
@@ -97,6 +190,10 @@ class Scenario:
     # named starting points, each named after what it shows ("Brick: the flip"): (name, {param: value});
     # the values are partial (the rest keep their defaults) and go through `resolve` like any input
     presets: tuple[tuple[str, dict[str, Any]], ...] = ()
+
+    def __post_init__(self):
+        # every caller (CLI, app, record, export, tests) gets the central divergence check
+        object.__setattr__(self, "simulate_fn", _guarded(self.simulate_fn))
 
     def resolve(self, given: dict[str, Any] | None = None) -> dict[str, Any]:
         values = resolve(self.params, given)
