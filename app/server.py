@@ -206,7 +206,7 @@ class ClientSession:
                 self._set_camera(self.spec)
             return
         self._following = True
-        if "fov_deg" in want and abs(cam.fov - np.radians(want["fov_deg"])) > 1e-6:
+        if "fov_deg" in want and abs(getattr(cam, "fov", 0.0) - np.radians(want["fov_deg"])) > 1e-6:
             cam.fov = np.radians(want["fov_deg"])
         cam.up_direction = want.get("up", (0.0, 0.0, 1.0))
         cam.position = want["position"]

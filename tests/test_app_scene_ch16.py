@@ -147,6 +147,10 @@ def test_moon_view_from_the_earth(results):
         assert np.linalg.norm(pos) > 1.0 and cam["look_at"] == (0.0, 0.0, 0.0)
     # seen from the Earth the Earth's own marker would block the view: not drawn
     assert not [n for n in view._h if n.startswith("/world/bodies/")]
+    # the time plot: one unit at a time (degrees for the face, arcseconds for the physical libration)
+    assert set(ex.plot_series(res)) == {"libration_longitude_deg", "libration_latitude_deg", "ζ, Euler §833 (deg)"}
+    view.set_option("plot_physical", True)
+    assert set(ex.plot_series(res)) == {"physical_libration_arcsec", "physical_libration_euler_arcsec"}
     view.set_option("earth_view", False)
     assert ex.follow_camera(traj, 0) is None
     assert [n for n in view._h if n.startswith("/world/bodies/")]
@@ -224,3 +228,25 @@ def test_earth_stars_and_frame(results):
     assert cam is not None and cam["look_at"][2] > 2.0
     view.set_option("pole_view", False)
     assert view._h["/world/body/mesh"].visible is True and view.extra.follow_camera(res.trajectory, 0) is None
+
+
+def test_session_applies_the_moons_camera_and_gives_the_view_back():
+    """app/server.py ClientSession with the fake viser client of tests/test_gallery.py: the
+    camera follows the Earth's direction while "view from the Earth" is on."""
+    from test_gallery import _session, _wait
+
+    with _session("moon") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        with s._view_lock:
+            s.view.set_frame(17)
+            s._follow_camera()
+            e = s.result.trajectory.bodies["earth"][17]
+            pos = np.asarray(client.camera.position, float)
+            assert np.allclose(pos / np.linalg.norm(pos), e / np.linalg.norm(e), atol=1e-9)
+            assert client.camera.fov == pytest.approx(np.radians(ch16.MoonExtra.FOV_DEG))
+            # the plot shows the extra's choice (degrees of the wobbling face)
+            assert "ζ, Euler §833 (deg)" in s._plot_key
+            cb = [h for h in s._option_handles if h.label.startswith("view from the Earth")][0]
+            cb.value = False  # the checkbox's callback: option off → default camera and fov back
+            assert client.camera.fov == pytest.approx(np.radians(75.0))
+            assert tuple(client.camera.position) != tuple(pos)

@@ -355,7 +355,8 @@ def moon_mesh(count: int = 160) -> trimesh.Trimesh:
 class MoonExtra(_Ch16):
     options = {"earth_view": ("view from the Earth (camera follows)", True),
                "maria": ("maria on the Moon", True),
-               "earth_line": ("direction to the Earth + sub-Earth meridian", True)}
+               "earth_line": ("direction to the Earth + sub-Earth meridian", True),
+               "plot_physical": ("time plot: physical libration (″) instead of the face's wobble (°)", False)}
     FOV_DEG = 60.0
     EYE = 2.3  # camera distance in Moon radii (drawn 1): the disc spans ~52° of the 60° view
 
@@ -391,6 +392,20 @@ class MoonExtra(_Ch16):
             self._eline.points = _f32([[[0, 0, 0], 1.9 * self._earth[i]]])
         if self._light is not None:
             self._light.position = _tuple(5.0 * self._earth[i])
+
+    def plot_series(self, result):
+        """One y axis: either the wobbling face in degrees (sub-Earth longitude = the scenario's ζ,
+        latitude, and Euler's ζ converted to degrees) or the physical libration in arcseconds
+        with Euler's formula (§833, §836)."""
+        ps = result.plot_series
+        if self.values.get("plot_physical", False):
+            keys = ("physical_libration_arcsec", "physical_libration_euler_arcsec")
+            return {k: ps[k] for k in keys if k in ps}
+        # (the uniform-rotation curves differ from these by < 0.04°: drawn they would hide each other)
+        out = {k: ps[k] for k in ("libration_longitude_deg", "libration_latitude_deg") if k in ps}
+        if "zeta_euler_rad" in ps:
+            out["ζ, Euler §833 (deg)"] = np.degrees(ps["zeta_euler_rad"])
+        return out or dict(ps)
 
     def bodies(self, traj):
         """Seen from the Earth, the Earth's marker would stand in front of the camera: none."""
