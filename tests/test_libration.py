@@ -313,8 +313,15 @@ def test_hyperion_chaotic_sea_and_regular_island():
     assert per_orbit[1] > 0.2  # chaotic: e-folding in a few orbits
     assert per_orbit[0] < 0.05 * per_orbit[1]
     r = get("hyperion").simulate({"n_starts": 20, "n_orbits": 100, "probe_orbits": 2})
+    assert r.status == "ok" and not r.warnings  # the central divergence guard found nothing to cut
     assert 0 < r.metrics["chaotic_fraction"] < 1
-    assert len(r.plot_series["section_theta_dot"]) == len(r.trajectory.t)
+    sec = r.extras["section"]
+    assert sec["theta_mod_pi"].shape == sec["theta_dot"].shape == (20, 100) and sec["lyapunov_per_orbit"].shape == (20,)
+    assert np.all(np.isfinite(sec["theta_mod_pi"])) and np.all(np.isfinite(sec["theta_dot"]))
+    assert np.all((sec["theta_mod_pi"] >= 0) & (sec["theta_mod_pi"] < np.pi))
+    # the flat plot_series copy: the same points, start by start, no NaN separator
+    assert np.array_equal(r.plot_series["section_theta_dot"], sec["theta_dot"].ravel())
+    assert all(np.all(np.isfinite(v)) for v in r.plot_series.values())
     # the synchronous, 1:2 and 2:1 islands survive at Hyperion's ω₀ (followed from the GP centres)
     for p in (0.5, 1.0, 2.0):
         assert abs(r.metrics[f"island_trace_{p:g}"]) < 2, p
@@ -324,8 +331,17 @@ def test_hyperion_chaotic_sea_and_regular_island():
     q = r.trajectory.quat_wxyz
     theta = np.unwrap(2 * np.arctan2(q[:, 3], q[:, 0]))
     k = np.argmin(np.abs(t[:, None] - 2 * np.pi * np.arange(1, 3)[None, :]), axis=0)
+    assert np.max(np.abs(t[k] - 2 * np.pi * np.arange(1, 3))) < 1e-9  # the periapse passages are stored samples
     T, _ = lib.spin_orbit_section([0.0], [1.4], e, w0, 2, 128)
     assert np.max(np.abs(theta[k] - T[0])) < 1e-5
+
+
+def test_hyperion_at_euler_resonance_omega0_1_has_no_euler_curve_and_does_not_diverge():
+    """ω₀ = 1 is Euler's A² = 2N: his 2e/(1 − ω₀²) is infinite, so the curve is left out (not NaN)."""
+    r = get("hyperion").simulate({"omega0": 1.0, "n_starts": 4, "n_orbits": 10, "probe_orbits": 1})
+    assert r.status == "ok" and "zeta_euler_rad" not in r.plot_series
+    assert any("A² = 2N" in n for n in r.notes)
+    assert all(np.all(np.isfinite(v)) for v in r.plot_series.values())
 
 
 # ------------------------------------------------------------------ the Moon

@@ -75,27 +75,42 @@ def _hyperion(values, progress=None):
         m[f"island_trace_{p:g}"] = float(tr)
         if np.isfinite(tr):
             islands.append(f"{p:g}: θ̇/n = {wd_i:.3f} at θ = {th_i:.2f} ({'stable island' if abs(tr) < 2 else 'unstable (no island)'})")
-    # Euler's §833 first-order forced libration ζ = 2e/(1 − ω₀²)·sin M (fails here: ω₀ ~ 1, e = 0.1)
-    z_euler = 2 * e / (1 - w0**2) * np.sin(t) if abs(1 - w0**2) > 1e-9 else np.full_like(t, np.nan)
-    nan = np.array([np.nan])
-    sec_th = np.concatenate([np.remainder(T, np.pi).ravel(), nan])
-    sec_w = np.concatenate([W.ravel(), nan])
-    series = {"zeta_rad": zeta, "zeta_euler_rad": z_euler,
-              "section_theta_mod_pi": sec_th, "section_theta_dot": sec_w,
-              "section_start_index": np.concatenate([np.repeat(np.arange(ns, dtype=float), no), nan]),
-              "section_lyapunov_per_orbit": np.concatenate([np.repeat(lyap * P, no), nan])}
+    # Euler's §833 first-order forced libration ζ = 2e/(1 − ω₀²)·sin M (fails here: ω₀ ~ 1, e = 0.1);
+    # at ω₀ = 1 (his resonance A² = 2N) the formula has no value: the curve is left out, not NaN
+    euler_applies = abs(1 - w0**2) > 1e-9
+    series = {"zeta_rad": zeta}
+    if euler_applies:
+        series["zeta_euler_rad"] = 2 * e / (1 - w0**2) * np.sin(t)
+    # the surface of section is a point cloud, not a time series: per start (n_starts, n_orbits)
+    # arrays in extras, and (for the ch. 16 scene) flattened start by start in plot_series —
+    # n_starts·n_orbits points, no NaN separators (the divergence guard reads NaN as divergence)
+    theta_mod_pi = np.remainder(T, np.pi)
+    extras = {"section": {
+        "theta_mod_pi": theta_mod_pi, "theta_dot": np.asarray(W, float),
+        "lyapunov_per_orbit": np.asarray(lyap * P, float),
+        "start_theta": np.asarray(th0, float), "start_theta_dot": np.asarray(wd0, float),
+    }}
+    series.update({"section_theta_mod_pi": theta_mod_pi.ravel(), "section_theta_dot": np.asarray(W, float).ravel(),
+                   "section_start_index": np.repeat(np.arange(ns, dtype=float), no),
+                   "section_lyapunov_per_orbit": np.repeat(lyap * P, no)})
     traj.series.update({"zeta_rad": zeta})
     comps = [Comparison(f"resonance θ̇/n = {p:g}: half-width ω₀√|H(p,e)|", None, None,
                         m[f"gp_half_width_{p:g}"], "n", "Goldreich & Peale 1966") for p in RESONANCES]
     comps.append(Comparison("Lyapunov exponent of the probe start", None, m["lyapunov_probe_per_orbit"], None,
                             "1/orbit", "nearby starts in the chaotic sea separate by a factor e every 1/λ orbits"))
     notes = ["Periodic orbits followed from Goldreich & Peale's centres (small ω₀) to these values — " + "; ".join(islands),
-             "section_* series are a point cloud (n_starts × n_orbits points at periapse, then one NaN), "
-             "not a time series: plot section_theta_dot against section_theta_mod_pi, coloured by "
-             "section_lyapunov_per_orbit. Draw the resonance zones θ̇/n = p ± gp_half_width_p.",
-             "Euler's linear forced libration (§833) is drawn as zeta_euler_rad: for Hyperion it fails "
-             "completely (ω₀ ≈ 1 is near his resonance A² = 2N, and ζ is not small)."]
-    return Result("hyperion", values, traj, m, comps, notes, plot_series=series)
+             "The surface of section is a point cloud, not a time series: extras['section'] holds "
+             "theta_mod_pi and theta_dot as (n_starts, n_orbits) arrays (one row per start, periapse "
+             "passages in order) and lyapunov_per_orbit (n_starts,); plot theta_dot against theta_mod_pi, "
+             "coloured by lyapunov_per_orbit. (The same points flattened start by start, n_starts·n_orbits "
+             "long, are in plot_series section_*.) Draw the resonance zones θ̇/n = p ± gp_half_width_p."]
+    if euler_applies:
+        notes.append("Euler's linear forced libration (§833) is drawn as zeta_euler_rad: for Hyperion it fails "
+                     "completely (ω₀ ≈ 1 is near his resonance A² = 2N, and ζ is not small).")
+    else:
+        notes.append("ω₀ = 1 is Euler's resonance A² = 2N: his forced libration 2e/(1 − ω₀²)·sin M is "
+                     "infinite there, so no Euler curve is drawn.")
+    return Result("hyperion", values, traj, m, comps, notes, plot_series=series, extras=extras)
 
 
 register(Scenario(

@@ -236,8 +236,12 @@ def _libration_circular(values, progress=None):
     traj.series.update(series)
     notes.append("plot_series: ζ(t) with Euler's small-oscillation curve; the phase portrait is "
                  "(zeta_rad, zeta_dot); the separatrix is the parametric curve "
-                 "(separatrix_zeta_rad, separatrix_zeta_dot_±) — not a time series.")
-    return Result("libration-circular", values, traj, m, comps, notes, plot_series=series)
+                 "(separatrix_zeta_rad, separatrix_zeta_dot_±) — not a time series; the same curve is in "
+                 "extras['separatrix'] (zeta_rad, zeta_dot_plus, zeta_dot_minus).")
+    extras = {"separatrix": {"zeta_rad": series["separatrix_zeta_rad"],
+                             "zeta_dot_plus": series["separatrix_zeta_dot_plus"],
+                             "zeta_dot_minus": series["separatrix_zeta_dot_minus"]}}
+    return Result("libration-circular", values, traj, m, comps, notes, plot_series=series, extras=extras)
 
 
 register(Scenario(
