@@ -23,7 +23,8 @@ def vis_viva(omega_body, inertia):
 
 def axis_and_speed_rates(omega_body, inertia, torque=(0.0, 0.0, 0.0)):
     """§803 (§805 when the torque is zero): the rates of the angular speed γ' and of the arcs
-    α, β, γ from the pole of rotation to the principal axes. Returns (dγ'/dt, dα/dt, dβ/dt, dγ/dt).
+    α, β, γ from the pole of rotation to the principal axes. Returns (dγ'/dt, dα/dt, dβ/dt, dγ/dt),
+    each of the shape of omega_body[..., 0].
 
     dγ' = (cc−bb)(aa−cc)(bb−aa)/(aabbcc) γ'² cos α cos β cos γ dt + (P cos α/A + Q cos β/B + R cos γ/C) dt
     γ' dα sin α = (cc−bb)/aa γ'² cos β cos γ (1 + (aa−cc)(bb−aa)/(bbcc) cos²α) dt
@@ -32,9 +33,9 @@ def axis_and_speed_rates(omega_body, inertia, torque=(0.0, 0.0, 0.0)):
     """
     A, B, C = validate_moments(inertia)
     w = np.asarray(omega_body, float)
-    P, Q, R = np.asarray(torque, float)
-    g = np.linalg.norm(w)
-    ca, cb, cc_ = w / g
+    P, Q, R = np.moveaxis(np.broadcast_to(np.asarray(torque, float), w.shape), -1, 0)
+    g = np.linalg.norm(w, axis=-1)
+    ca, cb, cc_ = np.moveaxis(w, -1, 0) / g
     sa2, sb2, sc2 = 1 - ca * ca, 1 - cb * cb, 1 - cc_ * cc_
     dg = (C - B) * (A - C) * (B - A) / (A * B * C) * g * g * ca * cb * cc_ + (P * ca / A + Q * cb / B + R * cc_ / C)
     da = ((C - B) / A * g * g * cb * cc_ * (1 + (A - C) * (B - A) / (B * C) * ca * ca)
@@ -67,9 +68,11 @@ def initial_axis_angles_807(torque, inertia):
     tan ϑ = R·aa/(P·cc)·cos η, with cos α = cos η cos ϑ, cos β = −sin η cos ϑ, cos γ = sin ϑ.
     Returns (η, ϑ)."""
     A, B, C = validate_moments(inertia)
-    P, Q, R = np.asarray(torque, float)
+    P, Q, R = np.moveaxis(np.asarray(torque, float), -1, 0)
     eta = np.arctan2(-Q * A, P * B)
-    theta = np.arctan(R * A / (P * C) * np.cos(eta)) if P != 0 else np.sign(R) * np.pi / 2
+    # tan ϑ = R·aa/(P·cc)·cos η written so that P = 0 needs no special case:
+    # cos ϑ ∝ √((P/A)² + (Q/B)²), sin ϑ ∝ R/C
+    theta = np.arctan2(R / C, np.hypot(P / A, Q / B))
     return eta, theta
 
 

@@ -43,6 +43,9 @@ def test_803_rates_of_axis_and_speed(torque):
     dg, da, db, dc = axis_and_speed_rates(w, I, torque)
     assert dg == pytest.approx(gd, rel=1e-13)
     assert np.allclose([da, db, dc], ang_d, rtol=1e-12)
+    # arrays of states broadcast
+    dgs = axis_and_speed_rates(np.stack([w, 2 * w]), I, torque)[0]
+    assert dgs.shape == (2,) and dgs[0] == pytest.approx(gd, rel=1e-13)
 
 
 def test_806_initial_axis_and_807_angles():
@@ -51,8 +54,10 @@ def test_806_initial_axis_and_807_angles():
     wd = omega_dot(np.zeros(3), I, tau)  # Euler's equations at rest
     assert np.allclose(axis, wd / np.linalg.norm(wd))
     assert acc == pytest.approx(np.linalg.norm(wd))
-    eta, th = initial_axis_angles_807(tau, I)
-    assert np.allclose([np.cos(eta) * np.cos(th), -np.sin(eta) * np.cos(th), np.sin(th)], axis)
+    for tq in (tau, np.array([0.0, 1.0, 1.0]), np.array([-0.5, 0.0, -2.0])):  # P = 0 and P < 0 too
+        ax, _ = initial_axis(tq, I)
+        eta, th = initial_axis_angles_807(tq, I)
+        assert np.allclose([np.cos(eta) * np.cos(th), -np.sin(eta) * np.cos(th), np.sin(th)], ax)
     with pytest.raises(ValueError):
         initial_axis((0, 0, 0), I)
 
