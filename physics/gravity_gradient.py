@@ -34,11 +34,15 @@ def torque_first_order(inertia, s_body, gm=1.0):
 
 def torque_euler_components(inertia, s, cosines, gm=1.0):
     """§815 in Euler's own form: (P, Q, R) from the distance s and the direction cosines
-    (cos ζ, cos η, cos ϑ) of IF with the axes A, B, C. P = 3GM(C−B)cos η cos ϑ/s³ etc."""
+    (cos ζ, cos η, cos ϑ) of IF with the axes A, B, C. P = 3GM(C−B)cos η cos ϑ/s³ etc.
+
+    Broadcasts: s (...) and cosines (..., 3) (the last axis holds cos ζ, cos η, cos ϑ, as in
+    `torque_first_order`) give (..., 3)."""
     A, B, C = np.asarray(inertia, float)
-    cz, ce, ct = cosines
-    f = 3.0 * gm / s**3
-    return np.array([f * (C - B) * ce * ct, f * (A - C) * cz * ct, f * (B - A) * cz * ce])
+    cos = np.asarray(cosines, float)
+    cz, ce, ct = cos[..., 0], cos[..., 1], cos[..., 2]
+    f = 3.0 * gm / np.asarray(s, float) ** 3
+    return np.stack([f * (C - B) * ce * ct, f * (A - C) * cz * ct, f * (B - A) * cz * ce], axis=-1)
 
 
 def extra_force_first_order(inertia, s_body, gm=1.0):
@@ -134,7 +138,9 @@ def starting_axis(inertia, torque):
     axis (cos α, cos β, cos γ) and the rate |ω̇| = √(P²/A² + Q²/B² + R²/C²).
 
     The translation's "cos α = P/aa · √(…)" must read "P/aa : √(…)" (a division), else the
-    cosines would not be unit. Euler's dγ' = (2g dt/M)·√(…) is |ω̇|dt in his units."""
+    cosines would not be unit. Euler's dγ' = (2g dt/M)·√(…) is |ω̇|dt in his units.
+    Broadcasts: torque (..., 3) gives axis (..., 3) and rate (...) (a float for one torque)."""
     w = np.asarray(torque, float) / np.asarray(inertia, float)
-    rate = float(np.linalg.norm(w))
-    return (w / rate if rate > 0 else w), rate
+    rate = np.linalg.norm(w, axis=-1)
+    axis = np.divide(w, rate[..., None], out=np.zeros_like(w), where=rate[..., None] > 0)
+    return axis, (float(rate) if rate.ndim == 0 else rate)

@@ -9,7 +9,10 @@ Sources (values used below):
   orbit's ascending node Ω; the ecliptic pole lies between the spin pole and the orbit pole.
 - The Moon's geocentric position: the main terms of the ELP-2000/82 truncation in Meeus ch. 47
   (Tables 47.A/B, fundamental arguments of eq. 47.1–47.7), good to ~10″; referred to the fixed
-  ecliptic of J2000 by removing the general precession in longitude (5029.0966″/century).
+  ecliptic of J2000 by removing the general precession in longitude, 5029.0966″/century: the
+  IAU 1976 value (Lieske et al. 1977, A&A 58, 1) that Meeus uses (eq. 21.5 and ch. 47). IAU 2006
+  (Capitaine et al. 2003, P03) has p_A = 5028.796195″/century; the 0.3″/century difference moves
+  the Moon by < 0.1″ within a century of J2000, far below this truncation's ~10″.
 - Optical libration in longitude and latitude: Meeus ch. 53 (l', b' for a uniformly rotating
   Moon in the Cassini state); maxima about ±7.9° and ±6.8° over the 18.6-yr cycle.
 - Physical libration in longitude τ: Meeus ch. 53 after Eckhardt (1981, Moon & Planets 25, 3):
@@ -32,7 +35,7 @@ I_EQUATOR_DEG = 1.54242  # mean lunar equator to ecliptic, IAU / Meeus ch. 53
 GM_EARTH_KM3_S2 = 398600.4418  # IERS 2010 conventions
 DAY_S = 86400.0
 GM_EARTH = GM_EARTH_KM3_S2 * DAY_S**2  # km³/day²
-PRECESSION_DEG_PER_CY = 5029.0966 / 3600.0  # general precession in longitude (IAU 2006)
+PRECESSION_DEG_PER_CY = 5029.0966 / 3600.0  # general precession in longitude, IAU 1976 (Lieske 1977), as in Meeus
 MEEUS_TAU_MPRIME_DEG = -0.00467  # physical libration in longitude, sin M′ (Meeus ch. 53, Eckhardt 1981)
 MEEUS_TAU_ANNUAL_DEG = 0.02520  # ... E sin M
 OPTICAL_MAX_LON_DEG = 7.9  # published maxima of the optical libration

@@ -40,6 +40,16 @@ def test_first_order_torque_in_euler_components_and_zero_for_equal_moments():
     r = np.linalg.norm(s)
     assert np.allclose(torque_first_order(I, s, 7.0), torque_euler_components(I, r, s / r, 7.0), rtol=1e-14)
     assert np.max(np.abs(torque_first_order([2, 2, 2], s, 7.0))) < 1e-18  # §817
+    # arrays broadcast: N positions at once give the same rows as one at a time
+    S = np.array([[3.0, -1.0, 2.0], [1.0, 2.0, -0.5], [0.2, 0.0, 5.0]]) * 10
+    R = np.linalg.norm(S, axis=1)
+    tau = torque_euler_components(I, R, S / R[:, None], 7.0)
+    assert tau.shape == (3, 3)
+    assert np.allclose(tau, [torque_euler_components(I, r_, s_ / r_, 7.0) for r_, s_ in zip(R, S)], rtol=1e-15)
+    assert np.allclose(tau, torque_first_order(I, S, 7.0), rtol=1e-14)
+    axes, rates = starting_axis(I, tau)
+    assert axes.shape == (3, 3) and rates.shape == (3,)
+    assert np.allclose(rates, [starting_axis(I, t_)[1] for t_ in tau], rtol=1e-15)
 
 
 def test_first_order_torque_error_is_second_order_in_size_over_distance():
