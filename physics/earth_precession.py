@@ -25,6 +25,7 @@ Constants and their sources
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -115,13 +116,15 @@ def moon_semi_major_axis(month=SIDEREAL_MONTH):
     return (GM_SUN * M_EMB / n ** 2) ** (1 / 3)
 
 
+@functools.lru_cache(maxsize=8)
 def calibrated_moon_elements(month=SIDEREAL_MONTH, span_days=4 * 365.25, iterations=3):
     """Osculating (a, e, i) at J2000 whose integrated Moon has the observed mean sidereal month,
     mean eccentricity and mean inclination (osculating and mean elements differ by the Sun's
     periodic perturbations, and the Sun lengthens the mean month): fixed-point iteration
     a ← a·(n_sim/n_obs)^(2/3), e ← e + (e_obs − ē_sim), i ← i + (i_obs − ī_sim). Only these
     three are fitted; the node regression, the perigee motion and the mean distance come out of
-    the integration."""
+    the integration. Cached (a few REBOUND runs of `span_days`): the result is a tuple of floats
+    that depends on the arguments only."""
     a = moon_semi_major_axis(month)
     e, inc = MOON_J2000["e"], math.radians(MOON_J2000["inc"])
     target = 2 * np.pi / month

@@ -78,14 +78,20 @@ class PoleRates:
     """Euler §840: rates of change of the spin γ' and of the arcs β = OB, γ = OC from the pole
     of rotation O (close to the principal pole A) to the principal poles B, C."""
 
-    dspin_dt: float  # dγ'/dt
-    dbeta_dt: float  # dβ/dt
-    dgamma_dt: float  # dγ/dt
+    dspin_dt: np.ndarray  # dγ'/dt (scalar for scalar inputs)
+    dbeta_dt: np.ndarray  # dβ/dt
+    dgamma_dt: np.ndarray  # dγ/dt
 
     @property
     def pole_speed(self) -> float:
         """|Oo|/dt = √(dβ² + dγ²)/dt (§840)."""
-        return float(np.hypot(self.dbeta_dt, self.dgamma_dt))
+        return np.hypot(self.dbeta_dt, self.dgamma_dt)
+
+
+def _last_axis(x):
+    """The three components of x (..., 3) as arrays (broadcasting over the leading axes)."""
+    x = np.asarray(x, float)
+    return x[..., 0], x[..., 1], x[..., 2]
 
 
 def pole_rates_840(moments, spin, cosines, tidal) -> PoleRates:
@@ -100,10 +106,13 @@ def pole_rates_840(moments, spin, cosines, tidal) -> PoleRates:
         γ' dγ/dt = −3GM(bb − aa) cos ζ cos η / (cc s³)
 
     Exact at the instant O = A (the gyroscopic terms Euler drops, (aa−cc)/bb·xz etc., vanish
-    there); for O at a distance α from A they add the free wobble γ'(aa−cc)/bb·α."""
-    a, b, c = (float(x) for x in moments)
-    cz, ce, ct = (float(x) for x in cosines)
-    k = 3.0 * tidal
+    there); for O at a distance α from A they add the free wobble γ'(aa−cc)/bb·α.
+
+    Array inputs broadcast: moments and cosines (..., 3), spin and tidal (...)."""
+    a, b, c = _last_axis(moments)
+    cz, ce, ct = _last_axis(cosines)
+    k = 3.0 * np.asarray(tidal, float)
+    spin = np.asarray(spin, float)
     return PoleRates(
         dspin_dt=k * (c - b) * ce * ct / a,
         dbeta_dt=-k * (a - c) * cz * ct / (b * spin),
@@ -119,16 +128,18 @@ def equal_moments_841(moments, spin, cosines, tidal) -> dict:
 
     and, if aa > cc, "around A in the sense CB" (§843): the displacement of O from A, written
     on the B, C axes, is 2N cos ζ (cos θ, −cos η) dt, i.e. the projection of F turned by −90°.
-    Returns N, the speed, and the unit direction (on B, C) of the displacement of O."""
-    a, b, c = (float(x) for x in moments)
-    cz, ce, ct = (float(x) for x in cosines)
-    N = 1.5 * tidal * (a - c) / (spin * c)
-    sin_zeta = np.sqrt(max(0.0, 1.0 - cz * cz))
-    d = np.array([ct, -ce])
-    nd = np.linalg.norm(d)
-    sgn = np.sign(N * cz) if N * cz != 0 else 1.0
-    return dict(N=N, pole_speed=2.0 * abs(N * cz) * sin_zeta,
-                direction_BC=(d / nd if nd > 0 else d) * sgn)
+    Returns N, the speed, and the unit direction (on B, C, last axis) of the displacement of O.
+    Array inputs broadcast as in `pole_rates_840`."""
+    a, b, c = _last_axis(moments)
+    cz, ce, ct = _last_axis(cosines)
+    N = 1.5 * np.asarray(tidal, float) * (a - c) / (np.asarray(spin, float) * c)
+    sin_zeta = np.sqrt(np.clip(1.0 - cz * cz, 0.0, None))
+    d = np.stack(np.broadcast_arrays(ct, -ce), axis=-1)
+    nd = np.linalg.norm(d, axis=-1, keepdims=True)
+    sgn = np.where(N * cz != 0, np.sign(N * cz), 1.0)[..., None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = np.where(nd > 0, d / np.where(nd > 0, nd, 1.0), d)
+    return dict(N=N, pole_speed=2.0 * np.abs(N * cz) * sin_zeta, direction_BC=unit * sgn)
 
 
 # --------------------------------------------------------------------------------------------
