@@ -181,6 +181,26 @@ def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-
                          "too close to the resonance (B−A)/C = 1/3 or too eccentric; lower one of them")
 
 
+def free_libration_floquet(orbit, gamma, gm, lam0, lamdot0, rtol=1e-12, atol=1e-13, d=1e-6):
+    """Frequency of small free librations about the forced (periodic) solution (λ0, λ̇0) of §838,
+    with nothing of the ellipse neglected (beyond Euler's 2N: the 1/s³ modulation, the forced
+    swing's cos 2ζ, all orders in e): the Floquet exponent ν of the linearised flow over one
+    orbit, from the monodromy matrix M (central differences of DOP853 runs): tr M = 2 cos νP.
+    Returns ν in (0, π/P) (the branch next to Euler's √(2N) while √(2N) < n/2), or NaN when the
+    forced solution is unstable (|tr M| > 2). Not valid for small-amplitude nonlinearity: a free
+    swing of amplitude φ lengthens the period further by φ²/4 (the pendulum's K(k))."""
+    P = 2.0 * np.pi / orbit.n
+    rhs = planar_rhs(orbit, gamma, gm)
+    y0 = np.array([lam0, lamdot0], float)
+
+    def flow(y):
+        return solve_ivp(rhs, (0.0, P), y, method="DOP853", rtol=rtol, atol=atol).y[:, -1]
+
+    M = np.column_stack([(flow(y0 + d * e_) - flow(y0 - d * e_)) / (2 * d) for e_ in np.eye(2)])
+    c = 0.5 * np.trace(M)
+    return float(np.arccos(c) / P) if abs(c) <= 1 else float("nan")
+
+
 def harmonics(t, x, omega, k_max=3):
     """Least-squares amplitudes of x(t) ≈ c + Σ_k a_k sin kωt + b_k cos kωt, returns
     (a, b) arrays of length k_max (index 0 ↔ k = 1)."""

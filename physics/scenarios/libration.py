@@ -354,13 +354,22 @@ def _libration_eccentric(values, progress=None):
         "free_period": lib.measured_period(t, z_free) if dz != 0 else np.nan,
         "free_period_euler": 2 * np.pi / w0 if w0 > 0 else np.inf,
     }
+    # modern: the linearised free period about the forced solution (Floquet, exact in e), lengthened by
+    # the free swing's own amplitude φ²/4 (pendulum); only worth computing when there is a free part
+    if dz != 0 and g > 0 and w0 < 0.5 * n:
+        nu = lib.free_libration_floquet(fs.orbit, g, gm, fs.lam0, fs.lamdot0)
+        mt["free_period_floquet"] = 2 * np.pi / nu if nu > 0 else np.nan
+        mt["free_period_modern"] = mt["free_period_floquet"] * (1 + dz**2 / 4)
     comps = [
         Comparison("forced libration amplitude A²α/(A²−2N) (§833)", m1, mt["forced_amplitude_rad"], None, "rad",
                    "simulated: first harmonic of the periodic (forced) solution, free part removed (§838)"),
         Comparison("sin 2At coefficient (§835)", m2e, mt["forced_second_harmonic_rad"], None, "rad",
                    "Euler keeps only the 1/s³ modulation β; the ellipse adds (5/4)e² sin 2M to the true anomaly, "
                    "which gives 5e²A²/(4A²−2N) — larger than Euler's term"),
-        Comparison("free libration period 2π/√(2N) (§838)", mt["free_period_euler"], mt["free_period"], None, "1/n"),
+        Comparison("free libration period 2π/√(2N) (§838)", mt["free_period_euler"], mt["free_period"],
+                   mt.get("free_period_modern"), "1/n",
+                   "modern: Floquet period of small swings about the forced libration (the ellipse to all orders) "
+                   "× (1 + φ²/4) for the free amplitude φ"),
     ]
     notes = ["Euler's α = 2e, A = n (anomalistic = orbital rate for a fixed ellipse), β = 3e: the ellipse to first order in e.",
              "For B < A the forced libration is about ζ = 90° (the B axis toward F) and Euler's formula is used with |n|; "
