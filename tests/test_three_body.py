@@ -69,11 +69,13 @@ def test_lagrange_points_vs_restricted_problem_and_published():
     Lm = col.lagrange_distances_cr3bp(col.MOON_EARTH_MASS_RATIO, col.EARTH_MOON_DISTANCE_KM)
     assert np.allclose(L, Lm, rtol=1e-12)
     # Koon, Lo, Marsden & Ross (2011), Earth–Moon μ = 0.01215: x of L1, L2, L3 from the barycentre
-    mu = 0.01215
+    # (labelled μ = 1.215e-2; the six digits are those of the JPL μ = 0.01215058561): within
+    # half a unit of the sixth decimal
+    mu = 0.012150585609624
     L = col.lagrange_distances(mu / (1 - mu), 1.0)
-    assert L[0] - mu == pytest.approx(0.836915, abs=5e-6)
-    assert L[1] - mu == pytest.approx(1.155682, abs=5e-6)
-    assert -(L[2] + mu) == pytest.approx(-1.005063, abs=5e-6)
+    assert L[0] - mu == pytest.approx(0.836915, abs=5e-7)
+    assert L[1] - mu == pytest.approx(1.155682, abs=5e-7)
+    assert -(L[2] + mu) == pytest.approx(-1.005063, abs=5e-7)
 
 
 def test_translator_table_is_slightly_off():
@@ -165,23 +167,40 @@ def test_syzygy_frequency_measured_vs_linear_and_euler():
         eta, _ = sz.eta_and_distance(S, side)
         w, lam, res = sz.fit_swing_and_escape(t, eta, A)
         modes = sz.linear_modes(m, side)
-        # nonlinear shift ∝ amplitude (≤ 20 A = 2e-5 in the fit window)
-        assert w == pytest.approx(modes["frequency"], rel=1e-4)
+        # nonlinear terms of relative size |η| ≤ 20 A = 2e-5 in the fit window (measured 1.3e-5)
+        assert w == pytest.approx(modes["frequency"], rel=2 * 20 * A)
         assert lam == pytest.approx(modes["escape_exponent"], rel=1e-3)
-        # Euler's Hill value differs by terms of order v/u = α ≈ 0.01
-        assert abs(w / sz.HILL_FREQUENCY - 1) < sz.equilibrium_conjunction(m)
         assert res < 1e-3
+
+
+@pytest.mark.parametrize("side", ["conjunction", "opposition"])
+@pytest.mark.parametrize("m", [sz.EARTH_SUN_MASS_RATIO, 1e-8])
+def test_hill_value_misses_exactly_the_first_order_terms(side, m):
+    """Euler's √(√28 − 1) drops the O(α) parts of the stiffnesses (u ≫ v): the frequency of the
+    full linearised problem (numerical Jacobian, eigenvalues) must be ω_Hill(1 ± c₁α) up to
+    O(α²), with c₁ = (24/√7 − 3)/(2(2√7 − 1)) from the perturbation expansion."""
+    a = sz.equilibrium_conjunction(m) if side == "conjunction" else sz.equilibrium_opposition(m)
+    off = sz.linear_modes(m, side)["frequency"] / sz.HILL_FREQUENCY - 1
+    c1 = sz.hill_first_order_coefficient(side)
+    assert abs(off) > 0.5 * abs(c1) * a  # the first-order term is really there...
+    assert abs(off - c1 * a) <= 2 * a * a  # ...and is all of it to O(α²)
 
 
 def test_hill_limit_is_eulers_equation():
     """As m → 0 the linearised full problem tends to λ⁴ − 2λ² − 27 = 0: α² = √28 − 1, the real
     root √(√28 + 1), and the amplitude coefficient 0.311717 of §16."""
     modes = sz.linear_modes(1e-12)
-    assert modes["frequency"] == pytest.approx(2.071594, rel=1e-3)
+    # Euler's α⁴ + 2α² = 27 solved on its own (numpy roots), his printed α = 2.071594
+    roots = np.roots([1.0, 0.0, 2.0, 0.0, -27.0])
+    hill = max(r.real for r in roots if abs(r.imag) < 1e-12)
+    assert hill == pytest.approx(2.071594, abs=5e-7)
+    assert sz.HILL_FREQUENCY == pytest.approx(hill, rel=1e-14)
+    assert modes["frequency"] == pytest.approx(hill, rel=1e-3)
     assert modes["escape_exponent"] == pytest.approx(math.sqrt(math.sqrt(28) + 1), rel=1e-3)
     Vo = modes["osc_vector"]
     assert abs(Vo[0]) / abs(Vo[1]) == pytest.approx(0.311717, rel=1e-3)
-    assert sz.AMPLITUDE_COEFFICIENT == pytest.approx(0.311717, abs=1e-6)
+    # §16's printed 0.311717 is (α² − 3)/(2α) with the root above
+    assert (hill**2 - 3) / (2 * hill) == pytest.approx(0.311717, abs=5e-7)
 
 
 def test_syzygy_scenario_moon_leaves():
@@ -190,7 +209,9 @@ def test_syzygy_scenario_moon_leaves():
     for k in ("syzygy_distance_lunar_units", "oscillation_frequency", "oscillation_frequency_euler",
               "escape_exponent"):
         assert math.isfinite(m[k])
-    assert m["oscillation_frequency_euler"] == pytest.approx(2.071594, abs=1e-6)
+    roots = np.roots([1.0, 0.0, 2.0, 0.0, -27.0])  # Euler's α⁴ + 2α² = 27 (§16), solved here
+    assert m["oscillation_frequency_euler"] == pytest.approx(max(r.real for r in roots if abs(r.imag) < 1e-12),
+                                                             rel=1e-14)
     assert math.isfinite(m["escape_time_yr"]) and m["escape_time_yr"] < 3.0  # it leaves
     assert m["swings_before_escape"] >= 1.0
     assert m["amplitude_ratio"] == pytest.approx(m["amplitude_ratio_linear"], rel=0.02)
@@ -205,17 +226,37 @@ def lunar_default():
 
 
 def test_node_and_apse_periods_vs_published(lunar_default):
-    """Published mean periods (Explanatory Supplement to the Astronomical Almanac, 2013):
-    node 6798.38 d = 18.613 yr, perigee 3232.6 d = 8.850 yr. Done means: within 1% and 2%."""
+    """Published mean rates (Simon et al. 1994, Meeus ch. 47), referred to the fixed stars like
+    the model: node −1934.1362891 − 1.3968878 °/cy → 6793.48 d, perigee 4069.0137287 − 1.3968878
+    °/cy → 3232.61 d (the often quoted 6798.38 d counts the node from the moving equinox).
+    Left out of the model: the Earth's J2 (computed: 8.5e-5 and 4.1e-5 of the rates, periods
+    shorter) and the planets (same order): tolerance 3× the J2 share, as in check E13. (The
+    issue's done-criterion was 1% and 2%.)"""
     m = lunar_default.metrics
-    assert m["node_period_yr"] == pytest.approx(18.613, rel=0.01)
-    assert m["apse_period_yr"] == pytest.approx(8.850, rel=0.02)
+    month = le.MOON_J2000["sidereal_month_days"]
+    j2 = le.oblateness_rates(month, le.MOON_J2000["eccentricity"])
+    cy = 36525.0 / le.YEAR_DAYS
+    node_pub = 360.0 / (1934.1362891 + 5028.796195 / 3600) * cy  # yr, against the stars
+    apse_pub = 360.0 / (4069.0137287 - 5028.796195 / 3600) * cy
+    tol_node = 3 * abs(j2["node_rate"]) * node_pub * le.YEAR_DAYS / (2 * math.pi)
+    tol_apse = 3 * abs(j2["apse_rate"]) * apse_pub * le.YEAR_DAYS / (2 * math.pi)
+    assert 2e-4 < tol_node < 3e-4 and 1e-4 < tol_apse < 1.5e-4
+    assert m["node_period_yr"] == pytest.approx(node_pub, rel=tol_node)
+    assert m["apse_period_yr"] == pytest.approx(apse_pub, rel=tol_apse)
+    # both periods come out longer than observed, as the left-out J2 (and planets) predict
+    assert m["node_period_yr"] > node_pub and m["apse_period_yr"] > apse_pub
     # osculating inclination 4.99°–5.30° (period 173 d): the Sun alone gives it to ~0.03°
     assert m["inclination_min_deg"] == pytest.approx(4.99, abs=0.05)
     assert m["inclination_max_deg"] == pytest.approx(5.30, abs=0.05)
-    # first order gives half the apse motion (Clairaut 1747) and most of the node motion
+    # first order gives half the apse motion (Clairaut 1747's puzzle: the series (3/4)m² +
+    # (225/32)m³ + … converges slowly, m = n'/n = 0.075)
     assert m["apse_first_order_fraction"] == pytest.approx(0.5, abs=0.02)
-    assert m["node_period_first_order_yr"] == pytest.approx(18.6, rel=0.05)
+    # the first-order node period from its closed form (3/4)n'²/n cos i, computed here with the
+    # Almanac's sidereal year (the model's Sun has the Kepler year of 1 AU: n' differs by 6e-8)
+    n = 2 * math.pi / month
+    ns = 2 * math.pi / 365.256363
+    node_fo = 2 * math.pi / (0.75 * ns * ns / n * math.cos(math.radians(5.145396))) / le.YEAR_DAYS
+    assert m["node_period_first_order_yr"] == pytest.approx(node_fo, rel=1e-6)
     assert m["elements_vs_cartesian_max_error"] < 1e-5  # lunar distances over 40 yr
     assert set(lunar_default.trajectory.bodies) == {"sun", "earth", "moon"}
 
@@ -224,7 +265,8 @@ def test_elements_vs_rebound_three_body():
     """Independent: Sun, Earth and Moon as three massive bodies in REBOUND IAS15, 20 years.
     The models differ only by the Moon's reflex on the Sun's apparent orbit (4670 km in 1.5e8)."""
     el, sun, mu, mus = le.initial_conditions()
-    el = le.calibrate_mean_elements(el, sun, mu, mus, 27.321661, 0.0549, math.radians(5.145396))
+    el = le.calibrate_mean_elements(el, sun, mu, mus, le.MOON_J2000["sidereal_month_days"], 0.0549,
+                                    math.radians(5.145396))
     days = 20 * le.YEAR_DAYS
     t, E = le.integrate_rk4("elements", el, days, 0.025, 0.5, mu, mus, sun)
     tr, r, v = le.rebound_three_body(el, sun, mu, mus, days, 0.5)

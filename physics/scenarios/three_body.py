@@ -409,11 +409,12 @@ def _lunar(values, progress=None):
         "sidereal_month_days": 2 * math.pi / le.mean_motion(t, E),
     }
     comps = [
-        Comparison("regression of the node", node_fo, na["node_period_yr"], le.NODE_PERIOD_YR, "yr",
-                   "Euler column: first-order rate (3/4)n'²/n·cos i; modern: 6798.38 d (Expl. Suppl. 2013)"),
+        Comparison("regression of the node", node_fo, na["node_period_yr"], le.NODE_PERIOD_SIDEREAL_YR, "yr",
+                   "Euler column: first-order rate (3/4)n'²/n·cos i; modern: 6793.48 d against the stars, the frame of "
+                   "this model (the often quoted 6798.38 d counts from the moving equinox)"),
         Comparison("advance of the apsides", apse_fo, na["apse_period_yr"], le.APSE_PERIOD_YR, "yr",
                    f"first order gives {fo['apse_rate'] / na['apse_rate']:.2f} of the motion — the historical "
-                   "'half the apse motion' (Clairaut 1747); modern: 3232.6 d"),
+                   "'half the apse motion' (Clairaut 1747); modern: 3232.6 d against the stars"),
         Comparison("inclination min", None, float(inc.min()), le.INCLINATION_RANGE_DEG[0], "deg", "osculating, period ≈ 173 d"),
         Comparison("inclination max", None, float(inc.max()), le.INCLINATION_RANGE_DEG[1], "deg", ""),
         Comparison("Euler's elements vs Cartesian integration, max distance", 0.0, err, None, "lunar distance",

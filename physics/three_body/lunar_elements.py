@@ -36,25 +36,33 @@ import math
 import numpy as np
 from numba import njit
 
+from . import constants as C
+
 DAY = 86400.0
 KM_PER_UNIT = 384400.0  # length unit: the Moon's mean distance (km)
 GM_EARTH = 398600.4418  # km³/s² (IERS 2010)
 GM_MOON = GM_EARTH * 0.0123000371  # IAU 2009 mass ratio
 GM_SUN = 1.32712440018e11  # km³/s² (IERS 2010)
 AU_KM = 149597870.7
-YEAR_DAYS = 365.25  # Julian year, for the periods in years
+YEAR_DAYS = C.JULIAN_YEAR_DAYS  # Julian year, for the periods in years
 
 # Mean elements at J2000 (Simon et al. 1994; Meeus, Astronomical Algorithms, ch. 47 and 25),
 # referred to the ecliptic: Moon and the geocentric Sun.
 MOON_J2000 = dict(eccentricity=0.0549, inclination_deg=5.145396, node_deg=125.0445479,
-                  perigee_deg=83.3532465, mean_longitude_deg=218.3164477, sidereal_month_days=27.321661)
+                  perigee_deg=83.3532465, mean_longitude_deg=218.3164477,
+                  sidereal_month_days=C.SIDEREAL_MONTH_DAYS)  # 27.3216615 d, see constants
 SUN_J2000 = dict(eccentricity=0.0167086, perigee_deg=282.937348, mean_longitude_deg=280.46646)
 
-# Published mean periods (Explanatory Supplement to the Astronomical Almanac, 3rd ed. 2013,
-# and Meeus ch. 47 rates): regression of the node 6798.38 d = 18.613 yr; apsidal (perigee)
-# advance 3232.6 d = 8.850 yr. Inclination 4.99°–5.30° (period 173 d).
-NODE_PERIOD_YR = 6798.38 / 365.25
-APSE_PERIOD_YR = 3232.6 / 365.25
+# Published mean periods from the rates of Simon et al. 1994 (Meeus ch. 47; see `constants`).
+# The usually quoted node period 6798.38 d = 18.613 yr is measured from the moving equinox;
+# against the stars (the frame of our model: fixed ecliptic and axes) it is 6793.48 d =
+# 18.5995 yr. The usually quoted perigee period 3232.6 d = 8.8504 yr is already the one against
+# the stars (from the equinox of date: 3231.50 d). Compare the model with the *_SIDEREAL values.
+# Inclination 4.99°–5.30° (period 173 d).
+NODE_PERIOD_YR = C.NODE_PERIOD_OF_DATE_DAYS / YEAR_DAYS  # 18.613 yr, from the equinox of date
+NODE_PERIOD_SIDEREAL_YR = C.NODE_PERIOD_SIDEREAL_DAYS / YEAR_DAYS  # 18.5995 yr
+APSE_PERIOD_YR = C.APSE_PERIOD_SIDEREAL_DAYS / YEAR_DAYS  # 8.8504 yr (= 3232.6 d, against the stars)
+APSE_PERIOD_SIDEREAL_YR = APSE_PERIOD_YR
 INCLINATION_RANGE_DEG = (4.99, 5.30)
 
 
@@ -318,6 +326,27 @@ def first_order_rates(sun, month_days: float, inclination_rad: float):
     ns = sun[2]
     base = 0.75 * ns * ns / n
     return {"node_rate": -base * math.cos(inclination_rad), "apse_rate": base}
+
+
+def oblateness_rates(month_days: float, eccentricity: float, obliquity: float = C.OBLIQUITY_RAD,
+                     j2: float = C.EARTH_J2, radius_km: float = C.EARTH_RADIUS_KM) -> dict:
+    """Secular node and perigee rates (rad/day) that the Earth's J2 would add to the Moon's orbit
+    near the ecliptic; NOT in Euler's model (nor ours) — this sizes what the comparison with the
+    observed periods leaves out.
+
+    For an orbit whose normal h makes the angle θ with the Earth's pole P, the orbit-averaged J2
+    potential turns h about P: dh/dt = −k cos θ (P × h), and turns the perigee in the orbit plane
+    at (k/2)(3cos²θ − 1), with k = (3/2) n J2 (R/a)²/(1 − e²)² (the classical first-order
+    rates: dΩ/dt = −k cos θ, dω/dt = (k/2)(5cos²θ − 1)). The Sun keeps h circling the ecliptic
+    pole at 5° (much faster than J2 alone would move it); averaging the J2 turn over that circle
+    (small i, P at the obliquity ε from the ecliptic pole) gives the extra node rate on the
+    ecliptic −k(cos²ε − ½sin²ε) = −k(1 − (3/2)sin²ε), and the extra perigee rate
+    (k/2)(3cos²ε − 1). Size for the Moon: k = 1.03e-7 rad/d, i.e. 8.5e-5 of the node rate and
+    4.0e-5 of the perigee rate (both make the real periods shorter than the model's)."""
+    n = 2 * math.pi / month_days
+    k = 1.5 * n * j2 * (radius_km / KM_PER_UNIT) ** 2 / (1 - eccentricity**2) ** 2
+    se2 = math.sin(obliquity) ** 2
+    return {"k": k, "node_rate": -k * (1 - 1.5 * se2), "apse_rate": 0.5 * k * (3 * (1 - se2) - 1)}
 
 
 def euler_identity_residuals(t, el, r, vel):

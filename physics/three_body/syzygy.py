@@ -37,6 +37,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from . import constants as C
+
 # Euler's numbers (1766 §8, §16)
 EULER_N_SQUARED = 175.0  # "n² = 175": (lunar revolutions per year)²
 HILL_FREQUENCY = math.sqrt(math.sqrt(28.0) - 1.0)  # α of §16, 2.0715939...
@@ -45,8 +47,8 @@ AMPLITUDE_COEFFICIENT = (HILL_FREQUENCY**2 - 3.0) / (2.0 * HILL_FREQUENCY)  # 0.
 
 # Earth/Sun mass ratio GM_earth/GM_sun = 398600.4418 / 1.32712440018e11 (IAU 2009 / IERS 2010)
 EARTH_SUN_MASS_RATIO = 398600.4418 / 1.32712440018e11
-# sidereal year 365.256363 d / sidereal month 27.321662 d (Astronomical Almanac)
-MOON_REVOLUTIONS_PER_YEAR = 365.256363 / 27.321662
+# sidereal year 365.256363 d / sidereal month 27.3216615 d (sources in `constants`)
+MOON_REVOLUTIONS_PER_YEAR = C.SIDEREAL_YEAR_DAYS / C.SIDEREAL_MONTH_DAYS
 
 
 def equilibrium_conjunction(m: float) -> float:
@@ -134,6 +136,22 @@ def hill_frequencies() -> tuple[float, float]:
     """Roots of Euler's characteristic equation λ⁴ − 2λ² − 27 = 0 (1766 §16, Hill's limit):
     (oscillation frequency √(√28−1), escape exponent √(√28+1))."""
     return HILL_FREQUENCY, HILL_ESCAPE_EXPONENT
+
+
+def hill_first_order_coefficient(side: str = "conjunction") -> float:
+    """c₁ in ω_linear/ω_Hill = 1 + c₁α + O(α²), α = v/a at syzygy: the size of what Euler's
+    u ≫ v approximation (1766 §12) neglects in the swing frequency.
+
+    Linearising the full rotating-frame equations (module docstring) at (x₀, 0):
+    ẍ − 2ẏ = Kxx x, ÿ + 2ẋ = Kyy y with Kxx = 1 + 2m/|x₀|³ + 2/ρ³, Kyy = 1 − m/|x₀|³ − 1/ρ³,
+    ρ = 1 ∓ α. The equilibrium (§7) gives m/α³ = 1 + [(1−α)⁻² − 1]/α = 3 + 3α + O(α²) at
+    conjunction, and 1/ρ³ = 1 + 3α + O(α²), so Kxx = 9 + 12α, Kyy = −3 − 6α (Hill/Euler: 9 and
+    −3). ω² solves ω⁴ + (Kxx + Kyy − 4)ω² + Kxx·Kyy = 0, i.e. ω⁴ + (2 + 6α)ω² − (27 + 90α) = 0;
+    to first order ω² = √28 − 1 + α(24/√7 − 3), so c₁ = (24/√7 − 3)/(2(2√7 − 1)) = 0.70735.
+    At opposition α → −α (the Moon beyond the Earth): c₁ → −c₁. The O(α²) remainder has a
+    coefficient ≈ 0.9 (measured on `linear_modes`, both sides)."""
+    c1 = (24.0 / math.sqrt(7.0) - 3.0) / (2.0 * (2.0 * math.sqrt(7.0) - 1.0))
+    return c1 if side == "conjunction" else -c1
 
 
 def euler_oscillation(b: float, amplitude: float, t, side: str = "conjunction"):
