@@ -302,6 +302,7 @@ class SceneView:
         self._result = None
         self._spec = None
         self._h: dict[str, object] = {}  # name → handle (alive)
+        self._auto: set[str] = set()  # group nodes created by _ensure_parents
         self._touched: set[str] = set()
         self._paths: dict[str, list[_Path]] = {}  # overlay → paths
         self._static: dict[str, list] = {}  # overlay → handles shown/hidden with it
@@ -315,8 +316,10 @@ class SceneView:
     # ---- node cache --------------------------------------------------------------------------
     def _node(self, name: str, create, **update):
         """The handle called `name`: created by `create()` the first time, else updated."""
+        self._ensure_parents(name)
         h = self._h.get(name)
-        if h is None:
+        if h is None or name in self._auto:
+            self._auto.discard(name)  # a group made for a child before its parent: the real node replaces it
             h = create()
             self._h[name] = h
         else:
@@ -330,9 +333,24 @@ class SceneView:
         return self._node(name, lambda: self.scene.add_line_segments(name, segs, color, thickness=thickness,
                                                                        thickness_units="world"), points=segs)
 
+    def _ensure_parents(self, name: str) -> None:
+        """Explicit (empty frame) nodes for the groups between the root and `name`: viser keeps a
+        parent it created implicitly as an empty group after its children are removed, so every
+        group is a cached node, pruned with its last child and removed by `clear`."""
+        if not name.startswith(self.root + "/"):
+            return
+        parts = name.split("/")
+        for k in range(self.root.count("/") + 2, len(parts)):
+            prefix = "/".join(parts[:k])
+            if prefix not in self._h:
+                self._h[prefix] = self.scene.add_frame(prefix, show_axes=False)
+                self._auto.add(prefix)
+            self._touched.add(prefix)
+
     def _prune(self, keep_prefixes=()):
-        for name in list(self._h):
+        for name in sorted(self._h, key=lambda n: -n.count("/")):  # children first
             if name not in self._touched and not name.startswith(keep_prefixes):
+                self._auto.discard(name)
                 try:
                     self._h.pop(name).remove()
                 except Exception:
@@ -345,6 +363,7 @@ class SceneView:
             except Exception:
                 pass
         self._paths, self._static, self._built, self._markers = {}, {}, set(), {}
+        self._auto = set()
         self.body_frame = self.omega_arrow = self.L_arrow = None
         self.extra = None
         self.n = 0

@@ -127,6 +127,8 @@ def test_switching_through_all_scenarios_leaves_no_stale_objects():
         fresh.show(res, spec, overlays=fresh.default_overlays(spec))
         assert _alive(scene) == _alive(fresh_scene), spec.name
         assert set(view._h) == _alive(scene), spec.name
+        for g in view._auto:  # every group node made for children still has a child
+            assert any(n.startswith(g + "/") for n in view._h), (spec.name, g)
         if spec.kind == "rotation":
             assert "/world/body/mesh" in view._h, spec.name
         else:
