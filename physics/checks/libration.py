@@ -15,17 +15,65 @@ _SEMI = np.array([1.0, 0.8, 0.6])
 _DIR = np.array([0.6, 0.5, 0.3])
 
 
-@register_check("E3.gravity", "body at rest pulled by F: starting axis ∝ P/A : Q/B : R/C", "§820")
+def gravity_start_reference(values, times, rtol=1e-12, atol=1e-14):
+    """Independent reference for §820: the full rigid-body equations (Euler's equations with the
+    §815 gravity-gradient torque, attitude as a quaternion) from rest, by scipy DOP853, evaluated
+    at `times`: ω (len(times), 3) in the body frame."""
+    from scipy.integrate import solve_ivp
+
+    from .. import quaternion as quat
+    from ..euler_equations import rhs_state
+    from ..gravity_gradient import torque_first_order
+
+    I = np.asarray(values["inertia"], float)
+    d = np.asarray(values["direction"], float)
+    s = d / np.linalg.norm(d) * values["distance"]
+    gm = values["gm"]
+
+    def torque(t, q, w):
+        return torque_first_order(I, quat.rotate_inverse(q, s), gm)
+
+    sol = solve_ivp(rhs_state, (0.0, float(np.max(times))), np.r_[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0], method="DOP853",
+                    rtol=rtol, atol=atol, args=(I, torque), dense_output=True)
+    return sol.sol(np.asarray(times, float))[:3].T
+
+
+def _angle_from(w, axis):
+    a = w / np.linalg.norm(w, axis=-1, keepdims=True)
+    return np.arccos(np.clip(a @ axis, -1.0, 1.0))
+
+
+@register_check("E3.gravity", "body at rest pulled by F: starts about the axis ∝ P/A : Q/B : R/C, drifting off it as t²",
+                "§820")
 def e3_gravity():
-    r = get("gravity-start").simulate({})
-    m = r.metrics
-    rel = abs(m["angular_acceleration_rad_per_s2"] / m["angular_acceleration_euler_rad_per_s2"] - 1)
-    ang = m["start_axis_angle_error_rad"]
-    return {"euler": m["angular_acceleration_euler_rad_per_s2"], "simulated": m["angular_acceleration_rad_per_s2"],
-            "modern": None, "rel_error": max(rel, ang), "tolerance": 1e-5, "unit": "rad/s²",
-            "note": (f"starting axis off Euler's by {ang:.2e} rad; ω(t)/t at the first stored step "
-                     "(t = T/1000, the body has turned ~1e-5 of its path): the change of ω̇ over that "
-                     "time is O(t) relative, ~1e-6")}
+    from ..gravity_gradient import starting_axis, torque_first_order
+
+    sc = get("gravity-start")
+    values = sc.resolve({})
+    r = sc.simulate_fn(values)
+    tr = r.trajectory
+    I = np.asarray(values["inertia"], float)
+    u = np.asarray(values["direction"], float) / np.linalg.norm(values["direction"])
+    axis_e, _ = starting_axis(I, torque_first_order(I, u * values["distance"], values["gm"]))
+    n = len(tr.t) - 1
+    idx = np.array([n // 8, n // 4, n // 2, n])
+    w_ref = gravity_start_reference(values, tr.t[idx])
+    drift_ref = _angle_from(w_ref, axis_e)
+    drift_sim = _angle_from(tr.omega_body[idx], axis_e)
+    # Euler's axis is the first instant's: ω = ω̇₀t + O(t³) from rest (ω̈₀ = 0, as q̇ = ω = 0), so the
+    # axis leaves it as t² — slope 2 in log–log, bent by the next term by ~drift(T/2) relative
+    order = float(np.polyfit(np.log(tr.t[idx[:3]]), np.log(drift_ref[:3]), 1)[0])
+    order_sim = float(np.polyfit(np.log(tr.t[idx[:3]]), np.log(drift_sim[:3]), 1)[0])
+    rel = float(abs(drift_sim[-1] / drift_ref[-1] - 1))
+    tol = 1e-9
+    return {"euler": 0.0, "simulated": float(drift_sim[-1]), "modern": float(drift_ref[-1]), "rel_error": rel,
+            "tolerance": tol, "unit": "rad", "passed": bool(rel < tol and abs(order - 2.0) < 0.05),
+            "note": (f"angle of the rotation axis from Euler's starting axis at t = {tr.t[-1]:.4g} s (the body has "
+                     f"turned ~{values['turn_deg']:g}°): Euler's axis holds at the first instant (0); modern = "
+                     f"scipy DOP853 (rtol 1e-12) on the full equations. Drift ∝ t^{order:.3f} (DOP853), t^{order_sim:.3f} "
+                     "(run) from T/8 to T/2: O(t²) as predicted (|slope − 2| < 0.05 required; the t⁴ term bends it "
+                     "by ~0.01). Tolerance 1e-9: the DOP853 reference's own error (rtol 1e-12, ×100 accumulated "
+                     "and divided by a drift of 0.07) — the 4th-order splitting at T/2000 is far below it")}
 
 
 @register_check("E5", "first-order torque 3GM/s³·ŝ×Iŝ vs exact integration over an ellipsoid", "§815–817")
