@@ -215,29 +215,52 @@ def _iau2000_terms(years=40.0):
     return out
 
 
-def test_earth_precession_within_half_percent_of_iau2006(earth):
+def _newtonian_psi_a_rate():
+    """ψ_A without the geodesic precession (1.919883″/cy, Capitaine et al. 2003), which ψ_A holds
+    with the sense opposite to the luni-solar precession and a Newtonian rigid Earth has not."""
+    from physics.earth_precession import GEODESIC_PRECESSION
+
+    return _iau2006_psi_a_rate() + GEODESIC_PRECESSION / 100
+
+
+def test_earth_precession_matches_iau2006_psi_a_plus_geodesic(earth):
+    """A consistency check: H_d (MHB2000) was fitted to the observed precession. Measured gap
+    1.2e-6; tolerance 1e-4 (5 mas/yr), the order of the second-order and non-rigid contributions
+    to ψ_A the rigid first-order model leaves out (mas/yr: Lambert & Capitaine 2004)."""
     m = earth.metrics
     ref = _iau2006_psi_a_rate()
     assert ref == pytest.approx(50.3848, abs=1e-3)  # the published 5038.481507″/cy
-    assert m["precession_rate_arcsec_per_yr"] == pytest.approx(ref, rel=0.005)
+    assert m["precession_rate_arcsec_per_yr"] == pytest.approx(_newtonian_psi_a_rate(), rel=1e-4)
+    # without the geodesic term the gap would be 0.019″/yr = 3.8e-4: the row can tell the difference
+    assert abs(m["precession_rate_arcsec_per_yr"] / ref - 1) > 2e-4
     assert m["precession_solar_arcsec_per_yr"] + m["precession_lunar_arcsec_per_yr"] == pytest.approx(
         m["precession_rate_arcsec_per_yr"], rel=2e-3)  # linear in the torques to O(H)
-    assert m["precession_lunar_arcsec_per_yr"] / m["precession_solar_arcsec_per_yr"] == pytest.approx(2.16, abs=0.05)
-    assert m["precession_period_yr"] == pytest.approx(25722, rel=0.005)
+    # the lunar/solar ratio against the orbit-averaged closed forms (independent of the run); they
+    # leave out the Sun's periodic perturbations of the Moon's orbit (⟨r⁻³⟩ at the 1e-4 level, measured 2e-4)
+    ratio_formula = m["precession_lunar_formula_arcsec_per_yr"] / m["precession_solar_formula_arcsec_per_yr"]
+    assert m["precession_lunar_arcsec_per_yr"] / m["precession_solar_arcsec_per_yr"] == pytest.approx(ratio_formula, rel=1e-3)
+    assert m["precession_period_yr"] == pytest.approx(360 * 3600 / _newtonian_psi_a_rate(), rel=1e-4)
     # Euler's §846 sum is too fast by C/A and the Moon's inclination, too slow by the eccentricities
     assert m["euler_excess_measured"] == pytest.approx(m["euler_excess_predicted"], abs=5e-4)
     assert m["euler_excess_measured"] > 0.005
 
 
-def test_earth_nutation_18_6yr_within_3_percent_and_semiannual_within_10(earth):
+def test_earth_nutation_18_6yr_semiannual_and_fortnightly_vs_iau2000(earth):
+    """IAU 2000A is the non-rigid Earth (MHB2000); the model is rigid. Measured gaps: 18.6 yr
+    0.07% (Δψ), 0.10% (Δε) -> tolerance 0.3%; semi-annual 2.9%, 3.4% and 13.66 d 3.5%, 3.9% (the
+    non-rigid response: elastic mantle, fluid core, free-core-nutation resonance) -> 5%. The
+    issue's 3% / 10% are outer bounds only. The rigid values themselves are tested against
+    Euler's/the corrected linear theory in the checks (E10.earth-semiannual note: within 0.2%)."""
     m = earth.metrics
     iau = _iau2000_terms()
     # sanity of the erfa fit: −17.2064161″ − 0.0174666″·T with T ≈ 0.2 cy the middle of the fitted span
     assert iau["om"][0] == pytest.approx(-17.2064161 - 0.0174666 * 0.2, abs=1e-3)
-    assert m["nutation_longitude_18_6yr_arcsec"] == pytest.approx(iau["om"][0], rel=0.03)
-    assert m["nutation_obliquity_18_6yr_arcsec"] == pytest.approx(iau["om"][1], rel=0.03)
-    assert m["nutation_longitude_semiannual_arcsec"] == pytest.approx(iau["semi"][0], rel=0.10)
-    assert m["nutation_obliquity_semiannual_arcsec"] == pytest.approx(iau["semi"][1], rel=0.10)
+    assert m["nutation_longitude_18_6yr_arcsec"] == pytest.approx(iau["om"][0], rel=0.003)
+    assert m["nutation_obliquity_18_6yr_arcsec"] == pytest.approx(iau["om"][1], rel=0.003)
+    assert m["nutation_longitude_semiannual_arcsec"] == pytest.approx(iau["semi"][0], rel=0.05)
+    assert m["nutation_obliquity_semiannual_arcsec"] == pytest.approx(iau["semi"][1], rel=0.05)
+    # the rigid model's semi-annual term is Euler's §844 circle theory plus the Sun's eccentricity
+    assert m["nutation_longitude_semiannual_arcsec"] == pytest.approx(m["nutation_longitude_semiannual_euler_arcsec"], rel=0.005)
     # 13.66 days: the real Earth's non-rigid response adds ≈3% (as in the semi-annual term)
     assert m["nutation_longitude_13_66d_arcsec"] == pytest.approx(iau["fort"][0], rel=0.05)
     assert m["nutation_obliquity_13_66d_arcsec"] == pytest.approx(iau["fort"][1], rel=0.05)
@@ -247,7 +270,9 @@ def test_earth_nutation_18_6yr_within_3_percent_and_semiannual_within_10(earth):
     ratio = m["nutation_longitude_13_66d_momentum_axis_arcsec"] / m["nutation_longitude_13_66d_arcsec"]
     assert ratio == pytest.approx(1 - two_delta_over_eps, abs=0.005)
     # and the moon's node regression really comes out of the REBOUND integration
-    assert m["moon_node_period_yr"] == pytest.approx(18.6129, rel=0.003)
+    from physics.three_body.lunar_elements import NODE_PERIOD_YR
+
+    assert m["moon_node_period_yr"] == pytest.approx(NODE_PERIOD_YR, rel=0.003)
 
 
 def test_earth_trajectory_and_series(earth):
@@ -257,6 +282,12 @@ def test_earth_trajectory_and_series(earth):
     assert len(tr) <= 20001
     for k, v in earth.plot_series.items():
         assert v.shape == tr.t.shape, k
+
+
+# The long view's Moon is a Kepler ellipse with the mean rates from REBOUND: it lacks the Sun's
+# periodic perturbations of the lunar orbit (variation, evection) that the REBOUND-orbit run has.
+# Measured over 3000 yr: 1.8e-4 below ψ_A + geodesic (the REBOUND-orbit run: 1.2e-6); tolerance 3×.
+LONG_VIEW_TOL = 6e-4
 
 
 def test_long_view_pole_reaches_vega_region_and_passes_polaris():
@@ -271,7 +302,76 @@ def test_long_view_pole_reaches_vega_region_and_passes_polaris():
     ax /= np.linalg.norm(ax, axis=1, keepdims=True)
     lam = np.unwrap(np.arctan2(ax[:, 1], ax[:, 0]))
     rate = -np.polyfit(t / 365.25, lam, 1)[0] / ARCSEC
-    assert rate == pytest.approx(_iau2006_psi_a_rate(), rel=0.005)
+    assert rate == pytest.approx(_newtonian_psi_a_rate(), rel=LONG_VIEW_TOL)
     passes = pole_star_passages(t / 365.25 + 2000, ax, cat.names, cat.ra_deg, cat.dec_deg, within_deg=1.0)
     name, year, sep = passes[0]
     assert name == "Polaris" and 2080 < year < 2120 and sep < 0.5  # closest approach ≈ 0.45° around 2100
+
+
+def _capped(name, given):
+    """Preset values with the run shortened for the test (the Earth's 100-yr default is the 40-yr
+    fixture's case; the long view is run over 200 years)."""
+    g = dict(given)
+    if name == "earth":
+        g["years"] = min(g.get("years", 100.0), 19.0)
+    if name == "earth-long-view":
+        g["years"] = 200.0
+    if name == "precession-circular":
+        g["orbits"] = min(g.get("orbits", 5), 5)
+    return g
+
+
+@pytest.mark.parametrize("name", ["earth", "earth-long-view", "pole-near-axis", "precession-circular"])
+def test_presets_give_finite_metrics_or_say_why_not(name):
+    """Every preset (shortened): each metric is finite, or missing (NaN, null in JSON) with a note
+    saying it is not measurable; and the Earth's are near the IAU values, never absurd."""
+    from physics.earth_precession import IAU2000_NUTATION as iau
+
+    s = get(name)
+    for preset, given in s.presets:
+        r = s.simulate(_capped(name, given))
+        assert r.status == "ok", preset
+        missing = [k for k, v in r.metrics.items() if not np.isfinite(v)]
+        if missing:
+            assert any("not measurable" in n.lower() or "needs a run" in n for n in r.notes), (preset, missing)
+        m = r.metrics
+        if name == "earth":
+            years = r.params["years"]
+            assert np.isfinite(m["nutation_longitude_semiannual_arcsec"])  # every preset resolves it
+            for kind in ("longitude", "obliquity"):
+                sim = m[f"nutation_{kind}_semiannual_arcsec"]
+                ref = iau["semiannual"]["dpsi" if kind == "longitude" else "deps"]
+                assert sim == pytest.approx(ref, rel=0.06), (preset, kind)  # 3.4% non-rigid + 1.3% short fit
+            if years >= 18.6:
+                assert m["precession_rate_arcsec_per_yr"] == pytest.approx(_newtonian_psi_a_rate(), rel=1e-3)
+                assert m["nutation_longitude_18_6yr_arcsec"] == pytest.approx(iau["18.6yr"]["dpsi"], rel=0.003)
+            else:
+                assert np.isnan(m["precession_rate_arcsec_per_yr"]) and np.isnan(m["nutation_longitude_18_6yr_arcsec"])
+                assert any("Precession not measurable in a run shorter than" in n for n in r.notes)
+        if name == "earth-long-view":
+            assert m["precession_rate_arcsec_per_yr"] == pytest.approx(_newtonian_psi_a_rate(), rel=0.01)
+
+
+@pytest.mark.parametrize("name,given", [("earth", {"years": 3e-222}), ("earth", {"years": 1e-300}),
+                                        ("earth", {"years": 0.04}), ("earth", {"years": 0.1, "step_days": 3.0}),
+                                        ("earth-long-view", {"years": 3e-222}),
+                                        ("earth-long-view", {"years": 500.0, "sample_years": 200.0})])
+def test_too_short_runs_are_refused_naming_years(name, given):
+    with pytest.raises(ParameterError) as e:
+        get(name).simulate(given)
+    assert e.value.name == "years" and "≤ years ≤" in str(e.value)
+
+
+def test_pole_rates_broadcast_over_arrays():
+    I = np.array([[1.3, 1.0, 0.8], [1.2, 1.0, 1.0]])
+    u = np.array([[np.cos(0.7), np.sin(0.7) * np.cos(0.4), np.sin(0.7) * np.sin(0.4)],
+                  [np.cos(0.6), np.sin(0.6) * np.cos(1.0), np.sin(0.6) * np.sin(1.0)]])
+    spin, tidal = np.array([7.0, 5.0]), 2.0
+    r = pole_rates_840(I, spin, u, tidal)
+    e = equal_moments_841(I, spin, u, tidal)
+    for i in range(2):
+        ri = pole_rates_840(I[i], spin[i], u[i], tidal)
+        ei = equal_moments_841(I[i], spin[i], u[i], tidal)
+        assert r.dbeta_dt[i] == ri.dbeta_dt and r.dgamma_dt[i] == ri.dgamma_dt and r.dspin_dt[i] == ri.dspin_dt
+        assert r.pole_speed[i] == ri.pole_speed
+        assert e["pole_speed"][i] == ei["pole_speed"] and np.array_equal(e["direction_BC"][i], ei["direction_BC"])
