@@ -382,3 +382,31 @@ def test_small_inclination_forms_of_xxxiv():
         err = max(np.max(np.abs(ex[0] - ap[0])), np.max(np.abs(ex[1] - ap[1])))
         assert err <= w**4 / 24 * 1.0001
         assert err > w**4 / 24 * 0.5
+
+
+def test_oblateness_node_share_vs_averaged_torque():
+    """The J2 share of the node rate that sets the E13 tolerance, −k(1 − (3/2)sin²ε), against a
+    direct integration of the orbit-averaged normal: dh/dt = −K_s(h·z)(z×h) (the Sun, node
+    period 18.6 yr) − k(h·P)(P×h) (J2 about the pole P at ε from z). The closed form is the
+    small-i limit: O(i²) = 0.8% corrections allowed (2%)."""
+    from scipy.integrate import solve_ivp
+
+    from physics.three_body.constants import OBLIQUITY_RAD
+
+    eps, inc = OBLIQUITY_RAD, math.radians(5.145396)
+    P, z = np.array([0.0, -math.sin(eps), math.cos(eps)]), np.array([0.0, 0.0, 1.0])
+    nu = 2 * math.pi / (le.NODE_PERIOD_SIDEREAL_YR * le.YEAR_DAYS)
+    Ks = nu / math.cos(inc)
+    k = le.oblateness_rates(le.MOON_J2000["sidereal_month_days"], le.MOON_J2000["eccentricity"])["k"]
+    k_big = 20 * k  # still ≪ ν, so the response is linear in k; clearer above the integration noise
+
+    def rate(kk):
+        f = lambda t, h: -Ks * (h @ z) * np.cross(z, h) - kk * (h @ P) * np.cross(P, h)  # noqa: E731
+        T = 10 * 2 * math.pi / nu
+        s = solve_ivp(f, (0, T), np.array([math.sin(inc), 0.0, math.cos(inc)]), rtol=1e-11, atol=1e-13,
+                      t_eval=np.linspace(0, T, 4001))
+        return np.polyfit(s.t, np.unwrap(np.arctan2(s.y[1], s.y[0])), 1)[0]
+
+    share = (rate(k_big) - rate(0.0)) / k_big
+    expected = le.oblateness_rates(le.MOON_J2000["sidereal_month_days"], le.MOON_J2000["eccentricity"])["node_rate"] / k
+    assert share == pytest.approx(expected, rel=0.02)
