@@ -215,11 +215,16 @@ async def _student(i: int, url: str, t_end: float, lat: list, failures: list, re
             failures.append(f"client {i}: no first scene")
             return
         ready.append(time.perf_counter())
+        last = c.values.get(c.uuid_of(SLIDER))
         while time.perf_counter() < t_end:
             await asyncio.sleep(rng.uniform(*THINK_S))
             if time.perf_counter() >= t_end:
                 break
-            dt = await c.move_slider(SLIDER, round(rng.uniform(0.005, 0.3), 3))
+            value = last
+            while value == last:  # viser calls no callback for an unchanged value: always a new one
+                value = round(rng.uniform(0.005, 0.3), 3)
+            last = value
+            dt = await c.move_slider(SLIDER, value)
             if dt is None:
                 failures.append(f"client {i}: no redraw within {REDRAW_TIMEOUT_S:g} s")
             else:
