@@ -207,22 +207,35 @@ def _earth(values, progress=None):
         f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr.",
         "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψ_A, not the general precession p_A.",
         f"Moon's orbit: the osculating a, e, i at J2000 are calibrated so that the integrated mean month, e and i equal "
-        f"the observed ones; the node then regresses with period {node_period:.3f} yr (observed {NODE_PERIOD_YR:.3f} yr).",
+        f"the observed ones; the node then regresses " + (f"with period {node_period:.3f} yr" if long_enough else "")
+        + f" (observed {NODE_PERIOD_YR:.3f} yr).",
     ]
     span = t[-1] - t[0]
     if not lunar_ok:
-        notes.insert(0, f"Precession not measurable in a run shorter than the Moon's node period ({me.node_period_yr:.1f} yr): "
+        notes.insert(0, f"Precession not measurable in a run shorter than the Moon's node period ({NODE_PERIOD_YR:.1f} yr): "
                         f"over {_years(span)} the 18.6-year nod (17″ in longitude) is a slope and a curve that cannot be "
                         "told from the secular precession. The fit takes a quadratic for the unresolved long-period "
                         "terms; the precession rate and the lunar part are left empty (null in JSON).")
     if not solar_ok:
         notes.insert(0, f"The solar part of the precession is not measurable in a run shorter than a year ({_years(span)}).")
-    if unresolved:
+    # periods shown in the notes: the published ones (a short run's fitted rates are rough); the
+    # node from lunar_elements, the rest from the mean rates of Simon et al. 1994 (Meeus ch. 47)
+    published = {"18.6yr": NODE_PERIOD_YR * YR, "9.3yr": NODE_PERIOD_YR * YR / 2, "semiannual": 365.2596 / 2,
+                 "annual": 365.2596, "13.66d": 27.321582 / 2, "27.55d": 27.554550, "9.13d": 13.633}
+    unresolved = {k: published.get(k, P) for k, P in unresolved.items()}
+    long_p = {k: P for k, P in unresolved.items() if P * RAYLEIGH_SLACK > span}
+    close = [k for k in unresolved if k not in long_p]
+    if close:
+        notes.insert(0, "Not separable in this run (left empty): " + ", ".join(f"the {TERM_LABEL[k]} term" for k in close)
+                        + f", within 1/span = 1/{_years(span)} in frequency of a larger term fitted (2L☾ and 2L☾ − Ω are "
+                          "1/18.6 yr apart: the 13.66-day term then holds part of the 13.63-day one).")
+    if "semiannual" in long_p:
+        notes.insert(0, f"Over {_years(span)} the semi-annual nod (1.3″) is unresolved and taken up only by the "
+                        "quadratic of the fit: the shorter terms measured here are rough (the 13.66-day term in an "
+                        "18-day run: 10–20% off).")
+    if long_p:
         notes.insert(0, "Not measurable in a run shorter than their period (left empty, null in JSON): "
-                        + ", ".join(f"the {TERM_LABEL[k]} term (period {_years(P)})" if math.isfinite(P) else f"the {TERM_LABEL[k]} term"
-                                    for k, P in unresolved.items())
-                        + f". Terms closer in frequency than 1/span = 1/{_years(span)} are also not separated "
-                          "(e.g. 2L☾ and 2L☾ − Ω, 18.6 yr apart: the 13.66-day term then holds part of the 13.63-day one).")
+                        + ", ".join(f"the {TERM_LABEL[k]} term (period {_years(P)})" for k, P in long_p.items()) + ".")
     if not math.isfinite(node_period):
         notes.append(f"The Moon's node period needs a run of at least {NODE_MIN_YEARS:g} yr (the node oscillates by "
                      "1.5° in 173 days about its mean regression of 19°/yr); its apse period likewise "
