@@ -24,6 +24,11 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(10)
 GL_X = 0.5 * (_GL_X + 1.0)  # nodes on [0, 1]
 GL_W = 0.5 * _GL_W
 _MACHEP = 1.11022302462515654042e-16
+# Quadrature pieces per step beyond which a step is refused rather than computed: λh this large
+# means the body spins (or tumbles) thousands of times per step (e.g. moments 1e6 : 1e-6 under a
+# torque: ω ~ 1e9 rad/s), and the table of sn/cn/dn would need gigabytes (found by tests/test_fuzz.py:
+# the run hung with >1 GB of memory). Ordinary runs need at most a few hundred.
+MAX_NSUB = 20000
 
 
 @nb.njit(cache=True, fastmath=False)
@@ -229,6 +234,8 @@ def prepare(L, I, h):
     # being how sharp the integrand gets near sn = 0
     v = lam * h
     du_max = 0.5 * math.sqrt(max(J1 * p / (J2 * r), 1e-6))
+    if not abs(v) / du_max <= MAX_NSUB:
+        raise ValueError("free flow: step too large for this spin")
     nsub = max(1, int(math.ceil(abs(v) / du_max)))
     ip[5] = nsub
     n = GL_X.shape[0]

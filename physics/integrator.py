@@ -139,7 +139,13 @@ def integrate(
         rows = n // stride
         oL = np.empty((rows + 1, 3))
         oq = np.empty((rows + 1, 4))
-        L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, oL, oq)
+        try:
+            L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, oL, oq)
+        except ValueError as e:  # free_flow.prepare refuses a step far too large for the spin reached
+            if "free flow" not in str(e):
+                raise
+            raise ParameterError("step", step, f"too large for the spin this run reaches near t={t0 + h * done:.4g} "
+                                 "(thousands of turns per step); use a smaller step, torque or spread of moments") from None
         t_out.append(t0 + h * (done + stride * np.arange(1, rows + 1)))
         L_out.append(oL[1:])
         q_out.append(oq[1:])
