@@ -302,8 +302,9 @@ class HyperionExtra(_FAndZeta):
                     lines.append(p.hline(y))
             if y0 - pad <= q <= y1 + pad:
                 labels.append((q, h))
-        if lines:
-            self._segs("section/resonance_zones", np.concatenate(lines), (20, 150, 60), 0.014)
+        if lines:  # a little toward the camera, so the zones are drawn over the points
+            lift = 0.03 * np.cross(right, up)
+            self._segs("section/resonance_zones", np.concatenate(lines) + lift, (20, 150, 60), 0.016)
         names = {0.5: "1:2", 1.0: "1:1", 1.5: "3:2", 2.0: "2:1", 2.5: "5:2"}
         for q, h in labels:
             self._label(f"section/res_{q:g}", f"{names.get(q, f'{q:g}')} ± {h:.2f}", p.map(np.pi, q) + 0.25 * right)
@@ -639,5 +640,6 @@ class EarthExtra(_PoleExtra):
                     fov_deg=60.0)
 
     def trail(self, name):
-        """The Moon's direction sampled every few years is a scatter, not a path: no trail."""
-        return not (name == "moon" and self.view._spec is not None and self.view._spec.name == "earth-long-view")
+        """No trail for the Moon: sampled every few years (earth-long-view) its direction is a
+        scatter, and over a century (earth) a solid band 2 × 5.1° wide that hides the Earth."""
+        return name != "moon"
