@@ -406,23 +406,35 @@ def test_lunar_position_and_optical_libration_against_meeus_examples():
     assert abs(np.degrees(np.max(np.abs(bp))) - moon.OPTICAL_MAX_LAT_DEG) < 0.1
 
 
-def test_moon_physical_libration_against_euler_and_published_terms():
+def test_moon_physical_libration_against_dop853_euler_and_published_terms():
     from physics import moon
-    r = get("moon").simulate({"years": 6.0})
-    m = r.metrics
+    from physics.checks.libration import moon_runs
+
+    runs = moon_runs()  # the 6-year run, the same at twice the step, and scipy DOP853 of the same model
+    m = runs["run"]
     # the face seen from the Earth: optical libration, the body's own motion only arcminutes
     assert m["sub_earth_vs_uniform_lon_max_arcsec"] < 300
     assert abs(m["optical_libration_lon_max_deg"] - moon.OPTICAL_MAX_LON_DEG) < 0.25
     assert abs(m["optical_libration_lat_max_deg"] - moon.OPTICAL_MAX_LAT_DEG) < 0.15
+    # the pass criterion: the same rigid quadrupole model integrated independently (DOP853, rtol 1e-10)
+    # gives the same fitted terms, within 3× the splitting error estimated by step doubling (4th order)
+    for key in ("mprime", "annual"):
+        sim, ref = m[f"physical_libration_{key}_arcsec"], runs["dop853"][key]
+        est = abs(runs["run_2h"][f"physical_libration_{key}_arcsec"] - sim) / 15
+        assert 0 < est < 1e-4, key  # the 4th-order splitting at 0.25 d: micro-arcseconds
+        assert abs(sim - ref) < 3 * est, key
     # Euler's forced libration (§833/§836) term by term: linear in e and in each term, so a few %
     for key in ("mprime", "annual", "evection"):
         sim = m[f"physical_libration_{key}_arcsec"]
         eul = m[f"physical_libration_{key}_euler_arcsec"]
         assert abs(sim / eul - 1) < 0.05, key
-    # published (Eckhardt 1981 via Meeus ch. 53): −16.8″ sin M′, +90.7″ E sin M, −4.14″ sin(2D−M′).
-    # Not modelled: the Moon's third-degree gravity field and the Sun's direct torque (~1″ each).
-    assert abs(m["physical_libration_mprime_arcsec"] - m["physical_libration_mprime_published_arcsec"]) < 1.6
-    assert abs(m["physical_libration_annual_arcsec"] / m["physical_libration_annual_published_arcsec"] - 1) < 0.02
+    # published (Eckhardt 1981 via Meeus ch. 53): −16.8″ sin M′, +90.7″ E sin M, −4.14″ sin(2D−M′) —
+    # information, not a criterion: the fuller theory has terms this model leaves out (the Moon's
+    # third-degree field, the Sun's direct torque), whose sizes are not sourced here. Only the signs
+    # and magnitudes are asserted (a model off by a factor would be a bug, not a missing term).
+    assert m["physical_libration_mprime_arcsec"] * m["physical_libration_mprime_published_arcsec"] > 0
+    assert 0.8 < m["physical_libration_mprime_arcsec"] / m["physical_libration_mprime_published_arcsec"] < 1.2
+    assert 0.8 < m["physical_libration_annual_arcsec"] / m["physical_libration_annual_published_arcsec"] < 1.2
     assert abs(m["physical_libration_evection_arcsec"] + 0.00115 * 3600) < 0.3
     assert m["free_libration_amplitude_arcsec"] < 20  # started on Euler's forced solution
 

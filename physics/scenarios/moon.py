@@ -44,13 +44,13 @@ def fit_physical_libration(t, tau, free_periods=np.linspace(800.0, 1400.0, 61)):
     return coef, float(P), float(np.hypot(c[-2], c[-1])), r
 
 
-def _moon(values, progress=None):
+def initial_state(values):
+    """The run's set-up, shared with the DOP853 reference: (t0 days from J2000, duration, moments,
+    2N, q0, ω0, Earth position function of the run's time)."""
     beta, gamma = values["beta"], values["gamma"]
     I = moon.moments(beta, gamma)
     t0 = (values["start_year"] - J2000_YEAR) * 365.25
     duration = values["years"] * 365.25
-    h = values["step_days"]
-    two_N_probe = None
     # 2N = 3γ·GM_E⟨1/r³⟩ over the run (Euler's n, §833, with the Moon's mean 1/s³)
     tg = t0 + np.linspace(0.0, duration, 4001)
     _, _, dist = moon.moon_geocentric(tg)
@@ -69,6 +69,44 @@ def _moon(values, progress=None):
         q0 = quat.multiply(q0, quat.from_axis_angle([0, 0, 1], tau_e[1]))
         w0 = w0 + np.array([0.0, 0.0, (tau_e[2] - tau_e[0]) / 2e-3])
     pos = lambda t: moon.earth_from_moon(t0 + np.asarray(t))  # noqa: E731
+    return t0, duration, I, two_N, q0, w0, pos
+
+
+def reference_dop853(values, t, rtol=1e-12, atol=1e-14):
+    """The same rigid quadrupole model as the run (moments, Earth on the truncated lunar theory,
+    first-order torque §815, same start), integrated independently by scipy DOP853 (ω and the
+    quaternion, physics.euler_equations.rhs_state): attitude quaternions at the run's times t."""
+    from scipy.integrate import solve_ivp
+
+    from ..euler_equations import rhs_state
+    from ..gravity_gradient import torque_first_order
+
+    t0, duration, I, _, q0, w0, pos = initial_state(values)
+
+    def torque(tt, q, w):
+        return torque_first_order(I, quat.rotate_inverse(q, pos(np.array([tt]))[0]), moon.GM_EARTH)
+
+    t = np.asarray(t, float)
+    sol = solve_ivp(rhs_state, (0.0, float(t[-1])), np.r_[w0, q0], method="DOP853", rtol=rtol, atol=atol,
+                    args=(I, torque), t_eval=t)
+    q = sol.y[3:].T
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def physical_libration_terms(values, t, q, free_periods=np.linspace(800.0, 1400.0, 61)):
+    """The run's analysis (t from the start, attitudes q), as in the scenario for spans of 3 years
+    or more: fitted physical-libration coefficients {label: rad}, free period, free amplitude, rms
+    (fit_physical_libration)."""
+    t0 = (values["start_year"] - J2000_YEAR) * 365.25
+    tt = t0 + np.asarray(t, float)
+    tau = moon.physical_libration(q, tt, values["equator_inclination_deg"])[:, 2]
+    return fit_physical_libration(tt, tau, free_periods)
+
+
+def _moon(values, progress=None):
+    gamma = values["gamma"]
+    h = values["step_days"]
+    t0, duration, I, two_N, q0, w0, pos = initial_state(values)
     n = int(np.ceil(duration / h))
     stride = max(1, int(np.ceil(n / 6000)))
     t, L, q = integrate(I, w0, duration, h, q0=q0, masses=[PointMass(moon.GM_EARTH, pos)], scheme="yoshida4",
@@ -147,7 +185,6 @@ def _moon(values, progress=None):
     }
     traj.series.update({"libration_longitude_deg": series["libration_longitude_deg"],
                         "libration_latitude_deg": series["libration_latitude_deg"]})
-    del two_N_probe
     return Result("moon", values, traj, m, comps, notes, plot_series=series)
 
 
