@@ -250,3 +250,21 @@ def test_session_applies_the_moons_camera_and_gives_the_view_back():
             cb.value = False  # the checkbox's callback: option off → default camera and fov back
             assert client.camera.fov == pytest.approx(np.radians(75.0))
             assert tuple(client.camera.position) != tuple(pos)
+
+
+def test_pole_near_axis_path_is_the_body_pole_magnified_about_its_start(results):
+    spec, res = results["pole-near-axis"]
+    _, view = _show(spec, res)
+    ex = view.extra
+    assert any(n.startswith("/world/body/pole_path/") for n in view._h)  # drawn on the body frame
+    u = res.trajectory.omega_body / np.linalg.norm(res.trajectory.omega_body, axis=1, keepdims=True)
+    k = ex.wiggle_factor
+    assert k >= 10.0  # in the body the pole moves by a fraction of a degree in a few turns
+    drawn = ex._pole / np.linalg.norm(ex._pole, axis=1, keepdims=True)
+    # the drawn departure from the start is k times the true one (small angles)
+    true = np.degrees(np.arccos(np.clip(u @ u[0], -1, 1)))
+    shown = np.degrees(np.arccos(np.clip(drawn @ drawn[0], -1, 1)))
+    j = int(np.argmax(true))
+    assert shown[j] == pytest.approx(k * true[j], rel=0.02)
+    view.set_frame(j)
+    assert np.allclose(ex._pdot.position, ex._pole[j])

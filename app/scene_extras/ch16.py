@@ -18,9 +18,11 @@ physical quantity.
 - hyperion: the surface of section (θ mod π, θ̇/n at each periapse) as a flat panel beside the
   body, points coloured by the Lyapunov exponent, with the Goldreich–Peale resonance zones
   p ± half-width drawn as lines; and the same F / ζ drawings as the libration scenes.
-- pole-near-axis, precession-circular (§840–849): the precession cone (lines from the centre to
-  the figure axis's path on the celestial sphere, and the mean cone about the orbit pole) and
-  the nutation wiggle magnified by a factor shown in its label.
+- pole-near-axis (§840–843): the path of the rotation pole O in the body (direction of ω,
+  beyond the A axis), its departure from the start magnified by a factor shown in its label.
+- precession-circular (§844–849): the precession cone (lines from the centre to the figure
+  axis's path on the celestial sphere, and the mean cone about the orbit pole) and the nutation
+  wiggle magnified by a factor shown in its label.
 - earth, earth-long-view: the Earth's axis and equator (body-fixed), the ecliptic, the Sun and
   Moon directions, the bright stars on the celestial sphere (assets/bright_stars.csv via
   app.bright_stars; the brightest and the pole stars labelled), the pole's path with year
@@ -496,7 +498,57 @@ class _PoleExtra(_Ch16):
             self._wdot.position = _tuple(self._wig[i])
 
 
-@register_extra("pole-near-axis", "precession-circular")
+def magnified_about_start(u, target_deg=8.0, max_factor=1e6):
+    """Unit vectors u (N,3) with their departure from u[0] magnified by k (1, 2 or 5 × 10ⁿ,
+    chosen so the largest departure is drawn about `target_deg`). Returns (path, k)."""
+    u = _unit(u)
+    d = u - u[0]
+    dev = max(float(np.max(np.linalg.norm(d, axis=1))), 1e-300)
+    k = _nice(float(np.clip(np.radians(target_deg) / dev, 1.0, max_factor)))
+    return _unit(u[0] + k * d), k
+
+
+@register_extra("pole-near-axis")
+class PoleNearAxisExtra(_Ch16):
+    """§840–843: the momentary motion of the pole of rotation O near the principal axis A: the
+    direction of ω in the body (Trajectory.omega_body) drawn on the body frame beyond the A axis,
+    its departure from the start magnified (in a few turns O moves by a fraction of a degree;
+    Euler: at right angles to the arc AF), with the direction to the centre of force."""
+
+    options = {"pole_path": ("path of the rotation pole O in the body, magnified", True),
+               "centre": ("direction to the centre of force", True)}
+    RADIUS = 1.6
+
+    def build(self, traj, result):
+        r = self.view.root
+        self._pole = None
+        if self.values.get("pole_path", True):
+            n = len(traj.t)
+            idx = np.unique(np.linspace(0, n - 1, min(n, 4000)).round().astype(int))
+            path, k = magnified_about_start(traj.omega_body, target_deg=10.0)
+            self.wiggle_factor = k
+            self._pole = self.RADIUS * path
+            self.path(f"{r}/body/pole_path", self._pole[idx], WIGGLE_COLOR, 0.02, idx=idx)
+            name = f"{r}/body/pole_now"
+            self._pdot = self.node(name, lambda: self.scene.add_icosphere(
+                name, radius=0.04, color=WIGGLE_COLOR, cast_shadow=False, receive_shadow=False))
+            name = f"{r}/body/pole_label"
+            text = f"pole O ×{k:g} (its departure from the start)"
+            pos = _tuple(self.RADIUS * 1.1 * _unit(traj.omega_body[0]))
+            self.node(name, lambda: self.scene.add_label(name, text, position=pos), text=text, position=pos)
+        self._cline = None
+        if self.values.get("centre", True) and traj.bodies:
+            self._cdir = _unit(np.asarray(next(iter(traj.bodies.values())), float))
+            self._cline = self._segs("centre_direction", np.zeros((1, 2, 3)), F_COLOR, 0.015)
+
+    def set_frame(self, i):
+        if self._pole is not None:
+            self._pdot.position = _tuple(self._pole[i])
+        if self._cline is not None:
+            self._cline.points = _f32([[[0, 0, 0], ORBIT_RADIUS * self._cdir[i]]])
+
+
+@register_extra("precession-circular")
 class PrecessionExtra(_PoleExtra):
     options = {"cone": ("precession cone (figure axis on the celestial sphere)", True),
                "wiggle": ("nutation wiggle, magnified", True),
