@@ -49,6 +49,7 @@ TRAIL_CHUNKS = 24  # a path is sent once, in chunks whose visibility grows with 
 # already at that time: the picture is the same, but a path that retraces itself (a periodic
 # polhode) costs far fewer points, and software WebGL pays per point.
 REPEAT_CELL = 0.7
+DRAW_MAX = 1e4  # scene units; paths go out as float16 (inf beyond 65504): larger scales fall back (below)
 VECTOR_LENGTH_TOL = 0.02  # ω / L arrows: geometry re-sent only when the length changes by 2 %
 AXIS_TRAIL_RADIUS = 1.6
 # Paths live in scene units of order 1 (body ≈ 1, celestial sphere 2.4, orbits ≤ 3), where
@@ -477,6 +478,11 @@ class SceneView:
         else:  # starts at rest (e.g. initial-axis): the largest ω of the run is drawn 1.3 long
             wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
             self.k_omega = 1.3 / wmax if wmax > 0 else 1.0
+        # a spin-up from nearly at rest (found by tests/test_fuzz.py: hyperion with probe_rate 1e-66 drew
+        # ω ~1e66 long, inf in float16): beyond DRAW_MAX the largest ω of the run is drawn 1.3 long
+        wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
+        if not (np.isfinite(self.k_omega) and self.k_omega * wmax <= DRAW_MAX):
+            self.k_omega = 1.3 / wmax if wmax > 0 and np.isfinite(1.3 / wmax) else 1.0
         # ω and L: an arrow along +z of its own frame, with its label; playback turns the frame
         # (a pose update, no geometry) and re-sends the arrow only when its length changes by
         # more than VECTOR_LENGTH_TOL
@@ -555,7 +561,11 @@ class SceneView:
             f"{r}/body/momentum_sphere", sph.vertices, sph.faces, color=(200, 150, 255), opacity=0.2, side="double",
             cast_shadow=False, receive_shadow=False))
         self._static["momentum_sphere"] = [h]
-        self._add_path("momentum_sphere", f"{r}/body/L_path", 1.3 / self._Lmag * traj.L_body[self._idx], L_COLOR,
+        k_L = 1.3 / self._Lmag
+        Lmax = float(np.max(np.linalg.norm(traj.L_body, axis=1)))
+        if not (np.isfinite(k_L) and k_L * Lmax <= DRAW_MAX):  # |L| grows from nearly nothing (as ω above)
+            k_L = 1.3 / Lmax if Lmax > 0 and np.isfinite(1.3 / Lmax) else 1.0
+        self._add_path("momentum_sphere", f"{r}/body/L_path", k_L * traj.L_body[self._idx], L_COLOR,
                        0.02, idx=self._idx)
 
     def _build_herpolhode(self, traj) -> None:

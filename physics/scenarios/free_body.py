@@ -117,6 +117,8 @@ register(Scenario(
 
 def _check_flip(values):
     I = validate_moments(values["inertia"], "inertia")
+    if values["spin"] == 0:  # found by tests/test_fuzz.py: the error named "omega0", not a parameter here
+        raise ParameterError("spin", values["spin"], "nonzero (a body at rest does not flip), allowed range [-50, 50] rad/s")
     s = np.sort(I)
     if not (s[0] < s[1] < s[2]):
         raise ParameterError("inertia", values["inertia"],

@@ -160,6 +160,10 @@ def _libration_circular(values, progress=None):
     T_ref = T_exact if (np.isfinite(T_exact) and case != "separatrix") else T_small
     if not np.isfinite(T_ref):
         T_ref = 2 * np.pi / d
+    if d > 0 and T_ref > 1e6 * 2 * np.pi / d:  # found by tests/test_fuzz.py: asymmetry 1e-172 gave a
+        # libration period of 1e86, a step of 2e84 and ω ~ 1e69 after one step
+        raise ParameterError("asymmetry", g, "0, or large enough for a libration within 10⁶ revolutions "
+                             "(|asymmetry| ≳ 1e-12), allowed range [-0.45, 0.45]")
     duration = values["periods"] * T_ref
     step = T_ref / values["steps_per_period"]
     n = int(np.ceil(duration / step))

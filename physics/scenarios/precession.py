@@ -229,6 +229,9 @@ def resonance_sweep(flattening, obliquity, ratios=(20.0, 8.0, 4.0, 3.0, 2.5, 2.2
 
 
 def _check_circular(values):
+    if values["orbits"] < 0.5:  # found by tests/test_fuzz.py: orbits=1e-258 made the fits' SVD fail
+        raise ParameterError("orbits", values["orbits"], "at least 0.5 revolutions (the fits of the secular "
+                             "rate and the 2φ term need half a turn), allowed range [0.5, 1e+05] revolutions")
     if values["orbits"] * values["steps_per_orbit"] > 5e6:
         raise ParameterError("steps_per_orbit", values["steps_per_orbit"],
                              f"orbits × steps_per_orbit ≤ 5e6 (here {values['orbits']:g} orbits)")
