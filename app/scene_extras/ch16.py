@@ -103,8 +103,13 @@ def _slerp_arc(a, b, radius, n=24):
     """Points of the shorter great-circle arc from unit vector a to unit vector b."""
     a, b = _unit(a), _unit(b)
     ang = np.arccos(np.clip(a @ b, -1.0, 1.0))
-    if ang < 1e-9:
+    if ang < 1e-9 or not np.isfinite(ang):
         return np.stack([a, b]) * radius
+    if np.pi - ang < 1e-6:  # opposite: any half great circle; take one through the z axis side
+        c = np.cross(a, [0.0, 0.0, 1.0])
+        c = c if np.linalg.norm(c) > 1e-9 else np.cross(a, [1.0, 0.0, 0.0])
+        c = _unit(c)
+        return np.concatenate([_slerp_arc(a, c, radius, n // 2), _slerp_arc(c, b, radius, n - n // 2)])
     s = np.linspace(0.0, 1.0, n)
     pts = (np.sin((1 - s) * ang)[:, None] * a + np.sin(s * ang)[:, None] * b) / np.sin(ang)
     return radius * pts
