@@ -329,8 +329,11 @@ class HyperionExtra(_FAndZeta):
 
 # ---- the Moon: maria and the view from the Earth ----------------------------------------------
 
-# (selenographic latitude, east longitude, radius) in degrees: the large maria, rounded (Rükl,
-# Atlas of the Moon; positions to a few degrees are enough to recognise the face).
+# (selenographic latitude, east longitude, radius) in degrees: the large near-side maria as round
+# patches (Procellarum, Imbrium, Serenitatis, Tranquillitatis, Crisium, Fecunditatis, Nectaris,
+# Nubium, Humorum, Insularum, Frigoris, Cognitum), approximate centres written from general lunar
+# maps, not transcribed from a catalogue: good to several degrees, enough to recognise the face and
+# see it wobble, not for measuring.
 MARIA = (
     (18, -57, 24), (32, -40, 14), (5, -45, 12),  # Oceanus Procellarum (three overlapping discs)
     (33, -16, 16), (28, 17, 10), (8, 31, 11), (17, 59, 8), (-8, 51, 9), (-15, 35, 7),
