@@ -11,7 +11,7 @@ from .. import earth_precession as EP
 from .. import quaternion as quat
 from ..params import Param, ParameterError
 from ..precession import ARCSEC, euler_N, fit_pole, linear_theory, pole_angles
-from ..three_body.lunar_elements import NODE_PERIOD_YR
+from ..three_body.lunar_elements import NODE_PERIOD_SIDEREAL_YR, NODE_PERIOD_YR
 from ..trajectory import Trajectory
 from .base import Comparison, Result, Scenario, register
 
@@ -181,8 +181,9 @@ def _earth(values, progress=None):
                    "(the Oppolzer term, ≈ 2δ/ε ≈ 7%). IAU 2000 includes the non-rigid response (≈3%)"),
         Comparison("nutation in obliquity, 13.66 d (cos 2L☾)", eul_nut["13.66d"]["deps"], sim(nut["13.66d"]["deps"]),
                    iau["13.66d"]["deps"], "arcsec", f"angular-momentum axis: {nut_L['13.66d']['deps']:.4f}″"),
-        Comparison("Moon's node regression period", None, sim(node_period), NODE_PERIOD_YR, "yr",
-                   "from the REBOUND Sun–Earth–Moon integration, not imposed"),
+        Comparison("Moon's node regression period", None, sim(node_period), NODE_PERIOD_SIDEREAL_YR, "yr",
+                   "from the REBOUND Sun–Earth–Moon integration, not imposed; against the fixed J2000 ecliptic "
+                   f"(sidereal; {NODE_PERIOD_YR:.3f} yr from the moving equinox)"),
     ]
     # why Euler's §846 sum differs: A for C in N, circles (no eccentricity), the Moon in the ecliptic
     ws = mod["sun"] / (mod["sun"] + mod["moon"])
@@ -208,7 +209,8 @@ def _earth(values, progress=None):
         "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψ_A, not the general precession p_A.",
         f"Moon's orbit: the osculating a, e, i at J2000 are calibrated so that the integrated mean month, e and i equal "
         f"the observed ones; the node then regresses " + (f"with period {node_period:.3f} yr" if long_enough else "")
-        + f" (observed {NODE_PERIOD_YR:.3f} yr).",
+        + f" (observed {NODE_PERIOD_SIDEREAL_YR:.4f} yr against the fixed ecliptic, {NODE_PERIOD_YR:.3f} yr from the "
+        "moving equinox, which sets the nutation periods).",
     ]
     span = t[-1] - t[0]
     if not lunar_ok:
