@@ -31,6 +31,7 @@ from physics.scenarios import all_scenarios
 SCENARIOS = sorted(all_scenarios(), key=lambda s: s.name)
 NAMES = [s.name for s in SCENARIOS]
 STATS: Counter = Counter()
+FOUND: list[str] = []  # runs refused while simulating, or reported diverged (printed at the end)
 
 # ---- 1. validation -------------------------------------------------------------------------
 
@@ -101,7 +102,7 @@ def check_error(spec, err: ParameterError, fuzzed: set[str]):
 
 
 @pytest.mark.parametrize("name", NAMES)
-@settings(max_examples=50, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=80, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 @given(data=st.data())
 def test_validation_fuzz(name, data):
     spec = next(s for s in SCENARIOS if s.name == name)
@@ -222,14 +223,14 @@ SLOW = {"hyperion", "libration-eccentric", "lunar-perturbation", "earth", "earth
 
 
 @pytest.mark.parametrize("name", [n for n in NAMES if n not in SLOW])
-@settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=15, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 @given(data=st.data())
 def test_simulation_fuzz(name, data):
     simulate_fuzzed(name, data)
 
 
 @pytest.mark.parametrize("name", sorted(SLOW & set(NAMES)))
-@settings(max_examples=3, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=4, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 @given(data=st.data())
 def test_simulation_fuzz_slow(name, data):
     simulate_fuzzed(name, data)
@@ -249,6 +250,7 @@ def simulate_fuzzed(name, data):
         result = spec.simulate_fn(values)
     except ParameterError as e:  # e.g. Diverged: no finite sample at all
         STATS["simulation: ParameterError"] += 1
+        FOUND.append(f"{name}: {e}")
         check_error(spec, e, set(given_) | {"parameters"})
         return
     out = result.to_json(spec)
@@ -265,6 +267,7 @@ def simulate_fuzzed(name, data):
         assert np.all(np.isfinite(np.asarray(arr, float))), f"{name}: non-finite {label} with {values}"
     if result.status == "diverged":
         STATS["simulation: diverged (reported)"] += 1
+        FOUND.append(f"{name}: {result.warnings[0]} with {values}")
         assert any("diverged at t=" in w for w in result.warnings) and out["status"] == "diverged"
     else:
         assert result.status == "ok"
@@ -275,3 +278,5 @@ def simulate_fuzzed(name, data):
 def test_zz_report_counts():
     """Prints how many cases ran (pytest -s)."""
     print("\nfuzz counts:", dict(STATS))
+    for f in FOUND:
+        print("  ", f[:300])

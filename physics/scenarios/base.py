@@ -161,14 +161,34 @@ def guard_result(result):
     return result
 
 
-def _guarded(fn):
+def _rename_error(e: ParameterError, params, values) -> ParameterError:
+    """A ParameterError about a derived quantity (e.g. the integrator's `step`, computed from
+    steps_per_turn) is re-worded to name the scenario's own parameter that sets it, with its
+    allowed range (found by tests/test_fuzz.py: pole-near-axis said "step=157080: ...")."""
+    names = [p.name for p in params]
+    if e.name in names or e.name in ("parameters", "scenario", "preset"):
+        return e
+    stem = e.name.split("_")[0]
+    related = [p for p in params if p.name.startswith(stem) or stem in p.name]
+    if len(related) == 1:
+        p = related[0]
+        return ParameterError(p.name, values.get(p.name) if isinstance(values, dict) else None,
+                              f"gives {e}; {p.allowed()}")
+    return ParameterError("parameters", "these values", str(e))
+
+
+def _guarded(fn, params=()):
     if getattr(fn, "__theoria_guarded__", False):
         return fn
     import functools
 
     @functools.wraps(fn)
     def simulate_fn(values, *args, **kwargs):
-        return guard_result(fn(values, *args, **kwargs))
+        try:
+            result = fn(values, *args, **kwargs)
+        except ParameterError as e:
+            raise _rename_error(e, params, values) from None
+        return guard_result(result)
 
     simulate_fn.__theoria_guarded__ = True
     return simulate_fn
@@ -193,7 +213,7 @@ class Scenario:
 
     def __post_init__(self):
         # every caller (CLI, app, record, export, tests) gets the central divergence check
-        object.__setattr__(self, "simulate_fn", _guarded(self.simulate_fn))
+        object.__setattr__(self, "simulate_fn", _guarded(self.simulate_fn, self.params))
 
     def resolve(self, given: dict[str, Any] | None = None) -> dict[str, Any]:
         values = resolve(self.params, given)
