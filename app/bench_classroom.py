@@ -70,6 +70,8 @@ class ViserProtocolClient:
         self.labels: dict[str, str] = {}  # gui label → uuid
         self.values: dict[str, object] = {}  # gui uuid → last value sent by the server
         self.status_uuid: str | None = None
+        self.markdown: dict[str, str] = {}  # markdown uuid → content (info, Euler table, status)
+        self.notifications: list[tuple[str, str]] = []  # (title, body) as the page would pop them up
         self.update_no = 0  # k of the last "(update #k)" seen
         self.scene_names: set[str] = set()
         self.path_msgs = 0  # path point-cloud messages received (scene rebuilds)
@@ -107,11 +109,16 @@ class ViserProtocolClient:
     def _handle(self, m: dict) -> None:
         self.messages += 1
         typ = m.get("type", "")
+        if "Notification" in typ and isinstance(m.get("props"), dict) and "title" in m["props"]:
+            self.notifications.append((m["props"].get("title", ""), m["props"].get("body", "")))
         if typ.startswith("Gui") and "props" in m and isinstance(m["props"], dict):
             label = m["props"].get("label")
             if label:
                 self.labels[label] = m["uuid"]
             content = m["props"].get("_markdown", m["props"].get("content"))
+            if isinstance(content, str):
+                self.markdown[m["uuid"]] = content
+
             if isinstance(content, str) and content.startswith("*simulat"):
                 self.status_uuid = m["uuid"]
                 self._status(content)
@@ -119,6 +126,8 @@ class ViserProtocolClient:
                 self.values[m["uuid"]] = m["value"]
         elif typ == "GuiUpdateMessage":
             up = m.get("updates", {})
+            if m.get("uuid") in self.markdown and "_markdown" in up:
+                self.markdown[m["uuid"]] = up["_markdown"]
             if m.get("uuid") == self.status_uuid:
                 for key in ("_markdown", "content"):
                     if key in up:

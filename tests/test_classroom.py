@@ -86,3 +86,62 @@ def test_concurrent_clients_each_get_their_own_redraw(server):
     lat = asyncio.run(main())
     assert all(x is not None for x in lat), lat
     assert _wait(lambda: not sessions and not _session_threads())
+
+
+def test_app_reports_divergence_and_survives_a_raising_scenario():
+    """In the app: a diverging run shows 'diverged at t=...' beside the scene (the finite part is
+    drawn); a scenario that raises gives the browser a notification and the server keeps serving
+    the next browser."""
+    import numpy as np
+
+    from physics.params import Param
+    from physics.scenarios import base
+    from physics.trajectory import Trajectory
+
+    def blowup(values, progress=None):
+        t = np.linspace(0.0, 5.0, 51)
+        L = np.tile([1.0, 0.5, 0.2], (51, 1)) * (1 + t[:, None])
+        L[t >= 3.0] = np.inf
+        traj = Trajectory(t, np.tile([1.0, 0, 0, 0], (51, 1)), L, np.array([1.0, 2.0, 3.0]))
+        return base.Result("test-blowup", dict(values), traj, {})
+
+    def boom(values, progress=None):
+        raise RuntimeError("deliberate failure in a test scenario")
+
+    specs = [base.Scenario("test-blowup", "blow-up", "§0", "ch. 15", "diverges", (Param("x", 1.0, 0.0, 2.0),), blowup),
+             base.Scenario("test-broken", "broken", "§0", "ch. 15", "raises", (Param("x", 1.0, 0.0, 2.0),), boom)]
+    for s in specs:
+        base.REGISTRY[s.name] = s
+    try:
+        for name in ("test-blowup", "test-broken"):
+            with contextlib.redirect_stdout(io.StringIO()):
+                srv, sessions = make_server(port=_free_port(), host="127.0.0.1", scenario=name, verbose=False)
+            try:
+                url = f"ws://127.0.0.1:{srv.get_port()}"
+
+                async def visit():
+                    c = ViserProtocolClient(url)
+                    await c.connect()
+                    if name == "test-blowup":
+                        ok = await c.wait_for(lambda: any("diverged at t=3" in v for v in c.markdown.values()), 120)
+                        shown = c.update_no
+                    else:
+                        ok = await c.wait_for(lambda: any("deliberate failure" in b for _, b in c.notifications), 120)
+                        shown = None
+                    await c.close()
+                    return ok, shown, c.notifications
+
+                for _ in range(2):  # a second browser is served as well
+                    ok, shown, notes = asyncio.run(visit())
+                    assert ok, notes
+                    if name == "test-blowup":
+                        assert shown >= 1  # the finite part was drawn
+                    else:
+                        assert any(t.startswith("Error in test-broken") for t, _ in notes), notes
+                assert _wait(lambda: not sessions and not _session_threads())
+            finally:
+                with contextlib.redirect_stdout(io.StringIO()):
+                    srv.stop()
+    finally:
+        for s in specs:
+            base.REGISTRY.pop(s.name, None)
