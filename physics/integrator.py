@@ -141,6 +141,9 @@ def integrate(
         oq = np.empty((rows + 1, 4))
         try:
             L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, oL, oq)
+        except ZeroDivisionError:  # found by tests/test_fuzz.py: spin 1e-155 with moments ~1e-6 underflows
+            raise ParameterError("parameters", "these values", "rates so small that their squares underflow "
+                                 "(|ω| below ~1e-150): practically at rest; use larger rates or torques") from None
         except ValueError as e:  # free_flow.prepare refuses a step far too large for the spin reached
             if "free flow" not in str(e):
                 raise

@@ -194,7 +194,11 @@ def _initial_axis(values, progress=None):
     I = validate_moments(values["inertia"], "inertia")
     tau = np.array(values["torque"])
     traj = _run(values, np.zeros(3), torque=tau, progress=progress)
-    axis_e, acc_e = initial_axis(tau, I)
+    try:
+        axis_e, acc_e = initial_axis(tau, I)
+    except ValueError:  # a torque so small that I⁻¹τ underflows (1e-200): found while fuzzing
+        raise ParameterError("torque", values["torque"], "not practically zero (|component| ≳ 1e-150), "
+                             "each component in [-1000, 1000] N m") from None
     # the numerical start: one short step from rest (ω = ω̇₀t + O(t³), so the axis is O(t²) off)
     h = values["probe_time"]
     _, L, _ = integrate(I, np.zeros(3), h, h / 4, torque_body=tau)
