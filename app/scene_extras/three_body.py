@@ -262,7 +262,10 @@ class Syzygy(_OrbitExtra):
             return
         M = self.INSET_AMPLITUDE / (k * amp0)
         centre = k * p + np.asarray(self.INSET_OFFSET)
-        pts = centre + k * M * rel
+        with np.errstate(over="ignore", invalid="ignore"):
+            pts = centre + k * M * rel
+        if not np.all(np.isfinite(pts)):  # a swing too small to magnify (amplitude 1e-311°: found by test_fuzz)
+            return
         inside = np.linalg.norm(pts - centre, axis=1) <= self.INSET_CLIP
         last = int(np.argmin(inside)) if not inside.all() else len(inside)
         self.inset_pts, self.inset_last = pts, last

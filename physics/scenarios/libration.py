@@ -138,6 +138,8 @@ def circular_setup(gamma, rate, zeta0, spin_ratio):
 
 def _libration_circular(values, progress=None):
     g, d = values["asymmetry"], values["orbital_rate"]
+    if d < 1e-100:  # found by tests/test_fuzz.py: 1e-308 made gm = d² underflow, then NaN → int crashed
+        raise ParameterError("orbital_rate", d, "at least 1e-100 (its square must not underflow), allowed range (0, 100] rad/unit")
     zeta0 = np.radians(values["zeta0_deg"])
     spin = values["spin_ratio"]
     gm = d * d
@@ -310,6 +312,8 @@ class ForcedSolution:
 
 def _libration_eccentric(values, progress=None):
     g, e, n = values["asymmetry"], values["eccentricity"], values["orbital_rate"]
+    if n < 1e-100:  # as in libration-circular: n² must not underflow
+        raise ParameterError("orbital_rate", n, "at least 1e-100 (its square must not underflow), allowed range (0, 100] rad/unit")
     I = planar_moments(g)
     gm = n * n
     orbit = KeplerOrbit(a=1.0, e=e, n=n)
