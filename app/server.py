@@ -31,7 +31,17 @@ from . import gallery
 from .controls import ParamControls
 from .scene import OVERLAYS, SceneView
 
-PLAY_HZ = 60.0  # playback tick (the client renders at display rate; messages go out each 1/60 s)
+PLAY_HZ = 60.0  # playback tick for one browser (messages go out each 1/60 s)
+# Pose updates per second shared by all browsers: the server runs on one core (the GIL), and 30
+# sessions at 60 Hz alone took 75% of it (docs/robustness.md), so with many browsers each plays
+# back at a lower rate and slider changes stay quick.
+PLAY_BUDGET = 360.0
+PLAY_HZ_MIN = 12.0
+
+
+def playback_hz(active_sessions: int) -> float:
+    """Playback rate of each session when `active_sessions` browsers are connected."""
+    return max(PLAY_HZ_MIN, min(PLAY_HZ, PLAY_BUDGET / max(1, active_sessions)))
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
 UPLOT_POINTS = 2000
 PROGRESS_SHOW_AFTER = 0.4  # s: the progress bar appears only for runs longer than this
@@ -117,8 +127,11 @@ def comparison_markdown(result) -> str:
 class ClientSession:
     """GUI, scene, worker and playback of one browser."""
 
+    active = 0  # sessions open on this process (sets the playback rate)
+
     def __init__(self, server: viser.ViserServer, client: viser.ClientHandle, scenario: str | None):
         self.server, self.client = server, client
+        ClientSession.active += 1
         self.scenarios = {s.name: s for s in all_scenarios()}
         self.spec = get(scenario) if scenario else self.scenarios.get("free-tumble") or next(iter(self.scenarios.values()))
         self.view = SceneView(client.scene, "/world")
@@ -531,9 +544,11 @@ class ClientSession:
                 if self._closed:
                     return
                 traceback.print_exc()
-            time.sleep(max(0.0, 1.0 / PLAY_HZ - (time.perf_counter() - now)))
+            time.sleep(max(0.0, 1.0 / playback_hz(ClientSession.active) - (time.perf_counter() - now)))
 
     def close(self) -> None:
+        if not self._closed:
+            ClientSession.active = max(0, ClientSession.active - 1)
         self._closed = True
         with self._cv:
             self._cv.notify()

@@ -31,7 +31,7 @@ _MACHEP = 1.11022302462515654042e-16
 MAX_NSUB = 20000
 
 
-@nb.njit(cache=True, fastmath=False)
+@nb.njit(cache=True, nogil=True)
 def ellipj(u, m):
     """Jacobi sn, cn, dn (u real, any sign; dn > 0) of argument u and parameter m = k² ∈ [0, 1].
 
@@ -85,7 +85,7 @@ def ellipj(u, m):
     return sn, cn, math.sqrt((1.0 - m) + m * cn * cn)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def quat_mul(p, q):
     r = np.empty(4)
     r[0] = p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3]
@@ -95,7 +95,7 @@ def quat_mul(p, q):
     return r
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def quat_from_matrix(M):
     """Shepperd's method: the largest of w, x, y, z is taken from the diagonal first."""
     tr = M[0, 0] + M[1, 1] + M[2, 2]
@@ -129,7 +129,7 @@ def quat_from_matrix(M):
     return q
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def rotate_inverse(q, v):
     """Inertial vector v in body coordinates (q rotates body into inertial)."""
     w = q[0]
@@ -146,7 +146,7 @@ def rotate_inverse(q, v):
     return r
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def _nutation_frame(l1, l2, l3):
     """P(l) = Rx(θ)·Rz(φ), the rotation taking the body unit vector l to +z, where
     l = (sin θ sin φ, sin θ cos φ, cos θ) (Euler angles z-x-z, body → space = Rz(ψ)Rx(θ)Rz(φ))."""
@@ -168,7 +168,7 @@ def _nutation_frame(l1, l2, l3):
     return P
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def _axis_angle_quat(x, y, z, angle):
     n = math.sqrt(x * x + y * y + z * z)
     q = np.empty(4)
@@ -184,7 +184,7 @@ def _axis_angle_quat(x, y, z, angle):
 GENERAL, PERMANENT, SPHERE = 0, 1, 2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def prepare(L, I, h):
     """Constants of the free flow through L over steps of h.
 
@@ -248,7 +248,7 @@ def prepare(L, I, h):
     return ip, c, tab
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def _add(sn0, cn0, dn0, snv, cnv, dnv, m):
     """Addition theorem: sn, cn, dn of u₀ + v from those of u₀ and of v."""
     den = 1.0 - m * sn0 * sn0 * snv * snv
@@ -259,7 +259,7 @@ def _add(sn0, cn0, dn0, snv, cnv, dnv, m):
     )
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def drift(L, q, I, h, ip, c, tab):
     """Advance body angular momentum L and attitude q (w,x,y,z) by the exact free flow over h,
     with the constants `prepare(L, I, h)` computed for the same invariants and step.
@@ -340,7 +340,7 @@ def drift(L, q, I, h, ip, c, tab):
     return Ln, qn
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def free_flow(L, q, I, h):
     """One exact free step from scratch (prepare + drift)."""
     ip, c, tab = prepare(L, I, h)

@@ -50,7 +50,7 @@ class PointMass:
     position: Callable[[np.ndarray], np.ndarray]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def _torque(L, q, I, tq, pos, gm):
     t = tq.copy()
     for p in range(gm.shape[0]):
@@ -64,7 +64,7 @@ def _torque(L, q, I, tq, pos, gm):
     return t
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, out_L, out_q):
     """n_steps steps of the splitting; every `stride` steps the state goes to out_L, out_q
     (row 0 is the initial state). pos: (n_steps, n_stages, n_masses, 3)."""
