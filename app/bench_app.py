@@ -10,7 +10,9 @@ same process:
   a 20001-sample run drawn with 10⁴-point trails (polhode, herpolhode, rotation-axis trail; the
   default overlays of a ch. 15 scene). theoria sends the paths once and moves poses and chunk
   visibility; baseline: the naive player that re-sends the three growing trails every frame.
-  Times are seconds per displayed frame (ratio = baseline / theoria).
+  Times are seconds per displayed frame (ratio = baseline / theoria). Software WebGL is bound by
+  pixels, so the same playback is also measured in a 960×600 window, and the floor is shown: an
+  empty viser page (no node, no control) asked to redraw every frame, in the 1280×800 window.
 - record-1e5-steps: a 10⁵-step recording (free tumble, one sample per step) written column-wise;
   baseline: the same entities logged row by row (set_time + log per step) on 10⁴ steps, scaled
   ×10 (linear in steps; reported as baseline_extrapolated).
@@ -34,6 +36,8 @@ CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
         "--disable-background-networking", "--disable-component-update", "--no-first-run"]
 VIEWPORT = {"width": 1280, "height": 800}
+# software WebGL is bound by pixels: the playback rate is also measured on a smaller window
+SMALL_VIEWPORT = {"width": 960, "height": 600}
 WAIT_MS = 120_000
 
 SIG_JS = """(name) => { const o = window.__viserMutable && window.__viserMutable.nodeRefFromName[name];
@@ -91,8 +95,8 @@ def _browser():
             b.close()
 
 
-def _open(browser, url):
-    ctx = browser.new_context(viewport=VIEWPORT)
+def _open(browser, url, viewport=None):
+    ctx = browser.new_context(viewport=viewport or VIEWPORT)
     page = ctx.new_page()
     page.goto(url)
     page.wait_for_function("!document.body.innerText.includes('Connecting')", timeout=WAIT_MS)
@@ -193,6 +197,68 @@ def _naive_server(result, spec):
     return server, stop
 
 
+RENDER_JS = """(seconds) => new Promise(resolve => {
+  const M = window.__viserMutable; let frames = 0; const t0 = performance.now();
+  function loop() { M.requestRender(); frames++;
+    if (performance.now() - t0 < seconds * 1000) requestAnimationFrame(loop);
+    else resolve(frames / ((performance.now() - t0) / 1000)); }
+  requestAnimationFrame(loop); })"""
+
+
+def _theoria_playback(b, viewport) -> dict:
+    """Playback of the 20001-sample run in theoria's own page: all three paths, then one, then none."""
+    out = {}
+    server, sessions = _quiet_server(scenario="middle-axis-flip")
+    try:
+        ctx, page = _open(b, f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1", viewport)
+        session = list(sessions.values())[-1]
+        _wait_updates(session, 1)
+        n = session.updates
+        session.request({**session.controls.values(), "duration": 100.0, "step": 0.005})
+        _wait_updates(session, n + 1)
+        time.sleep(1.0)
+        out["theoria"] = page.evaluate(FPS_JS, 4)
+        with session._view_lock:  # the same body with only one 10⁴-point path (rotation-axis trail)
+            for k in list(session.view.overlays):
+                session.view.set_overlay(k, k in ("axes", "vectors", "axis_trail"))
+        time.sleep(1.0)
+        out["one_trail"] = page.evaluate(FPS_JS, 3)
+        with session._view_lock:
+            for k in list(session.view.overlays):
+                session.view.set_overlay(k, False)
+        time.sleep(1.0)
+        out["no_paths"] = page.evaluate(FPS_JS, 3)
+        out["trail_points"] = int(len(session.view._idx))
+        out["samples"] = len(session.result.trajectory.t)
+        ctx.close()
+    finally:
+        with contextlib.redirect_stdout(io.StringIO()):
+            server.stop()
+    return out
+
+
+def _empty_page_fps(b, viewport) -> float:
+    """Frames per second of an empty viser page (no node, no control) asked to redraw every frame:
+    the floor the browser's renderer sets before theoria draws anything."""
+    import viser
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    try:
+        server.scene.world_axes.visible = False
+        ctx = b.new_context(viewport=viewport)
+        page = ctx.new_page()
+        page.goto(f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1")
+        page.wait_for_function("window.__viserMutable && window.__viserMutable.scene", timeout=WAIT_MS)
+        time.sleep(1.0)
+        fps = page.evaluate(RENDER_JS, 3)
+        ctx.close()
+    finally:
+        with contextlib.redirect_stdout(io.StringIO()):
+            server.stop()
+    return fps
+
+
 @register_bench("app-playback-fps")
 def playback_fps():
     from physics.scenarios import get
@@ -202,32 +268,9 @@ def playback_fps():
     result = spec.simulate_fn(spec.resolve(given))
     out = {}
     with _browser() as b:
-        server, sessions = _quiet_server(scenario="middle-axis-flip")
-        try:
-            ctx, page = _open(b, f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1")
-            session = list(sessions.values())[-1]
-            _wait_updates(session, 1)
-            n = session.updates
-            session.request({**session.controls.values(), "duration": 100.0, "step": 0.005})
-            _wait_updates(session, n + 1)
-            time.sleep(1.0)
-            out["theoria"] = page.evaluate(FPS_JS, 4)
-            with session._view_lock:  # the same body with only one 10⁴-point path (rotation-axis trail)
-                for k in list(session.view.overlays):
-                    session.view.set_overlay(k, k in ("axes", "vectors", "axis_trail"))
-            time.sleep(1.0)
-            out["one_trail"] = page.evaluate(FPS_JS, 3)
-            with session._view_lock:
-                for k in list(session.view.overlays):
-                    session.view.set_overlay(k, False)
-            time.sleep(1.0)
-            out["no_paths"] = page.evaluate(FPS_JS, 3)
-            out["trail_points"] = int(len(session.view._idx))
-            out["samples"] = len(session.result.trajectory.t)
-            ctx.close()
-        finally:
-            with contextlib.redirect_stdout(io.StringIO()):
-                server.stop()
+        out = _theoria_playback(b, VIEWPORT)
+        small = _theoria_playback(b, SMALL_VIEWPORT)["theoria"]
+        empty = _empty_page_fps(b, VIEWPORT)
         server, stop = _naive_server(result, spec)
         try:
             ctx, page = _open(b, f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1")
@@ -244,7 +287,9 @@ def playback_fps():
             "baseline_error": None, "fps": fps, "fps_naive_resend": fps_naive, "trail_points": out["trail_points"],
             "render_fps": out["theoria"]["frames"] / out["theoria"]["seconds"],
             "fps_one_10k_trail": out["one_trail"]["poses"] / out["one_trail"]["seconds"],
-            "fps_body_only": out["no_paths"]["poses"] / out["no_paths"]["seconds"], "samples": out["samples"],
+            "fps_body_only": out["no_paths"]["poses"] / out["no_paths"]["seconds"],
+            f"fps_at_{SMALL_VIEWPORT['width']}x{SMALL_VIEWPORT['height']}": small["poses"] / small["seconds"],
+            "empty_viser_page_fps": empty, "samples": out["samples"],
             "viewport": f"{VIEWPORT['width']}x{VIEWPORT['height']}"}
 
 
