@@ -25,6 +25,7 @@ What is drawn for a rotation scenario (Poinsot's construction, §805–808):
 from __future__ import annotations
 
 import colorsys
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -191,6 +192,8 @@ def drop_repeats(path: np.ndarray, idx: np.ndarray, cell: float):
     if len(path) < 2 or cell <= 0:
         return path, idx
     key = np.floor(np.asarray(path, float) / cell).astype(np.int64)
+    if np.abs(key).max() < 2**20:  # one int64 per cell: a 1-D unique, ~10× faster than unique(axis=0)
+        key = ((key[:, 0] + 2**20) << 42) | ((key[:, 1] + 2**20) << 21) | (key[:, 2] + 2**20)
     _, first = np.unique(key, axis=0, return_index=True)
     keep = np.sort(first)
     return path[keep], idx[keep]
@@ -232,6 +235,7 @@ MERIDIAN_COLOR, EQUATOR_COLOR = (60, 40, 30), (230, 80, 60)
 MERIDIAN_HALF_WIDTH, EQUATOR_HALF_WIDTH = 0.12, 0.05  # rad
 
 
+@functools.lru_cache(maxsize=4)
 def banded_sphere_parts(rows_per_band: int = 4, columns: int = 64) -> list[tuple[np.ndarray, np.ndarray, tuple]]:
     """A unit sphere in latitude bands of π/8 about the body z (C) axis, a dark meridian in the
     body x–z half-plane and a red equator, so that spin is visible: one (vertices, faces, colour)

@@ -31,6 +31,20 @@ def test_drop_repeats_keeps_the_picture_at_every_time():
     assert len(drop_repeats(line, idx[:1000], cell)[0]) == 1000
 
 
+def test_drop_repeats_packed_keys_match_the_plain_cell_search():
+    """The packed one-int64-per-cell key keeps exactly the points a unique over (i, j, k) rows keeps,
+    including negative cells and paths far from the origin (which fall back to the row search)."""
+    rng = np.random.default_rng(7)
+    for scale, cell in ((1.0, 0.01), (50.0, 0.5), (1.0, 1e-7)):  # the last: cells beyond 2**20, the fallback
+        path = scale * rng.standard_normal((5000, 3))
+        path = np.concatenate([path, path[::3] + 0.1 * cell * rng.standard_normal((len(path[::3]), 3))])
+        idx = np.arange(len(path), dtype=float)
+        key = np.floor(path / cell).astype(np.int64)
+        keep = np.sort(np.unique(key, axis=0, return_index=True)[1])
+        kept, kidx = drop_repeats(path, idx, cell)
+        assert np.array_equal(kidx, idx[keep]) and np.array_equal(kept, path[keep])
+
+
 def test_z_to_turns_z_onto_the_vector():
     for v in ([1, 2, 3], [0, 0, -5], [0, 0, 2], [1e-3, 0, -1], [-1, 0, 0]):
         q = np.array(z_to(v))
