@@ -73,8 +73,28 @@ def _free_tumble(values, progress=None):
         fm = free_motion(I, w0)
         m["polhode_period_s"] = fm.polhode_period
         circ = "ABC"[fm.circulation_axis]
-        comps.append(Comparison("polhode period", None, None, fm.polhode_period, "s",
-                                f"ω circulates about the {circ} axis; period 4K(k)/λ, k² = {fm.m:.6g}"))
+        # Euler: §808's quadrature gives the time between two sign changes of ω on the middle axis,
+        # half a polhode period; simulated: twice the mean spacing of those sign changes in the run
+        vals, counts = np.unique(I, return_counts=True)
+        if len(vals) == 3:
+            euler = 2.0 * flip_interval_808(I, w0)
+            how = "Euler: twice the §808 quadrature"
+        else:  # two equal moments: §808's reduction divides by their difference; his equations with
+            # A = B give dz = 0 and x, y turning at the constant rate (C − A) z / A: a circle
+            s_ax = int(np.nonzero(I == vals[counts == 1][0])[0][0])
+            a_mom = float(vals[counts == 2][0])
+            euler = 2 * np.pi * a_mom / abs((I[s_ax] - a_mom) * w0[s_ax])
+            how = "Euler: §808's equations with two equal moments, 2πA/|(C − A) ω_C|"
+        euler = float(euler) if np.isfinite(euler) else None
+        tc = middle_axis_crossings(traj)
+        measured = 2.0 * float(np.mean(np.diff(tc))) if len(tc) >= 2 else None
+        if euler is not None:
+            m["polhode_period_euler_808_s"] = euler
+        if measured is not None:
+            m["polhode_period_measured_s"] = measured
+        comps.append(Comparison("polhode period", euler, measured, fm.polhode_period, "s",
+                                f"ω circulates about the {circ} axis; {how}; modern: 4K(k)/λ, k² = {fm.m:.6g}" +
+                                ("" if measured is not None else "; the run is too short to see two crossings")))
     except ValueError as e:  # a permanent rotation or a sphere has no polhode
         comps.append(Comparison("polhode", None, None, None, "", str(e)))
     return Result("free-tumble", values, traj, m, comps,
