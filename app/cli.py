@@ -46,16 +46,32 @@ def _parse_sets(items: list[str] | None) -> dict[str, str]:
     return out
 
 
-def _scenario_values(name: str, sets: list[str] | None, duration: float | None):
+def _scenario_values(name: str, sets: list[str] | None, duration: float | None, preset: str | None = None):
     from physics.scenarios import get
 
     sc = get(name)
-    given = _parse_sets(sets)
+    given = {}
+    if preset is not None:  # the preset's values first; --set and --duration override them
+        given.update(dict(sc.presets).get(_preset_name(sc, preset), {}))
+    given.update(_parse_sets(sets))
     if duration is not None:
         if not any(p.name == "duration" for p in sc.params):
             raise ParameterError("--duration", duration, f"not a parameter of {name}")
         given["duration"] = duration
     return sc, sc.resolve(given)
+
+
+def _preset_name(sc, text: str) -> str:
+    """The preset called `text`: its exact name, or the one preset whose name contains it (any case)."""
+    names = [n for n, _ in sc.presets]
+    if text in names:
+        return text
+    hits = [n for n in names if text.casefold() in n.casefold()]
+    if len(hits) == 1:
+        return hits[0]
+    allowed = "; ".join(f'"{n}"' for n in names) if names else "none (this scenario has no presets)"
+    raise ParameterError("--preset", text, ("one of " if names else "") + allowed +
+                         (" (more than one matches)" if len(hits) > 1 else ""))
 
 
 def _fmt(x) -> str:
@@ -71,22 +87,31 @@ def _fmt(x) -> str:
 def cmd_list(args) -> int:
     from physics.scenarios import all_scenarios
 
-    items = all_scenarios()
+    from .gallery import ordered
+
+    items = ordered(all_scenarios())
     if args.json:
         print(json.dumps({"scenarios": [
             {"name": s.name, "title": s.title, "section": s.section, "group": s.group, "kind": s.kind,
-             "summary": s.summary,
+             "summary": s.summary, "presets": [n for n, _ in s.presets],
              "params": [{"name": p.name, "default": p.default, "min": p.minimum, "max": p.maximum,
                          "unit": p.unit, "kind": p.kind, "help": p.help} for p in s.params]}
             for s in items]}, indent=2))
-    else:
-        for s in items:
-            print(f"{s.name:<22} {s.group:<13} {s.section:<18} {s.title}")
+        return 0
+    w = max(len(s.name) for s in items)
+    group = None
+    for s in items:
+        if s.group != group:
+            group = s.group
+            print(f"{'' if s is items[0] else chr(10)}{group}")
+        print(f"  {s.name:<{w}}  {s.section:<26} {s.title}")
+        for n, _ in s.presets:
+            print(f"  {'':<{w}}    --preset \"{n}\"")
     return 0
 
 
 def cmd_run(args) -> int:
-    sc, values = _scenario_values(args.name, args.set, args.duration)
+    sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     prog = Progress(f"run {sc.name}", quiet=False)
     result = sc.simulate_fn(values, progress=prog)
     prog.done()
@@ -180,7 +205,7 @@ def cmd_serve(args) -> int:
 def cmd_record(args) -> int:
     from app.record import record
 
-    sc, values = _scenario_values(args.name, args.set, args.duration)
+    sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     record(sc.name, args.out, values)
     return 0
 
@@ -188,7 +213,7 @@ def cmd_record(args) -> int:
 def cmd_export(args) -> int:
     from app.export_html import export
 
-    sc, values = _scenario_values(args.name, args.set, args.duration)
+    sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     export(sc.name, args.out, values)
     return 0
 
@@ -230,6 +255,8 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("name")
         s.add_argument("--set", action="append", metavar="KEY=VALUE")
         s.add_argument("--duration", type=float, default=None)
+        s.add_argument("--preset", default=None, metavar="NAME",
+                       help="start from a preset (its name or a unique part of it; `theoria list` shows them)")
         if name == "run":
             s.add_argument("--json", action="store_true")
         else:

@@ -54,6 +54,8 @@ def test_param_parse_errors():
     (["run", "no-such-scenario"], "scenario=no-such-scenario"),
     (["run", "middle-axis-flip", "--set", "inertia=1,1,2"], "three different moments"),
     (["run", "initial-axis", "--set", "torque=0,0,0"], "torque=0,0,0"),
+    (["run", "middle-axis-flip", "--preset", "no such preset"], '--preset=no such preset: one of "Brick: the flip"'),
+    (["run", "middle-axis-flip", "--preset", "brick"], "more than one matches"),
 ])
 def test_bad_set_exits_2_with_one_line(args, needle, capsys):
     assert main(args) == 2
@@ -90,6 +92,22 @@ def test_list_json_has_every_scenario():
     code, out, _ = run_cli("list", "--json")
     names = {s["name"] for s in json.loads(out)["scenarios"]}
     assert {"free-tumble", "middle-axis-flip", "initial-axis"} <= names
+    flip = next(s for s in json.loads(out)["scenarios"] if s["name"] == "middle-axis-flip")
+    assert "Brick: the flip" in flip["presets"]
+
+
+def test_preset_flag_gives_the_preset_values_and_set_overrides_them(capsys):
+    from physics.scenarios import get
+
+    spec = get("free-tumble")
+    want = spec.preset("Tumble: spin near the short axis, a small polhode")
+    assert main(["run", "free-tumble", "--preset", "SHORT axis", "--set", "duration=3", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["params"]["omega0"]["value"] == list(want["omega0"]) and d["params"]["duration"]["value"] == 3.0
+    assert main(["list"]) == 0
+    text = capsys.readouterr().out
+    assert text.index("ch. 15") < text.index("ch. 16") < text.index("three bodies")
+    assert '--preset "Brick: the flip"' in text
 
 
 def test_every_check_row_passes_and_covers_design_table():
