@@ -22,7 +22,7 @@ CAMERAS: dict[str, tuple[Vec, Vec]] = {
     "middle-axis-flip": ((3.4, 1.2, 1.6), (0.0, 0.0, 0.0)),  # B (green) axis across the view: the flip is seen
     "initial-axis": ((2.6, 2.6, 1.9), (0.0, 0.0, 0.0)),
     # ch. 16: farther out, the direction of F (radius 2) and the celestial sphere (radius 2.4) in view
-    "gravity-gradient-accuracy": ((3.6, 2.8, 2.2), (0.0, 0.0, 0.0)),
+    "gravity-gradient-accuracy": ((2.0, -3.8, 2.2), (0.0, 0.0, 0.0)),  # across F's default direction (0.6, 0.5, 0.3)
     "gravity-start": ((4.2, 3.2, 2.6), (0.0, 0.0, 0.0)),
     "libration-circular": ((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),  # from above F's orbit plane (body xy)
     "libration-eccentric": ((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
@@ -36,6 +36,16 @@ CAMERAS: dict[str, tuple[Vec, Vec]] = {
     "collinear": ((0.0, -0.9, 3.4), (0.0, 0.0, 0.0)),  # from above: L1–L5, zero-velocity curves
     "syzygy": ((0.4, -0.8, 3.1), (0.4, 0.0, 0.0)),  # co-rotating: Sun on +x, both syzygy points in view
     "lunar-perturbation": ((0.9, -3.1, 2.1), (0.0, 0.0, 0.35)),  # oblique: orbit plane, node line, normal
+}
+
+# name → overlays switched on/off against the group's default (app/scene.py OVERLAYS): drawings
+# that say nothing in that scene are off, so what the scenario shows is not hidden in a tangle
+OVERLAY_DEFAULTS: dict[str, dict[str, bool]] = {
+    # the pole's own magnified path says it all; over several turns under a strong pull the
+    # rotation-axis trail and the axis paths on the celestial sphere wind into a ball of string
+    "pole-near-axis": {"celestial": False, "axis_trail": False, "polhode": False},
+    # no motion: the run is a sweep of the distance of F (t is size/distance)
+    "gravity-gradient-accuracy": {"celestial": False, "axis_trail": False, "polhode": False, "vectors": False},
 }
 
 

@@ -407,8 +407,12 @@ class SceneView:
 
     # ---- building --------------------------------------------------------------------------
     def default_overlays(self, spec) -> dict[str, bool]:
+        from .gallery import OVERLAY_DEFAULTS
+
         ch15 = spec is not None and spec.group == "ch. 15"
-        return {k: (v[1] if ch15 else v[2]) for k, v in OVERLAYS.items()}
+        out = {k: (v[1] if ch15 else v[2]) for k, v in OVERLAYS.items()}
+        out.update(OVERLAY_DEFAULTS.get(spec.name, {}) if spec is not None else {})
+        return out
 
     def show(self, result, spec, overlays: dict[str, bool] | None = None, exaggerate: float | None = None) -> None:
         """Show `result` (a physics.scenarios.Result) of scenario `spec`, updating in place."""

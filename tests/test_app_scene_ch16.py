@@ -22,6 +22,7 @@ QUICK = {
     "moon": {"years": 0.5},
     "hyperion": {"n_starts": 12, "n_orbits": 40, "probe_orbits": 4.0},
     "pole-near-axis": {},
+    "gravity-gradient-accuracy": {},
     "precession-circular": {"orbits": 20.0},
     "earth": {"years": 2.0},
 }
@@ -268,3 +269,20 @@ def test_pole_near_axis_path_is_the_body_pole_magnified_about_its_start(results)
     assert shown[j] == pytest.approx(k * true[j], rel=0.02)
     view.set_frame(j)
     assert np.allclose(ex._pdot.position, ex._pole[j])
+
+
+def test_gravity_accuracy_brings_f_in_at_its_distance_with_the_errors_there(results):
+    spec, res = results["gravity-gradient-accuracy"]
+    _, view = _show(spec, res)
+    ex = view.extra
+    traj = res.trajectory
+    assert not any(n.startswith("/world/bodies/") for n in view._h)  # no second F on the sphere of directions
+    u = np.asarray(traj.bodies["attractor"][-1], float)
+    u /= np.linalg.norm(u)
+    last = len(traj.t) - 1
+    view.set_frame(last)  # nearest: s = 1 / max_ratio body sizes, in view
+    assert np.allclose(ex._F.position, u / traj.t[last])
+    err = res.plot_series["torque_rel_error"][last]
+    assert f"s = {1 / traj.t[last]:.3g} sizes" in ex._label.text and f"{100 * err:.2g} %" in ex._label.text
+    view.set_frame(0)  # far away: waits at VIEW on its direction, and says so
+    assert np.linalg.norm(ex._F.position) == pytest.approx(ex.VIEW) and "drawn nearer" in ex._label.text

@@ -18,6 +18,8 @@ physical quantity.
 - hyperion: the surface of section (θ mod π, θ̇/n at each periapse) as a flat panel beside the
   body, points coloured by the Lyapunov exponent, with the Goldreich–Peale resonance zones
   p ± half-width drawn as lines; and the same F / ζ drawings as the libration scenes.
+- gravity-gradient-accuracy (§815–818): F coming in from far away as the sweep of its distance
+  plays, with the errors of Euler's torque and of the §818 force at that distance in its label.
 - pole-near-axis (§840–843): the path of the rotation pole O in the body (direction of ω,
   beyond the A axis), its departure from the start magnified by a factor shown in its label.
 - precession-circular (§844–849): the precession cone (lines from the centre to the figure
@@ -554,6 +556,50 @@ class PoleNearAxisExtra(_Ch16):
             self._pdot.position = _tuple(self._pole[i])
         if self._cline is not None:
             self._cline.points = _f32([[[0, 0, 0], ORBIT_RADIUS * self._cdir[i]]])
+
+
+@register_extra("gravity-gradient-accuracy")
+class GravityAccuracyExtra(_Ch16):
+    """§815–818: the run is a sweep of the distance s of F (trajectory.t = size/s), so playback
+    brings F in from far away: F drawn at its true distance once it is in view (beyond VIEW it
+    waits at VIEW on its direction), with the relative errors of Euler's torque and of the §818
+    force at that distance in its label (Result.plot_series, computed by the scenario)."""
+
+    options = {"attractor": ("F at its distance, with the errors there", True)}
+    VIEW = 2.8  # scene units (the body's largest semi-axis is 1): farther F is drawn here
+
+    def bodies(self, traj):
+        return {}  # F is drawn here, at its distance, not on the generic sphere of directions
+
+    def build(self, traj, result):
+        self._F = None
+        if not self.values.get("attractor", True) or "attractor" not in traj.bodies:
+            return
+        ratio = np.asarray(traj.t, float)
+        self._dist = 1.0 / ratio  # sizes (largest semi-axis) from the centre
+        self._dir = _unit(np.asarray(traj.bodies["attractor"], float))
+        s = result.plot_series
+        self._err = (np.asarray(s.get("torque_rel_error", np.full(len(ratio), np.nan)), float),
+                     np.asarray(s.get("force_rel_error", np.full(len(ratio), np.nan)), float))
+        name = self.name("F")
+        self._F = self.node(name, lambda: self.scene.add_icosphere(
+            name, radius=0.1, color=F_COLOR, cast_shadow=False, receive_shadow=False))
+        name = self.name("F", "label")
+        self._label = self.node(name, lambda: self.scene.add_label(name, "F", position=(0.0, 0.0, 0.22)))
+        self._line = self._segs("F_direction", np.zeros((1, 2, 3)), F_COLOR, 0.012)
+        self._shown = -1
+
+    def set_frame(self, i):
+        if self._F is None or i == self._shown:
+            return
+        self._shown = i
+        d = float(self._dist[i])
+        pos = self._dir[i] * min(d, self.VIEW)
+        self._F.position = _tuple(pos)
+        self._line.points = _f32([[[0, 0, 0], pos]])
+        et, ef = self._err[0][i], self._err[1][i]
+        where = f"s = {d:.3g} sizes" + ("" if d <= self.VIEW else " (drawn nearer)")
+        self._label.text = f"F at {where}: torque error {100 * et:.2g} %, force error {100 * ef:.2g} %"
 
 
 @register_extra("precession-circular")
