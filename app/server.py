@@ -48,6 +48,25 @@ PROGRESS_SHOW_AFTER = 0.4  # s: the progress bar appears only for runs longer th
 PROGRESS_EVERY = 0.15  # s: at most this often a progress message goes to the browser
 
 
+def y_axis_px(series_values, px_per_char: float = 7.2, min_px: int = 50) -> int:
+    """Width (CSS px) of a uPlot y axis for these series: uPlot labels ticks with en-US grouping
+    ("-250,000", "0.0005") at about five ticks; the longest label's characters × the 12 px font's
+    width, plus ticks and gap (15 px)."""
+    v = np.concatenate([np.asarray(a, float).ravel() for a in series_values]) if len(series_values) else np.zeros(1)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return min_px
+    lo, hi = float(v.min()), float(v.max())
+    span = hi - lo or abs(hi) or 1.0
+    step = 10 ** np.floor(np.log10(span / 5))
+    decimals = int(max(0, -np.floor(np.log10(step))))
+    widest = 0
+    for x in (lo, hi):
+        text = f"{x:,.{decimals}f}"
+        widest = max(widest, len(text))
+    return int(max(min_px, np.ceil(widest * px_per_char + 15)))
+
+
 def configure_lighting(scene) -> None:
     """Plain lights, no image-based environment map and no shadows: in software WebGL
     (SwiftShader) the environment map alone takes the body scene from ~28 to ~10 frames/s."""
@@ -493,8 +512,10 @@ class ClientSession:
         ser = ({"label": f"t [{traj.time_unit}]"},) + tuple(
             {"label": k, "stroke": "rgb(%d,%d,%d)" % palette(i), "width": 1.5} for i, k in enumerate(series))
         key = tuple(s["label"] for s in ser)
+        axes = ({}, {"size": y_axis_px(data[1:])})  # the default 50 px cut "-" and leading digits off
         if self.plot is not None and getattr(self, "_plot_key", None) == key:
             self.plot.data = data  # same series: update in place
+            self.plot.axes = axes
             return
         self._plot_key = key
         if self.plot is not None:
@@ -502,7 +523,7 @@ class ClientSession:
         with self.plot_folder:
             # x is the simulation time, not a date (uPlot's default x scale is a clock)
             self.plot = self.client.gui.add_uplot(data, ser, title=result.scenario, aspect=1.6,
-                                                  scales={"x": {"time": False}})
+                                                  scales={"x": {"time": False}}, axes=axes)
 
     # ---- playback ----------------------------------------------------------------------------
     def _frame_index(self) -> int:
