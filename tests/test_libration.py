@@ -238,8 +238,10 @@ def test_forced_amplitude_matches_euler_for_small_e_and_free_part_separates():
     r = get("libration-eccentric").simulate({"eccentricity": e, "free_zeta0_deg": 0.0, "orbits": 3})
     m = r.metrics
     assert abs(m["forced_amplitude_rad"] / m["forced_amplitude_euler_rad"] - 1) < 5 * e**2
-    # the rigid-body run started on the forced solution (planar shooting) stays on it
+    # the rigid-body run started on the forced solution (planar shooting) stays on it: its own first
+    # harmonic (the "simulated" column) is that of the DOP853 periodic solution (the "modern" one)
     assert m["free_amplitude_rad"] < 1e-7
+    assert abs(m["forced_amplitude_rad"] / m["forced_amplitude_periodic_rad"] - 1) < 1e-8
     # with a free part added, it oscillates at Euler's √(2N) (§838), amplitude kept
     r = get("libration-eccentric").simulate({"eccentricity": e, "free_zeta0_deg": 1.0, "orbits": 40})
     # Euler's period neglects the forced swing, the 1/s³ modulation (Floquet period, all orders in e) and
@@ -251,6 +253,8 @@ def test_forced_amplitude_matches_euler_for_small_e_and_free_part_separates():
     assert abs(m["free_period"] / m["free_period_euler"] - 1) < 3 * neglected
     assert abs(m["free_period"] / m["free_period_modern"] - 1) < neglected
     assert abs(r.metrics["free_amplitude_rad"] - np.radians(1.0)) < 0.05 * np.radians(1.0)
+    # the forced harmonic fitted beside the 1° free swing: within 1e-3 of the periodic solution's
+    assert abs(m["forced_amplitude_rad"] / m["forced_amplitude_periodic_rad"] - 1) < 1e-3
 
 
 def test_euler_forced_amplitude_fails_as_e_squared_and_near_resonance():

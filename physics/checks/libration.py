@@ -138,10 +138,12 @@ def e8():
                                              "orbits": 3})
     m = r.metrics
     rel = abs(m["forced_amplitude_rad"] / m["forced_amplitude_euler_rad"] - 1)
-    return {"euler": m["forced_amplitude_euler_rad"], "simulated": m["forced_amplitude_rad"], "modern": None,
-            "rel_error": rel, "tolerance": 5 * e**2 + 1e-6, "unit": "rad",
-            "note": (f"e = {e}, (B−A)/C = 0.05: first harmonic of the periodic (forced) solution; Euler's "
-                     "α = 2e drops the e³ terms of the true anomaly and ζ³ terms of sin 2ζ: relative O(e²)")}
+    run_vs_periodic = abs(m["forced_amplitude_rad"] / m["forced_amplitude_periodic_rad"] - 1)
+    return {"euler": m["forced_amplitude_euler_rad"], "simulated": m["forced_amplitude_rad"],
+            "modern": m["forced_amplitude_periodic_rad"], "rel_error": rel, "tolerance": 5 * e**2 + 1e-6, "unit": "rad",
+            "note": (f"e = {e}, (B−A)/C = 0.05: first harmonic of ζ in the rigid-body run over 3 orbits; modern: "
+                     f"the periodic solution of the planar equation (DOP853), {run_vs_periodic:.1e} from the run. "
+                     "Euler's α = 2e drops the e³ terms of the true anomaly and ζ³ terms of sin 2ζ: relative O(e²)")}
 
 
 @register_check("E7.separatrix", "separatrix: time from 10° to 80° = ln tan(45° + ζ/2)/√(2n)", "§826 (3rd)")
