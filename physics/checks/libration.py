@@ -177,8 +177,9 @@ MOON_YEARS = 6.0
 def moon_runs():
     """The Moon scenario (6 years, h = 0.25 d), the same at h = 0.5 d (step doubling: the 4th-order
     splitting error of a fitted coefficient c is ≈ |c(2h) − c(h)|/15), and the same rigid quadrupole
-    model integrated independently by scipy DOP853 (rtol 1e-10; rtol 1e-12 moves the fitted M′ term
-    by 1e-7″ and the annual one by 4e-7″, a quarter of the tolerances or less) and analysed by the same fit. Returns {name: {term: arcsec}}."""
+    model integrated independently by scipy DOP853 (rtol 1e-12: at 1e-10 the reference's own error in
+    the annual term, 1.6e-7″, is larger than the run's; from 1e-11 to 1e-12 the fitted terms move by
+    6e-9″ and 9e-9″) and analysed by the same fit. Returns {name: {term: arcsec}}."""
     from ..scenarios import moon as ms
 
     sc = get("moon")
@@ -186,8 +187,10 @@ def moon_runs():
     r = sc.simulate_fn(values)
     r2 = sc.simulate_fn(sc.resolve({"years": MOON_YEARS, "step_days": 2 * values["step_days"]}))
     t = r.trajectory.t
-    q_ref = ms.reference_dop853(values, t, rtol=1e-10)
-    coef_ref = ms.physical_libration_terms(values, t, q_ref)[0]
+    q_ref = ms.reference_dop853(values, t, rtol=1e-12)
+    P_free = r.metrics["free_libration_period_days"]  # the period the scenario's own fit used
+    P_free = P_free if np.isfinite(P_free) else r.metrics["free_libration_period_euler_days"]
+    coef_ref = ms.physical_libration_terms(values, t, q_ref, np.array([P_free]))[0]
     keys = {"M'": "mprime", "M": "annual"}
     out = {"run": dict(r.metrics), "run_2h": dict(r2.metrics)}
     out["dop853"] = {k: coef_ref[lab] * ms.ARCSEC for lab, k in keys.items()}

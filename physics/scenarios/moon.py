@@ -93,24 +93,52 @@ def reference_dop853(values, t, rtol=1e-12, atol=1e-14):
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
-def physical_libration_terms(values, t, q, free_periods=np.linspace(800.0, 1400.0, 61)):
-    """The run's analysis (t from the start, attitudes q), as in the scenario for spans of 3 years
-    or more: fitted physical-libration coefficients {label: rad}, free period, free amplitude, rms
-    (fit_physical_libration)."""
+def physical_libration_terms(values, t, q, free_periods):
+    """The run's analysis (t from the start, attitudes q) as in the scenario, the free term at
+    `free_periods` (the scenario's measured free period): fitted physical-libration coefficients
+    {label: rad}, free period, free amplitude, rms (fit_physical_libration)."""
     t0 = (values["start_year"] - J2000_YEAR) * 365.25
     tt = t0 + np.asarray(t, float)
     tau = moon.physical_libration(q, tt, values["equator_inclination_deg"])[:, 2]
     return fit_physical_libration(tt, tau, free_periods)
 
 
+FREE_KICK = 100.0 / ARCSEC  # rad: the extra free swing of the companion run (small: linear regime)
+
+
+def _integrate(values, state, kick=0.0, progress=None):
+    """The run from `state` (initial_state), turned by `kick` rad about the polar axis at the start."""
+    t0, duration, I, _, q0, w0, pos = state
+    h = values["step_days"]
+    n = int(np.ceil(duration / h))
+    if kick:
+        q0 = quat.multiply(q0, quat.from_axis_angle([0, 0, 1], kick))
+    return integrate(I, w0, duration, h, q0=q0, masses=[PointMass(moon.GM_EARTH, pos)], scheme="yoshida4",
+                     stride=max(1, int(np.ceil(n / 6000))), progress=progress)
+
+
+def free_period_from_difference(t, dtau):
+    """Period of the free libration from the difference of two runs that differ only by a small extra
+    free swing at the start: the forced terms cancel and what is left is the free libration alone
+    (§838), A cos(νt + φ). Crossings of any level in the same direction are one period apart, so the
+    period is the mean spacing of the upward (or downward) crossings of the mean; NaN under one period."""
+    d = np.asarray(dtau, float) - float(np.mean(dtau))
+    up = np.nonzero((d[:-1] < 0) & (d[1:] >= 0))[0]
+    down = np.nonzero((d[:-1] > 0) & (d[1:] <= 0))[0]
+    best = up if len(up) >= len(down) else down
+    if len(best) < 2:
+        return float("nan")
+    tc = t[best] - d[best] * (t[best + 1] - t[best]) / (d[best + 1] - d[best])
+    return float(np.mean(np.diff(tc)))
+
+
 def _moon(values, progress=None):
     gamma = values["gamma"]
-    h = values["step_days"]
-    t0, duration, I, two_N, q0, w0, pos = initial_state(values)
-    n = int(np.ceil(duration / h))
-    stride = max(1, int(np.ceil(n / 6000)))
-    t, L, q = integrate(I, w0, duration, h, q0=q0, masses=[PointMass(moon.GM_EARTH, pos)], scheme="yoshida4",
-                        stride=stride, progress=progress)
+    state = initial_state(values)
+    t0, duration, I, two_N, q0, w0, pos = state
+    short = duration < 3 * 365.25  # the free (~2.9 yr) and annual terms need ~3 yr to be told apart
+    sub = (lambda f: progress(0.5 * f)) if progress is not None and not short else progress
+    t, L, q = _integrate(values, state, progress=sub)
     tt = t0 + t
     earth = pos(t)
     traj = Trajectory(t, q, L, I, time_unit="day", bodies={"attractor": earth, "earth": earth})
@@ -119,11 +147,14 @@ def _moon(values, progress=None):
     v = moon.physical_libration(q, tt, values["equator_inclination_deg"])
     tau = v[:, 2]
     P_euler = float(2 * np.pi / np.sqrt(two_N))
-    short = duration < 3 * 365.25  # the free (~2.9 yr) and annual terms need ~3 yr to be told apart
-    coef, P_free, free_amp, rms = fit_physical_libration(tt, tau, np.array([P_euler]) if short else
-                                                         np.linspace(800.0, 1400.0, 61))
-    if short:
-        P_free = np.nan
+    P_free = np.nan
+    if not short:  # the model's own free period: a companion run with an extra free swing (see above)
+        _, _, q_kick = _integrate(values, state, kick=FREE_KICK,
+                                  progress=(lambda f: progress(0.5 + 0.5 * f)) if progress is not None else None)
+        tau_kick = moon.physical_libration(q_kick, tt, values["equator_inclination_deg"])[:, 2]
+        P_free = free_period_from_difference(t, tau_kick - tau)
+    # the fit of the forced terms carries the free term at the measured period (Euler's for short runs)
+    coef, _, free_amp, rms = fit_physical_libration(tt, tau, np.array([P_free if np.isfinite(P_free) else P_euler]))
     tau_euler, coef_e = moon.euler_physical_libration(tt, gamma, two_N)
     Eyr = moon.fundamental_arguments(tt)[6].mean()
     m = {
@@ -160,7 +191,8 @@ def _moon(values, progress=None):
         Comparison("physical libration, sin(2D − M′) (evection)", m["physical_libration_evection_euler_arcsec"],
                    m["physical_libration_evection_arcsec"], -0.00115 * 3600, "arcsec", "Meeus ch. 53: +0.00115° sin(M′ − 2D)"),
         Comparison("free libration period", m["free_libration_period_euler_days"], P_free, 1056.0, "day",
-                   "2π/√(2N) (§838); published 1056 d (LLR: Rambaux & Williams 2011)"),
+                   "2π/√(2N) (§838); simulated: the difference of this run and one started 100″ further on, "
+                   "which is the free libration alone; published 1056 d (LLR: Rambaux & Williams 2011)"),
     ]
     notes = [
         "Moments from lunar laser ranging: β = (C−A)/B = 631.0e-6, γ = (B−A)/C = 227.7e-6 (Williams et al. 2014).",
@@ -176,6 +208,8 @@ def _moon(values, progress=None):
     if short:
         notes.append("Span under 3 years: the free libration is fitted at Euler's period 2π/√(2N), not measured, "
                      "and the annual term is less certain.")
+    elif not np.isfinite(P_free):
+        notes.append("The free libration did not complete a period in this span: fitted at Euler's 2π/√(2N).")
     zeta_euler = lp - tau_euler
     series = {
         "zeta_rad": lon, "zeta_euler_rad": zeta_euler,
