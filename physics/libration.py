@@ -151,32 +151,64 @@ def planar_rhs(orbit, gamma, gm):
     return rhs
 
 
-def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-13, iters=40):
+def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-13, iters=40, max_cuts=3,
+                       max_misses=2, progress=None):
     """§838's forced libration: the solution with the orbit's period (free part zero), by
     Newton shooting on (λ(0), λ̇(0)) − the orbit starts at periapse (t_peri = 0). Returns
-    (λ0, λ̇0, P) with P the orbital period. Fails (ParameterError) near resonance."""
+    (λ0, λ̇0, P) with P the orbital period. Fails (ParameterError) near resonance.
+
+    The Jacobian comes from the variational equations integrated with the orbit (one run per
+    iteration, not five as with central differences); steps are capped at 0.3 (stay on the branch
+    of the guess) and halved up to `max_cuts` times until the residual falls. When none lowers it
+    the capped step is taken anyway, and after more than `max_misses` such steps in a row the search
+    gives up (e.g. e = 0.5 with (B−A)/C = −0.45, chaotic: refused in seconds where the fixed-step
+    search took two minutes). `progress(frac)` is called once per run (frac ≤ 0.1: the set-up)."""
     P = 2.0 * np.pi / orbit.n
-    rhs = planar_rhs(orbit, gamma, gm)
     y = np.array([guess[0], orbit.true_anomaly_rate(np.array([0.0]))[0] if guess[1] is None else guess[1]])
+    runs = [0]
 
-    def F(y):
-        sol = solve_ivp(rhs, (0.0, P), y, method="DOP853", rtol=rtol, atol=atol)
-        return sol.y[:, -1] - y - np.array([2.0 * np.pi, 0.0])
+    def rhs(t, z):  # (λ, λ̇) and the 2×2 matrix Φ = ∂(λ, λ̇)(t)/∂(λ, λ̇)(0), row-major
+        f, r = orbit.anomalies(np.array([t]))
+        c = 1.5 * gm * gamma / r[0] ** 3
+        k = -2.0 * c * np.cos(2.0 * (f[0] - z[0]))  # ∂λ̈/∂λ
+        return [z[1], c * np.sin(2.0 * (f[0] - z[0])), z[4], z[5], k * z[2], k * z[3]]
 
+    def shoot(y):
+        runs[0] += 1
+        if progress is not None:
+            progress(min(0.1, 0.1 * runs[0] / (2 * iters)))
+        z = solve_ivp(rhs, (0.0, P), [y[0], y[1], 1.0, 0.0, 0.0, 1.0], method="DOP853", rtol=rtol, atol=atol).y[:, -1]
+        r = z[:2] - y - np.array([2.0 * np.pi, 0.0])
+        return r, z[2:].reshape(2, 2) - np.eye(2)
+
+    r, J = shoot(y)
+    misses = 0
     for _ in range(iters):
-        r = F(y)
-        if np.max(np.abs(r)) < 1e-11:
+        res = float(np.max(np.abs(r)))
+        if not np.isfinite(res):
+            break
+        if res < 1e-11:
             return y[0], y[1], P
-        J = np.empty((2, 2))
-        for j in range(2):
-            d = np.zeros(2)
-            d[j] = 1e-6
-            J[:, j] = (F(y + d) - F(y - d)) / 2e-6
         try:
             dy = np.linalg.solve(J, r)
         except np.linalg.LinAlgError:
             break
-        y = y - dy * min(1.0, 0.3 / max(np.max(np.abs(dy)), 1e-300))  # damped: stay near the guess
+        step = dy * min(1.0, 0.3 / max(float(np.max(np.abs(dy))), 1e-300))  # damped: stay near the guess
+        first = None
+        for _cut in range(max_cuts + 1):
+            r_new, J_new = shoot(y - step)
+            first = first or (step, r_new, J_new)
+            if float(np.max(np.abs(r_new))) < res:
+                misses = 0
+                break
+            step = 0.5 * step
+        else:  # no step along Newton's direction lowers the residual: take the capped one anyway (it
+            # may lead out of a bad region), but give up after `max_misses` such steps in a row
+            misses += 1
+            if misses > max_misses:
+                break
+            step, r_new, J_new = first
+        y, r, J = y - step, r_new, J_new
     raise ParameterError("eccentricity", orbit.e, f"no forced (periodic) libration found with (B−A)/C = {gamma:g}: "
                          "too close to the resonance (B−A)/C = 1/3 or too eccentric; lower one of them")
 

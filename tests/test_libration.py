@@ -269,6 +269,25 @@ def test_euler_forced_amplitude_fails_as_e_squared_and_near_resonance():
     assert m["forced_amplitude_euler_rad"] > 1.2 * m["forced_amplitude_rad"]
 
 
+def test_forced_solution_search_gives_up_quickly_where_there_is_none():
+    """e = 0.5 with (B−A)/C = −0.45 (chaotic): a clear refusal after a bounded number of runs (the
+    fixed-step search used 200 DOP853 runs, two minutes), and the progress callback is called on
+    every run, so the app can drop a request that a newer one replaced."""
+    calls = []
+    with pytest.raises(ParameterError, match="eccentricity=0.5"):
+        get("libration-eccentric").simulate_fn(get("libration-eccentric").resolve(
+            {"eccentricity": 0.5, "asymmetry": -0.45}), progress=calls.append)
+    assert 3 <= len(calls) <= 100 and max(calls) <= 0.1  # 78 runs here
+    # where a forced solution exists the search still finds it (e = 0.2, (B−A)/C = −0.45 and 0.25:
+    # the previous search found these too), periodic to 1e-11 in λ and λ̇
+    from physics.scenarios.libration import ForcedSolution
+
+    for g in (-0.45, 0.25):
+        fs = ForcedSolution(g, 0.2, 1.0)
+        end = fs.sol(fs.P)
+        assert abs(end[0] - fs.lam0 - 2 * np.pi) < 1e-9 and abs(end[1] - fs.lamdot0) < 1e-9
+
+
 def test_forced_libration_case_II_about_the_B_axis():
     """B < A: the forced libration is about ζ = 90° (§827) with Euler's amplitude using |n|;
     the A axis facing F is unstable (§837's separatrix), so the body never librates there."""

@@ -290,7 +290,7 @@ class ForcedSolution:
     """The forced (periodic) libration on the Kepler orbit (periapse at t = 0), §838: found
     once by shooting (physics.libration.periodic_libration), evaluated at any t."""
 
-    def __init__(self, gamma, e, n):
+    def __init__(self, gamma, e, n, progress=None):
         self.orbit = KeplerOrbit(a=1.0, e=e, n=n)
         N = lib.euler_N(gamma, n * n, 1.0)
         m = lib.forced_amplitude_euler(2 * e, n, N)
@@ -299,7 +299,7 @@ class ForcedSolution:
             lam0, lamdot0, P = -zeq, float(n), 2 * np.pi / n
         else:
             guess = (-zeq, float(self.orbit.true_anomaly_rate(np.array([0.0]))[0] - m * n))
-            lam0, lamdot0, P = lib.periodic_libration(self.orbit, gamma, n * n, guess=guess)
+            lam0, lamdot0, P = lib.periodic_libration(self.orbit, gamma, n * n, guess=guess, progress=progress)
         lam0 = float(np.remainder(lam0 + 0.5 * np.pi, np.pi) - 0.5 * np.pi)  # ζ ≡ ζ + π
         self.lam0, self.lamdot0, self.P = lam0, lamdot0, P
         self.sol = solve_ivp(lib.planar_rhs(self.orbit, gamma, n * n), (0.0, P), [lam0, lamdot0],
@@ -338,14 +338,15 @@ def _libration_eccentric(values, progress=None):
     P = 2 * np.pi / n
     duration = values["orbits"] * P
     step = P / values["steps_per_orbit"]
-    fs = ForcedSolution(g, e, n)
+    fs = ForcedSolution(g, e, n, progress=progress)
     lam0, lamdot0 = fs.lam0, fs.lamdot0
     dz = np.radians(values["free_zeta0_deg"])
     q0 = quat.from_axis_angle([0, 0, 1], lam0 - dz)  # ζ₀ = f(0) − λ₀ + dz, f(0) = 0
     om0 = np.array([0.0, 0.0, lamdot0])
     nst = int(np.ceil(duration / step))
     t, L, q = integrate(I, om0, duration, step, q0=q0, masses=[PointMass(gm, orbit.position)],
-                        scheme="yoshida4", stride=_stride(nst), progress=progress)
+                        scheme="yoshida4", stride=_stride(nst),
+                        progress=(lambda f: progress(0.1 + 0.9 * f)) if progress is not None else None)
     pos = orbit.position(t)
     traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
     zeta = zeta_of(q, pos)
