@@ -36,25 +36,36 @@ def hint_of(p: Param) -> str:
     return f"{p.help} — {p.allowed()}".strip(" —")
 
 
-def slider_range(p: Param) -> tuple[float, float, float] | None:
-    """(min, max, step) if the parameter is shown as a slider, else None."""
+def slider_range(p: Param, presets=()) -> tuple[float, float, float] | None:
+    """(min, max, step) if the parameter is shown as a slider, else None (a number input).
+
+    A slider must hold its default exactly and reach the values around it: the default lies in
+    [min, max] and at least one step above min (unless it is min), and every preset value lies in
+    [min, max]. A parameter whose default is small against its range (pole-near-axis's tidal
+    1 in (0, 10⁶], gravity-start's GM 1000 in (0, 10²⁰]) would otherwise have been clamped to the
+    slider's first step and simulated at values 1000× off."""
     if p.kind not in ("float", "int") or p.minimum is None or p.maximum is None:
         return None
     step = _step(p)
     lo = p.minimum + (step if p.exclusive_min else 0)
     if p.maximum <= lo or (p.maximum - lo) / step > MAX_SLIDER_STEPS:
         return None
+    d = p.default
+    if isinstance(d, (int, float)) and not (lo <= d <= p.maximum and (d == lo or d - lo >= step * (1 - 1e-9))):
+        return None
+    if any(not (lo <= v <= p.maximum) for v in presets if isinstance(v, (int, float))):
+        return None
     return lo, p.maximum, step
 
 
-def add_param_control(gui, p: Param, value: Any):
-    """One GUI element for parameter `p`, showing `value`."""
+def add_param_control(gui, p: Param, value: Any, presets=()):
+    """One GUI element for parameter `p`, showing `value` (`presets`: the values presets give it)."""
     label, hint = label_of(p), hint_of(p)
     if p.kind == "choice":
         return gui.add_dropdown(label, [str(c) for c in p.choices], initial_value=str(value), hint=hint)
     if p.kind == "vec3":
         return gui.add_vector3(label, tuple(float(x) for x in value), step=p.step or 0.001, hint=hint)
-    rng = slider_range(p)
+    rng = slider_range(p, presets)
     if rng is not None:
         lo, hi, step = rng
         v = min(max(value, lo), hi)
@@ -75,7 +86,8 @@ class ParamControls:
         vals = spec.resolve(None) if values is None else values
         with self.folder:
             for p in spec.params:
-                h = add_param_control(gui, p, vals[p.name])
+                presets = [given[p.name] for _, given in spec.presets if p.name in given]
+                h = add_param_control(gui, p, vals[p.name], presets)
                 self.handles[p.name] = h
                 if on_change is not None:
                     h.on_update(lambda event, name=p.name: on_change(name))

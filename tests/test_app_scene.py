@@ -143,6 +143,37 @@ def test_controls_choose_sliders_only_for_usable_ranges():
     lo, hi, step = slider_range(Param("dt", 0.5, 0.0, 1.0, "s", exclusive_min=True, step=0.01))
     assert lo == pytest.approx(0.01) and hi == 1.0  # the excluded minimum is not offered
     assert slider_range(Param("v", (1, 2, 3), kind="vec3", minimum=0, maximum=5)) is None
+    # a default small against its range gets a number input, not a slider that would clamp it
+    assert slider_range(Param("tidal", 1.0, 0.0, 1e6, "1/s^2", exclusive_min=True)) is None
+    assert slider_range(Param("a", 0.05, 0.0, 20.0, "deg")) is None  # 0.05 is under one step (0.1)
+    assert slider_range(Param("e", 0.1, 0.0, 0.5, ""), presets=[0.7]) is None  # a preset out of reach
+
+
+def test_every_control_starts_at_the_scenarios_defaults_and_presets_set_them_exactly():
+    """The app simulates what its controls hold: for every scenario the controls give exactly the
+    defaults of the spec (pole-near-axis once started with tidal = 1000 and 10 turns, gravity-start
+    with GM = 10¹⁷: sliders clamped the defaults to their first step), and every preset exactly."""
+    import contextlib
+    import io
+
+    import viser
+
+    from app.controls import ParamControls
+    from physics.scenarios import all_scenarios
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        for spec in all_scenarios():
+            c = ParamControls(server.gui, spec)
+            assert spec.resolve(c.values()) == spec.resolve(None), spec.name
+            for name, _ in spec.presets:
+                c.set_values(spec.preset(name))
+                assert spec.resolve(c.values()) == spec.preset(name), (spec.name, name)
+            c.remove()
+    finally:
+        with contextlib.redirect_stdout(io.StringIO()):
+            server.stop()
 
 
 def test_scene_extra_hook_builds_moves_and_prunes():
