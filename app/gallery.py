@@ -22,13 +22,14 @@ CAMERAS: dict[str, tuple[Vec, Vec]] = {
     "middle-axis-flip": ((3.4, 1.2, 1.6), (0.0, 0.0, 0.0)),  # B (green) axis across the view: the flip is seen
     "initial-axis": ((2.6, 2.6, 1.9), (0.0, 0.0, 0.0)),
     # ch. 16: farther out, the direction of F (radius 2) and the celestial sphere (radius 2.4) in view
-    "gravity-gradient-accuracy": ((2.0, -3.8, 2.2), (0.0, 0.0, 0.0)),  # across F's default direction (0.6, 0.5, 0.3)
-    "gravity-start": ((4.2, 3.2, 2.6), (0.0, 0.0, 0.0)),
+    # across F's default direction (0.6, 0.5, 0.3), F on the left: its label runs toward the body, not under the panel
+    "gravity-gradient-accuracy": ((-2.0, 3.8, 2.2), (0.0, 0.0, 0.0)),
+    "gravity-start": ((1.2, -4.4, 2.4), (0.0, 0.0, 0.0)),  # across F (default direction (1, 0.6, 0.4)), not along it
     "libration-circular": ((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),  # from above F's orbit plane (body xy)
     "libration-eccentric": ((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
     "hyperion": ((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
     "moon": ((4.2, -3.6, 2.4), (0.0, 0.0, 0.0)),
-    "pole-near-axis": ((4.8, 3.7, 2.9), (0.0, 0.0, 0.0)),
+    "pole-near-axis": ((4.6, 1.6, 1.4), (0.8, 0.0, 0.0)),  # nearly down the spin axis A (body x): the pole path beyond it face-on
     "precession-circular": ((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
     "earth": ((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
     "earth-long-view": ((3.6, -3.2, 4.4), (0.0, 0.0, 0.6)),  # the pole's circle near the top of the sphere

@@ -537,8 +537,7 @@ class SceneView:
             self._vectors[key] = [frame, arrow, label, -1.0]
         self.omega_arrow, self.L_arrow = self._vectors["omega"][0], self._vectors["L"][0]
         self._labels = [self._vectors["omega"][2], self._vectors["L"][2]]
-
-    def _build_vectors(self, traj) -> None:
+        # shown and hidden with the "vectors" overlay even when it starts off (nothing to build)
         self._static["vectors"] = [self.omega_arrow, self.L_arrow]
 
     def _set_vector(self, key: str, v) -> None:

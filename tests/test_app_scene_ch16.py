@@ -277,6 +277,7 @@ def test_gravity_accuracy_brings_f_in_at_its_distance_with_the_errors_there(resu
     ex = view.extra
     traj = res.trajectory
     assert not any(n.startswith("/world/bodies/") for n in view._h)  # no second F on the sphere of directions
+    assert view._h["/world/omega"].visible is False and view._h["/world/L"].visible is False  # no motion: no ω, L
     u = np.asarray(traj.bodies["attractor"][-1], float)
     u /= np.linalg.norm(u)
     last = len(traj.t) - 1
