@@ -199,18 +199,20 @@ def drop_repeats(path: np.ndarray, idx: np.ndarray, cell: float):
     return path[keep], idx[keep]
 
 
-def z_to(v) -> tuple[float, float, float, float]:
-    """Unit quaternion (w, x, y, z) turning +z onto the direction of v (identity for v = 0)."""
+def z_to_many(v) -> tuple[np.ndarray, np.ndarray]:
+    """Unit quaternions (w, x, y, z) turning +z onto each row of v (N,3) (identity where v is zero or
+    not finite) and the lengths: (N,4), (N,). Computed once per result so
+    that playback only indexes arrays (per-frame numpy calls on 3-vectors cost the server more
+    than the frame's messages with thirty browsers)."""
     v = np.asarray(v, float)
-    n = np.linalg.norm(v)
-    if n == 0 or not np.isfinite(n):
-        return (1.0, 0.0, 0.0, 0.0)
-    x, y, z = v / n
-    if z < -1 + 1e-12:
-        return (0.0, 1.0, 0.0, 0.0)
-    q = np.array([1.0 + z, -y, x, 0.0])
-    q /= np.linalg.norm(q)
-    return tuple(float(c) for c in q)
+    n = np.linalg.norm(v, axis=1)
+    ok = (n > 0) & np.isfinite(n)
+    u = np.where(ok[:, None], v / np.where(ok, n, 1.0)[:, None], [0.0, 0.0, 1.0])
+    q = np.stack([1.0 + u[:, 2], -u[:, 1], u[:, 0], np.zeros(len(u))], 1)
+    down = u[:, 2] < -1 + 1e-12
+    q[down] = (0.0, 1.0, 0.0, 0.0)
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    return q, np.where(ok, n, 0.0)
 
 
 def segments(path: np.ndarray) -> np.ndarray:
@@ -536,14 +538,19 @@ class SceneView:
             label = self._node(f"{r}/{key}/label", lambda key=key, text=text: sc.add_label(f"{r}/{key}/label", text))
             self._vectors[key] = [frame, arrow, label, -1.0]
         self.omega_arrow, self.L_arrow = self._vectors["omega"][0], self._vectors["L"][0]
+        # their poses at every sample: ω in the energy ellipsoid's scale, L drawn 1.3 long
+        Lm = np.asarray(traj.momentum_norm, float)[:, None]
+        L_drawn = np.where(Lm > 0, 1.3 * traj.L_inertial / np.where(Lm > 0, Lm, 1.0), 0.0)
+        self._vector_poses = {"omega": z_to_many(self.k_omega * traj.omega_inertial), "L": z_to_many(L_drawn)}
         self._labels = [self._vectors["omega"][2], self._vectors["L"][2]]
         # shown and hidden with the "vectors" overlay even when it starts off (nothing to build)
         self._static["vectors"] = [self.omega_arrow, self.L_arrow]
 
-    def _set_vector(self, key: str, v) -> None:
+    def _set_vector(self, key: str, i: int) -> None:
         frame, arrow, label, drawn = self._vectors[key]
-        length = float(np.linalg.norm(v))
-        frame.wxyz = z_to(v)
+        wxyz, lengths = self._vector_poses[key]
+        length = float(lengths[i])
+        frame.wxyz = wxyz[i]
         if drawn < 0 or abs(length - drawn) > VECTOR_LENGTH_TOL * max(drawn, 1e-9):
             arrow.points = np.array([[[0, 0, 0], [0, 0, length]]], np.float32)
             label.position = (0.0, 0.0, 1.1 * length)
@@ -704,11 +711,8 @@ class SceneView:
         if self._rotation and self.body_frame is not None:
             self.body_frame.wxyz = traj.quat_wxyz[i]
             if self.overlays.get("vectors", True):
-                w = self.k_omega * traj.omega_inertial[i]
-                Lm = traj.momentum_norm[i]
-                Lv = 1.3 * traj.L_inertial[i] / Lm if Lm > 0 else np.zeros(3)
-                self._set_vector("omega", w)
-                self._set_vector("L", Lv)
+                self._set_vector("omega", i)
+                self._set_vector("L", i)
         for h, pos in self._markers.values():
             h.position = pos[i]
         if self.extra is not None and self.overlays.get("scenario", True):

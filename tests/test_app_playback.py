@@ -3,8 +3,9 @@ the picture unchanged, and the ω / L arrows move by pose updates, re-sending ge
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from app.scene import REPEAT_CELL, SceneView, drop_repeats, z_to
+from app.scene import REPEAT_CELL, SceneView, drop_repeats, z_to_many
 from physics.quaternion import rotate
 from physics.scenarios import get
 from tests.test_app_scene import FakeScene
@@ -45,11 +46,14 @@ def test_drop_repeats_packed_keys_match_the_plain_cell_search():
         assert np.array_equal(kidx, idx[keep]) and np.array_equal(kept, path[keep])
 
 
-def test_z_to_turns_z_onto_the_vector():
-    for v in ([1, 2, 3], [0, 0, -5], [0, 0, 2], [1e-3, 0, -1], [-1, 0, 0]):
-        q = np.array(z_to(v))
-        assert np.isclose(np.linalg.norm(q), 1.0)
-        assert np.allclose(rotate(q, [0, 0, 1.0]), np.asarray(v) / np.linalg.norm(v), atol=1e-9)
+def test_z_to_many_turns_z_onto_each_vector():
+    vs = np.array([[1, 2, 3], [0, 0, -5], [0, 0, 2], [1e-3, 0, -1], [-1, 0, 0], [0, 0, 0], [np.nan, 0, 1]], float)
+    q, n = z_to_many(vs)
+    assert np.allclose(np.linalg.norm(q, axis=1), 1.0)
+    for k in range(5):
+        assert np.allclose(rotate(q[k], [0, 0, 1.0]), vs[k] / np.linalg.norm(vs[k]), atol=1e-9)
+        assert n[k] == pytest.approx(np.linalg.norm(vs[k]))
+    assert np.allclose(q[5:], [1, 0, 0, 0]) and np.all(n[5:] == 0)  # nothing to point along: identity, length 0
 
 
 def test_periodic_polhode_sends_fewer_points_and_arrows_move_by_pose():
