@@ -202,7 +202,8 @@ def _libration_circular(values, progress=None):
     if case == "circulating" and w0 > 0:
         # §826 4th: C = m²n, t√n = ζ/m − sin 2ζ/(4m³): half a turn relative to F takes π/(m√N)
         m2 = (phidot0**2 - Nn * np.cos(2 * phi0)) / Nn
-        m["circulation_period_euler"] = float(np.pi / (np.sqrt(m2) * np.sqrt(Nn)))
+        # m² ≤ 0: the chosen start does not circulate (found by tests/test_fuzz.py), no such period
+        m["circulation_period_euler"] = float(np.pi / (np.sqrt(m2) * np.sqrt(Nn))) if m2 > 0 and Nn > 0 else np.nan
     if case == "separatrix" and w0 > 0 and abs(phi0) < np.radians(80.0):
         target = np.sign(phi0 or 1.0) * np.radians(80.0)
         k = np.nonzero(np.abs(phi) >= np.radians(80.0))[0]
