@@ -158,17 +158,26 @@ def test_moon_view_from_the_earth(results):
 
 
 def test_moon_maria_on_the_near_side():
-    m = ch16.moon_mesh(count=64)
-    col = m.visual.vertex_colors[:, :3].astype(float).mean(axis=1)
-    v = m.vertices
+    parts = ch16.moon_surface_parts(count=64)
+    grey = {k: np.mean(rgb) for k, (_, _, rgb) in enumerate(parts)}
+    centres = [(v[f].mean(axis=1), k) for k, (v, f, _) in enumerate(parts)]
+    c = np.concatenate([x for x, _ in centres])
+    part_of = np.concatenate([np.full(len(x), k) for x, k in centres])
 
     def at(lat, lon):
         la, lo = np.radians(lat), np.radians(lon)
         d = np.array([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)])
-        return col[np.argmax(v @ d)]
+        return grey[int(part_of[np.argmax(c @ d)])]
 
     assert at(17, 59) < 120 and at(33, -16) < 120  # Mare Crisium (east), Mare Imbrium
     assert at(0, 180) > 160 and at(-60, 120) > 160  # far side, southern highlands
+    assert sum(len(f) for _, f, _ in parts) == len(trimesh_sphere_faces(64))  # every face in one part
+
+
+def trimesh_sphere_faces(count):
+    import trimesh
+
+    return trimesh.creation.uv_sphere(radius=1.0, count=[count, count]).faces
 
 
 def test_magnified_wiggle_scales_the_departure_from_the_mean_cone():

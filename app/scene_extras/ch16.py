@@ -32,6 +32,8 @@ physical quantity.
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import trimesh
 
@@ -344,24 +346,47 @@ MARIA = (
 BRIGHT_CRATERS = ((-43, -11, 3), (10, -20, 2), (24, -47, 2))  # Tycho, Copernicus, Aristarchus
 
 
-def moon_mesh(count: int = 160) -> trimesh.Trimesh:
-    """A unit UV sphere with the near side's maria as dark vertex colours; body x toward the
-    Earth (selenographic longitude 0), y east, z north (as physics.moon.mean_frame)."""
-    m = trimesh.creation.uv_sphere(radius=1.0, count=[count, count])
-    v = m.vertices
-    col = np.tile(np.array([185, 182, 172], float), (len(v), 1))
+@functools.lru_cache(maxsize=1)
+def _moon_parts():
+    return moon_surface_parts()
+
+
+MOON_HIGHLAND, MOON_MARE, MOON_CRATER = (185, 182, 172), (88, 88, 96), (245, 245, 240)
+
+
+def moon_colour_index(d) -> np.ndarray:
+    """0 highland, 1 mare, 2 bright crater for unit vectors d (N,3) in the Moon's body frame."""
+    d = np.asarray(d, float)
+    out = np.zeros(len(d), int)
 
     def near(lat, lon, rad):
         la, lo = np.radians(lat), np.radians(lon)
         c = np.array([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)])
-        return v @ c > np.cos(np.radians(rad))
+        return d @ c > np.cos(np.radians(rad))
 
     for lat, lon, rad in MARIA:
-        col[near(lat, lon, rad)] = (88, 88, 96)
+        out[near(lat, lon, rad)] = 1
     for lat, lon, rad in BRIGHT_CRATERS:
-        col[near(lat, lon, rad)] = (245, 245, 240)
-    m.visual = trimesh.visual.ColorVisuals(m, vertex_colors=np.hstack([col, 255 * np.ones((len(v), 1))]).astype(np.uint8))
-    return m
+        out[near(lat, lon, rad)] = 2
+    return out
+
+
+def moon_surface_parts(count: int = 160) -> list[tuple[np.ndarray, np.ndarray, tuple]]:
+    """A unit UV sphere with the near side's maria, one (vertices, faces, colour) per colour (each
+    face coloured at its centre); body x toward the Earth (selenographic longitude 0), y east, z
+    north (as physics.moon.mean_frame). Plain meshes, not one vertex-coloured GLB: in software WebGL
+    the GLB's material costs twice as much per pixel, and the Moon fills the view."""
+    m = trimesh.creation.uv_sphere(radius=1.0, count=[count, count])
+    centre = m.vertices[m.faces].mean(axis=1)
+    idx = moon_colour_index(centre / np.linalg.norm(centre, axis=1, keepdims=True))
+    parts = []
+    for k, rgb in enumerate((MOON_HIGHLAND, MOON_MARE, MOON_CRATER)):
+        f = m.faces[idx == k]
+        if len(f) == 0:
+            continue
+        used, inv = np.unique(f, return_inverse=True)
+        parts.append((m.vertices[used].astype(np.float32), inv.reshape(-1, 3).astype(np.uint32), rgb))
+    return parts
 
 
 @register_extra("moon")
@@ -379,10 +404,12 @@ class MoonExtra(_Ch16):
         r = self.view.root
         semi = tuple(float(x) * 1.004 for x in getattr(self.view, "_semi", (1.0, 1.0, 1.0)))
         if self.values.get("maria", True):
-            mesh = moon_mesh()
             name = f"{r}/body/moon_surface"
-            self.node(name, lambda: self.scene.add_mesh_trimesh(name, mesh, scale=semi, cast_shadow=False,
-                                                                receive_shadow=False), scale=semi)
+            self.node(name, lambda: self.scene.add_frame(name, show_axes=False))
+            for k, (v, f, rgb) in enumerate(_moon_parts()):
+                part = f"{name}/{k}"
+                self.node(part, lambda part=part, v=v, f=f, rgb=rgb: self.scene.add_mesh_simple(
+                    part, v, f, color=rgb, scale=semi, cast_shadow=False, receive_shadow=False), scale=semi)
         self._eline = self._light = None
         if self.values.get("earth_line", True):
             if not self.values.get("earth_view", True):
