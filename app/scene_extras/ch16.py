@@ -161,6 +161,17 @@ class _Ch16(SceneExtra):
         return self.node(name, lambda: self.scene.add_icosphere(name, radius=radius, color=color,
                                                                 cast_shadow=False, receive_shadow=False))
 
+    def _build_centre_line(self, traj) -> None:
+        """The line from the body's centre toward the centre of force (the first of traj.bodies)."""
+        self._cline = None
+        if self.values.get("centre", True) and traj.bodies:
+            self._cdir = _unit(np.asarray(next(iter(traj.bodies.values())), float))
+            self._cline = self._segs("centre_direction", np.zeros((1, 2, 3)), F_COLOR, 0.015)
+
+    def _frame_centre_line(self, i: int) -> None:
+        if self._cline is not None:
+            self._cline.points = _f32([[[0, 0, 0], ORBIT_RADIUS * self._cdir[i]]])
+
 
 # ---- libration: F, ζ, the orbit, the phase portrait ------------------------------------------
 
@@ -374,8 +385,8 @@ def moon_colour_index(d) -> np.ndarray:
 def moon_surface_parts(count: int = 160) -> list[tuple[np.ndarray, np.ndarray, tuple]]:
     """A unit UV sphere with the near side's maria, one (vertices, faces, colour) per colour (each
     face coloured at its centre); body x toward the Earth (selenographic longitude 0), y east, z
-    north (as physics.moon.mean_frame). Plain meshes, not one vertex-coloured GLB: in software WebGL
-    the GLB's material costs twice as much per pixel, and the Moon fills the view."""
+    north (as physics.moon.mean_frame). Plain meshes, not one vertex-coloured GLB, as for the body
+    (app.scene.banded_sphere_parts: 9–12 against ~5 ms a frame there; the Moon fills the view)."""
     m = trimesh.creation.uv_sphere(radius=1.0, count=[count, count])
     centre = m.vertices[m.faces].mean(axis=1)
     idx = moon_colour_index(centre / np.linalg.norm(centre, axis=1, keepdims=True))
@@ -573,16 +584,12 @@ class PoleNearAxisExtra(_Ch16):
             text = f"pole O ×{k:g} (its departure from the start)"
             pos = _tuple(self.RADIUS * 1.1 * _unit(traj.omega_body[0]))
             self.node(name, lambda: self.scene.add_label(name, text, position=pos), text=text, position=pos)
-        self._cline = None
-        if self.values.get("centre", True) and traj.bodies:
-            self._cdir = _unit(np.asarray(next(iter(traj.bodies.values())), float))
-            self._cline = self._segs("centre_direction", np.zeros((1, 2, 3)), F_COLOR, 0.015)
+        self._build_centre_line(traj)
 
     def set_frame(self, i):
         if self._pole is not None:
             self._pdot.position = _tuple(self._pole[i])
-        if self._cline is not None:
-            self._cline.points = _f32([[[0, 0, 0], ORBIT_RADIUS * self._cdir[i]]])
+        self._frame_centre_line(i)
 
 
 @register_extra("gravity-gradient-accuracy")
@@ -639,16 +646,12 @@ class PrecessionExtra(_PoleExtra):
         self._cone_r = None
         if self.values.get("cone", True):
             self._build_cone(traj)
-        self._cline = None
-        if self.values.get("centre", True) and traj.bodies:
-            self._cdir = _unit(np.asarray(next(iter(traj.bodies.values())), float))
-            self._cline = self._segs("centre_direction", np.zeros((1, 2, 3)), F_COLOR, 0.015)
+        self._build_centre_line(traj)
 
     def set_frame(self, i):
         if self._cone_r is not None:
             self._frame_cone(i)
-        if self._cline is not None:
-            self._cline.points = _f32([[[0, 0, 0], ORBIT_RADIUS * self._cdir[i]]])
+        self._frame_centre_line(i)
 
 
 # ---- the Earth: axis, equator, ecliptic, Sun, Moon, stars, the pole among the stars ------------
