@@ -201,9 +201,9 @@ def drop_repeats(path: np.ndarray, idx: np.ndarray, cell: float):
 
 def z_to_many(v) -> tuple[np.ndarray, np.ndarray]:
     """Unit quaternions (w, x, y, z) turning +z onto each row of v (N,3) (identity where v is zero or
-    not finite) and the lengths: (N,4), (N,). Computed once per result so
-    that playback only indexes arrays (per-frame numpy calls on 3-vectors cost the server more
-    than the frame's messages with thirty browsers)."""
+    not finite) and the lengths: (N,4), (N,). Computed once per result so that playback only
+    indexes arrays: the per-frame arrow poses (numpy calls on 3-vectors) were ~5 % of the server's
+    CPU in a py-spy profile under thirty browsers."""
     v = np.asarray(v, float)
     n = np.linalg.norm(v, axis=1)
     ok = (n > 0) & np.isfinite(n)
@@ -243,8 +243,8 @@ def banded_sphere_parts(rows_per_band: int = 4, columns: int = 64) -> list[tuple
     body x–z half-plane and a red equator, so that spin is visible: one (vertices, faces, colour)
     per colour. The grid's rings and meridians fall on the band edges, so every edge is clean.
 
-    One plain mesh per colour rather than one vertex-coloured GLB: in software WebGL the GLB's
-    material costs ~9 ms a frame at 1280×800, the plain meshes ~4 ms (measured, app-playback-fps)."""
+    One plain mesh per colour rather than one vertex-coloured GLB: in software WebGL at 1280×800,
+    forced redraws, the GLB body cost 9–12 ms a frame and the plain meshes ~5 ms (docs/app.md)."""
     lat = np.unique(np.concatenate([np.linspace(-np.pi / 2, np.pi / 2, 8 * rows_per_band + 1),
                                     [-EQUATOR_HALF_WIDTH, EQUATOR_HALF_WIDTH]]))
     lon = np.unique(np.concatenate([np.linspace(-np.pi, np.pi, columns + 1),
@@ -274,7 +274,7 @@ def banded_sphere_parts(rows_per_band: int = 4, columns: int = 64) -> list[tuple
 
 def flat_disc(radius: float, sections: int = 64) -> tuple[np.ndarray, np.ndarray]:
     """A disc in the z = 0 plane (triangle fan): one layer, so a see-through disc is blended once
-    per pixel (a thin cylinder blends its top and bottom, twice the cost in software WebGL)."""
+    per pixel (a thin cylinder blends its top and its bottom)."""
     th = np.linspace(0, 2 * np.pi, sections, endpoint=False)
     v = np.vstack([[0.0, 0.0, 0.0], np.stack([radius * np.cos(th), radius * np.sin(th), 0 * th], 1)])
     k = np.arange(sections)
