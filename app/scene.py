@@ -624,13 +624,7 @@ class SceneView:
                        HERPOLHODE_COLOR, 0.012, idx=self._idx)
         Lhat = traj.L_inertial[0] / self._Lmag
         d = self.k_omega * 2 * self._E / self._Lmag
-        z = np.array([0, 0, 1.0])
-        ax = np.cross(z, Lhat)
-        ang = np.arctan2(np.linalg.norm(ax), z @ Lhat)
-        wxyz = (1.0, 0.0, 0.0, 0.0)
-        if np.linalg.norm(ax) > 1e-12:
-            ax = ax / np.linalg.norm(ax)
-            wxyz = (float(np.cos(ang / 2)), *(float(x) for x in np.sin(ang / 2) * ax))
+        wxyz = tuple(float(c) for c in z_to_many(Lhat[None])[0][0])  # the disc's normal (z) onto L
         pos = tuple(float(x) for x in d * Lhat)
         dv, df = flat_disc(1.25)
         self._static["herpolhode"] = [self._node(f"{r}/invariable_plane", lambda: sc.add_mesh_simple(
