@@ -14,11 +14,16 @@ app (every GUI value goes through `resolve`) share.
    A run that diverges must say so (status "diverged" and a "diverged at t=" warning).
 
 The counts of cases are printed at the end (`-s` to see them).
+
+CI runs the same examples every time (hypothesis `derandomize`), so a red CI means a change broke
+something rather than a new draw turning up an old edge case. To explore with fresh random draws
+(how findings 14–16 of docs/robustness.md were made), run with THEORIA_FUZZ_RANDOM=1.
 """
 from __future__ import annotations
 
 import json
 import math
+import os
 from collections import Counter
 
 import numpy as np
@@ -26,6 +31,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from physics.params import ParameterError
+
+DERANDOMIZE = os.environ.get("THEORIA_FUZZ_RANDOM") != "1"
 from physics.scenarios import all_scenarios
 
 SCENARIOS = sorted(all_scenarios(), key=lambda s: s.name)
@@ -102,7 +109,7 @@ def check_error(spec, err: ParameterError, fuzzed: set[str]):
 
 
 @pytest.mark.parametrize("name", NAMES)
-@settings(max_examples=80, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=80, deadline=None, database=None, derandomize=DERANDOMIZE, suppress_health_check=list(HealthCheck))
 @given(data=st.data())
 def test_validation_fuzz(name, data):
     spec = next(s for s in SCENARIOS if s.name == name)
@@ -222,14 +229,14 @@ SLOW = {"hyperion", "libration-eccentric", "lunar-perturbation", "earth", "earth
 
 
 @pytest.mark.parametrize("name", [n for n in NAMES if n not in SLOW])
-@settings(max_examples=15, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=15, deadline=None, database=None, derandomize=DERANDOMIZE, suppress_health_check=list(HealthCheck))
 @given(data=st.data())
 def test_simulation_fuzz(name, data):
     simulate_fuzzed(name, data)
 
 
 @pytest.mark.parametrize("name", sorted(SLOW & set(NAMES)))
-@settings(max_examples=4, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=4, deadline=None, database=None, derandomize=DERANDOMIZE, suppress_health_check=list(HealthCheck))
 @given(data=st.data())
 def test_simulation_fuzz_slow(name, data):
     simulate_fuzzed(name, data)
