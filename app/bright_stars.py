@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import csv
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-DEFAULT_PATH = Path(__file__).resolve().parent.parent / "assets" / "bright_stars.csv"
+ASSET = "bright_stars.csv"  # package data of theoria.assets: present in a wheel as in a checkout
 
 
 @dataclass(frozen=True)
@@ -22,8 +23,11 @@ class StarCatalogue:
 
 
 def load_bright_stars(path: str | Path | None = None) -> StarCatalogue:
-    path = Path(path) if path is not None else DEFAULT_PATH
-    rows = [r for r in csv.DictReader(line for line in path.read_text(encoding="utf-8").splitlines()
+    if path is None:
+        text = resources.files("theoria.assets").joinpath(ASSET).read_text(encoding="utf-8")
+    else:
+        text = Path(path).read_text(encoding="utf-8")
+    rows = [r for r in csv.DictReader(line for line in text.splitlines()
                                        if line.strip() and not line.startswith("#"))]
     ra = np.array([15.0 * (float(r["ra_h"]) + float(r["ra_m"]) / 60 + float(r["ra_s"]) / 3600) for r in rows])
     dec = np.array([(-1.0 if r["dec_sign"] == "-" else 1.0)

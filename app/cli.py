@@ -9,7 +9,7 @@ import json
 import sys
 import time
 
-from physics.params import ParameterError
+from theoria.physics.params import ParameterError
 
 
 class Progress:
@@ -47,7 +47,7 @@ def _parse_sets(items: list[str] | None) -> dict[str, str]:
 
 
 def _scenario_values(name: str, sets: list[str] | None, duration: float | None, preset: str | None = None):
-    from physics.scenarios import get
+    from theoria.physics.scenarios import get
 
     sc = get(name)
     given = {}
@@ -85,7 +85,7 @@ def _fmt(x) -> str:
 
 
 def cmd_list(args) -> int:
-    from physics.scenarios import all_scenarios
+    from theoria.physics.scenarios import all_scenarios
 
     from .gallery import ordered
 
@@ -158,7 +158,7 @@ def _fmt3(x, digits: int = 9) -> str:
 
 
 def cmd_check(args) -> int:
-    from physics.checks import run_checks
+    from theoria.physics.checks import run_checks
 
     t0 = time.perf_counter()
 
@@ -181,7 +181,7 @@ def cmd_check(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from app.bench import format_table, run_benches
+    from theoria.benchmarks import format_table, run_benches
 
     rows = run_benches(args.names or None, progress=None if args.json else (lambda n: sys.stderr.write(f"bench {n}\n")))
     if args.json:
@@ -192,10 +192,10 @@ def cmd_bench(args) -> int:
 
 
 def cmd_serve(args) -> int:
-    from app.server import serve
+    from theoria.app.server import serve
 
     if args.scenario is not None:
-        from physics.scenarios import get
+        from theoria.physics.scenarios import get
 
         get(args.scenario)  # unknown name: exit 2 before the server starts
     serve(port=args.port, host=args.host, scenario=args.scenario)
@@ -203,7 +203,7 @@ def cmd_serve(args) -> int:
 
 
 def cmd_record(args) -> int:
-    from app.record import record
+    from theoria.app.record import record
 
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     record(sc.name, args.out, values)
@@ -211,7 +211,7 @@ def cmd_record(args) -> int:
 
 
 def cmd_export(args) -> int:
-    from app.export_html import export
+    from theoria.app.export_html import export
 
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     export(sc.name, args.out, values)
@@ -219,7 +219,7 @@ def cmd_export(args) -> int:
 
 
 def cmd_replay(args) -> int:
-    from app.replay import ReplayError, replay
+    from theoria.app.replay import ReplayError, replay
 
     try:
         return replay(args.file, check_only=args.check, web_viewer=args.web_viewer)

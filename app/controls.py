@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from physics.params import Param
+from theoria.physics.params import Param
 
 MAX_SLIDER_STEPS = 2000
 

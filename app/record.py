@@ -20,7 +20,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from physics.quaternion import to_xyzw
+from theoria.physics.quaternion import to_xyzw
 
 from .scene import shape_semi_axes, AXIS_COLORS, L_COLOR, OMEGA_COLOR, POLHODE_COLOR, TRAIL_COLOR, HERPOLHODE_COLOR, palette
 
@@ -193,7 +193,7 @@ def _safe(name: str) -> str:
 
 def record(name: str, out: str, values: dict | None = None) -> dict:
     """Simulate scenario `name` with resolved parameter `values` and write a recording to `out`."""
-    from physics.scenarios import get
+    from theoria.physics.scenarios import get
 
     spec = get(name)
     values = spec.resolve(values) if values is not None else spec.resolve(None)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import trimesh
 
-from physics.inertia import ellipsoid_semi_axes
+from theoria.physics.inertia import ellipsoid_semi_axes
 
 AXIS_COLORS = ((220, 50, 47), (60, 170, 60), (38, 110, 220))  # A red, B green, C blue
 OMEGA_COLOR = (255, 150, 0)

@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 import viser
 
-from physics.params import ParameterError
-from physics.scenarios import all_scenarios, get
+from theoria.physics.params import ParameterError
+from theoria.physics.scenarios import all_scenarios, get
 
 from . import gallery
 from .controls import ParamControls

@@ -78,7 +78,7 @@ def browser():
 
 
 def _server(scenario):
-    from app.server import make_server
+    from theoria.app.server import make_server
 
     server, sessions = make_server(port=_free_port(), host="127.0.0.1", scenario=scenario, verbose=False)
     return server, sessions
@@ -263,8 +263,8 @@ ATTACHED_JS = """(name) => { let o = window.__viserMutable.nodeRefFromName[name]
 def test_switching_to_an_orbit_scenario_draws_its_bodies(browser, tumble_app):
     """The dropdown (grouped by chapter) switches this browser to an orbit scenario: the rotating
     body goes, a sphere and a trail per Trajectory.bodies entry come, the parameters follow."""
-    from app.server import scenario_label
-    from physics.scenarios import all_scenarios
+    from theoria.app.server import scenario_label
+    from theoria.physics.scenarios import all_scenarios
 
     orbit = next((s for s in all_scenarios() if s.kind == "orbit"), None)
     if orbit is None:
@@ -295,8 +295,8 @@ def test_switching_to_an_orbit_scenario_draws_its_bodies(browser, tumble_app):
 
 
 def test_exported_html_plays_from_file(browser, tmp_path):
-    from app.export_html import export
-    from physics.scenarios import get
+    from theoria.app.export_html import export
+    from theoria.physics.scenarios import get
 
     out = tmp_path / "tumble.html"
     info = export("free-tumble", str(out), get("free-tumble").resolve({"duration": "10"}))
@@ -318,8 +318,8 @@ def test_exported_html_plays_from_file(browser, tmp_path):
 
 def test_a_failing_scenario_never_kills_the_server(browser):
     """A scenario whose simulation raises: the browser is told, the server keeps serving."""
-    from physics.scenarios import base
-    from physics.params import Param
+    from theoria.physics.scenarios import base
+    from theoria.physics.params import Param
 
     def boom(values, progress=None):
         raise RuntimeError("deliberate failure in a test scenario")

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.scene import REPEAT_CELL, SceneView, drop_repeats, z_to_many
-from physics.quaternion import rotate
-from physics.scenarios import get
+from theoria.app.scene import REPEAT_CELL, SceneView, drop_repeats, z_to_many
+from theoria.physics.quaternion import rotate
+from theoria.physics.scenarios import get
 from tests.test_app_scene import FakeScene
 
 

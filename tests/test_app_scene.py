@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.controls import slider_range
-from app.scene import MAX_DRAW_POINTS, SceneView, densify, shape_semi_axes
-from physics.inertia import ellipsoid_moments
-from physics.params import Param
-from physics.scenarios import get
-from physics.scenarios.base import Result, Scenario
-from physics.trajectory import Trajectory
+from theoria.app.controls import slider_range
+from theoria.app.scene import MAX_DRAW_POINTS, SceneView, densify, shape_semi_axes
+from theoria.physics.inertia import ellipsoid_moments
+from theoria.physics.params import Param
+from theoria.physics.scenarios import get
+from theoria.physics.scenarios.base import Result, Scenario
+from theoria.physics.trajectory import Trajectory
 
 
 class FakeHandle:
@@ -158,8 +158,8 @@ def test_every_control_starts_at_the_scenarios_defaults_and_presets_set_them_exa
 
     import viser
 
-    from app.controls import ParamControls
-    from physics.scenarios import all_scenarios
+    from theoria.app.controls import ParamControls
+    from theoria.physics.scenarios import all_scenarios
 
     with contextlib.redirect_stdout(io.StringIO()):
         server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
@@ -179,7 +179,7 @@ def test_every_control_starts_at_the_scenarios_defaults_and_presets_set_them_exa
 def test_scene_extra_hook_builds_moves_and_prunes():
     """A scenario's SceneExtra is built with the "scenario" overlay, moved by set_frame, asked to
     rebuild on an option change, and its nodes disappear when another scenario is shown."""
-    from app import scene as scene_mod
+    from theoria.app import scene as scene_mod
 
     calls = []
 

@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.scene import SceneView
-from app.scene_extras import ch16
-from physics import quaternion as quat
-from physics.scenarios import get
+from theoria.app.scene import SceneView
+from theoria.app.scene_extras import ch16
+from theoria.physics import quaternion as quat
+from theoria.physics.scenarios import get
 
 from test_app_scene import FakeScene
 
@@ -48,7 +48,7 @@ def _show(spec, res):
 def test_extra_builds_and_playback_only_moves(results, name):
     spec, res = results[name]
     scene, view = _show(spec, res)
-    assert view.extra is not None and type(view.extra).__module__ == "app.scene_extras.ch16", name
+    assert view.extra is not None and type(view.extra).__module__ == "theoria.app.scene_extras.ch16", name
     extra_nodes = [n for n in view._h if n.startswith("/world/extra/") or n in ("/world/body/moon_surface",)]
     assert extra_nodes, name
     scene.log.clear()
@@ -212,7 +212,7 @@ def test_precession_cone_and_wiggle(results):
 def test_earth_stars_and_frame(results):
     spec, res = results["earth"]
     _, view = _show(spec, res)
-    from app.bright_stars import load_bright_stars
+    from theoria.app.bright_stars import load_bright_stars
 
     cat = load_bright_stars()
     labelled = [cat.names[int(n.rsplit("_", 1)[1])] for n in view._h if n.startswith("/world/extra/stars/label_")]

@@ -10,7 +10,7 @@ import os
 
 import pytest
 
-from app.cli import main
+from theoria.app.cli import main
 
 pytestmark = pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian's chromium")
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.bright_stars import load_bright_stars
+from theoria.app.bright_stars import load_bright_stars
 
 ephem = pytest.importorskip("ephem")
 import ephem.stars  # noqa: E402

@@ -1,7 +1,7 @@
 """Many browsers (issue 7 item 3): clients that leave — even in the middle of a long
 simulation — leave nothing running, over repeated connect/disconnect cycles.
 
-The clients are `app.bench_classroom.ViserProtocolClient`: viser's own websocket protocol (the
+The clients are `theoria.benchmarks.classroom.ViserProtocolClient`: viser's own websocket protocol (the
 camera handshake that makes the server build a ClientSession, GUI updates as msgpack), so the
 server side runs exactly as with a browser."""
 from __future__ import annotations
@@ -14,8 +14,8 @@ import time
 
 import pytest
 
-from app.bench_classroom import ViserProtocolClient, _free_port
-from app.server import make_server
+from theoria.benchmarks.classroom import ViserProtocolClient, _free_port
+from theoria.app.server import make_server
 
 CYCLES = 6
 
@@ -94,9 +94,9 @@ def test_app_reports_divergence_and_survives_a_raising_scenario():
     the next browser."""
     import numpy as np
 
-    from physics.params import Param
-    from physics.scenarios import base
-    from physics.trajectory import Trajectory
+    from theoria.physics.params import Param
+    from theoria.physics.scenarios import base
+    from theoria.physics.trajectory import Trajectory
 
     def blowup(values, progress=None):
         t = np.linspace(0.0, 5.0, 51)

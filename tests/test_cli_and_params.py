@@ -6,14 +6,14 @@ import sys
 import numpy as np
 import pytest
 
-from app.cli import main
-from physics.inertia import validate_moments
-from physics.params import Param, ParameterError
+from theoria.app.cli import main
+from theoria.physics.inertia import validate_moments
+from theoria.physics.params import Param, ParameterError
 
 
 def run_cli(*args):
     # the timeout only guards CI against a hang; it is no speed requirement
-    p = subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, timeout=3600)
+    p = subprocess.run([sys.executable, "-m", "theoria.app.cli", *args], capture_output=True, text=True, timeout=3600)
     return p.returncode, p.stdout, p.stderr
 
 
@@ -78,13 +78,13 @@ def test_run_json_shape():
 
 
 def test_run_duration_flag_and_final_state_matches_exact():
-    from physics.torque_free_exact import exact_free_motion
+    from theoria.physics.torque_free_exact import exact_free_motion
     code, out, err = run_cli("run", "free-tumble", "--duration", "7.5", "--json")
     assert code == 0, err
     d = json.loads(out)
     w, q = exact_free_motion((2, 3, 4), (1.0, 0.5, 1.5), [7.5])
     assert np.allclose(d["final_state"]["omega_body"], w[0], atol=1e-11)
-    from physics.quaternion import angle_between
+    from theoria.physics.quaternion import angle_between
     assert angle_between(np.array(d["final_state"]["quaternion_wxyz"]), q[0]) < 1e-10  # q and −q: one attitude
 
 
@@ -97,7 +97,7 @@ def test_list_json_has_every_scenario():
 
 
 def test_preset_flag_gives_the_preset_values_and_set_overrides_them(capsys):
-    from physics.scenarios import get
+    from theoria.physics.scenarios import get
 
     spec = get("free-tumble")
     want = spec.preset("Tumble: spin near the short axis, a small polhode")

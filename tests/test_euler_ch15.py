@@ -3,13 +3,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from physics import quaternion as quat
-from physics.euler_ch15 import (axis_and_speed_rates, flip_interval_808, initial_axis,
+from theoria.physics import quaternion as quat
+from theoria.physics.euler_ch15 import (axis_and_speed_rates, flip_interval_808, initial_axis,
                                 initial_axis_angles_807, integrals_808, vis_viva)
-from physics.euler_equations import direction_cosines_dot, omega_dot, rhs_state
-from physics.inertia import ellipsoid_moments, ellipsoid_semi_axes
-from physics.integrator import integrate
-from physics.torque_free_exact import free_motion
+from theoria.physics.euler_equations import direction_cosines_dot, omega_dot, rhs_state
+from theoria.physics.inertia import ellipsoid_moments, ellipsoid_semi_axes
+from theoria.physics.integrator import integrate
+from theoria.physics.torque_free_exact import free_motion
 
 I = np.array([1.0, 2.0, 3.0])
 

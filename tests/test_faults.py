@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.cli import main
-from app.replay import ReplayError, check
-from physics.params import Param, ParameterError
-from physics.scenarios import get
-from physics.scenarios.base import Diverged, Result, Scenario
-from physics.trajectory import Trajectory
+from theoria.app.cli import main
+from theoria.app.replay import ReplayError, check
+from theoria.physics.params import Param, ParameterError
+from theoria.physics.scenarios import get
+from theoria.physics.scenarios.base import Diverged, Result, Scenario
+from theoria.physics.trajectory import Trajectory
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -28,8 +28,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    from app.export_html import export
-    from app.record import record
+    from theoria.app.export_html import export
+    from theoria.app.record import record
 
     d = tmp_path_factory.mktemp("replay")
     rrd, html = d / "tumble.rrd", d / "tumble.html"
@@ -105,11 +105,11 @@ def test_replay_refuses_corrupt_truncated_foreign(files, capsys):
 
 
 def test_replay_cli_subprocess_exit_code(files):
-    """The installed entry point path: `python -m app.cli replay` exits 2 with one line."""
+    """The installed entry point path: `python -m theoria.app.cli replay` exits 2 with one line."""
     d, rrd, _ = files
     bad = d / "half.rrd"
     bad.write_bytes(rrd.read_bytes()[:5000])
-    p = subprocess.run([sys.executable, "-m", "app.cli", "replay", str(bad), "--check"], cwd=ROOT,
+    p = subprocess.run([sys.executable, "-m", "theoria.app.cli", "replay", str(bad), "--check"], cwd=ROOT,
                        env=dict(os.environ, PYTHONPATH=str(ROOT)), capture_output=True, text=True)
     assert p.returncode == 2 and p.stdout == "" and p.stderr.count("\n") == 1 and "half.rrd" in p.stderr
 
@@ -146,7 +146,7 @@ def test_diverged_run_is_cut_and_reported():
     assert out["metrics"]["final_spin"] is None  # NaN metric → null, never NaN in the JSON
     json.dumps(out, allow_nan=False)
     # the app shows the notes beside the scene
-    from app.server import comparison_markdown
+    from theoria.app.server import comparison_markdown
 
     assert "diverged at t=3" in comparison_markdown(res)
 
@@ -175,7 +175,7 @@ def test_overflow_without_nan_is_divergence():
 
 def test_cli_json_reports_divergence(capsys, monkeypatch):
     """`theoria run --json` on a diverging scenario: status and warning in the JSON, exit 0."""
-    from physics.scenarios import base
+    from theoria.physics.scenarios import base
 
     spec = _blowup_scenario(3.0)
     monkeypatch.setitem(base.REGISTRY, "blowup", spec)
@@ -202,8 +202,8 @@ def test_recording_complete_after_sigint(tmp_path):
     out = tmp_path / "ctrl_c.rrd"
     code = textwrap.dedent(f"""
         import sys, time
-        import app.record as R
-        from app.cli import main
+        import theoria.app.record as R
+        from theoria.app.cli import main
         orig = R._write
         def slow(rec, *a):
             orig(rec, *a)

@@ -30,10 +30,10 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from physics.params import ParameterError
+from theoria.physics.params import ParameterError
 
 DERANDOMIZE = os.environ.get("THEORIA_FUZZ_RANDOM") != "1"
-from physics.scenarios import all_scenarios
+from theoria.physics.scenarios import all_scenarios
 
 SCENARIOS = sorted(all_scenarios(), key=lambda s: s.name)
 NAMES = [s.name for s in SCENARIOS]
@@ -211,7 +211,7 @@ class RecordingScene:
 
 
 def scene_numbers_finite(spec, result):
-    from app.scene import SceneView
+    from theoria.app.scene import SceneView
 
     scene = RecordingScene()
     view = SceneView(scene, "/world")

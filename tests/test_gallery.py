@@ -12,11 +12,11 @@ import types
 import numpy as np
 import pytest
 
-from app import gallery
-from app.scene import SceneView
-from physics.params import Param, ParameterError
-from physics.scenarios import all_scenarios, get
-from physics.scenarios import base as scen_base
+from theoria.app import gallery
+from theoria.app.scene import SceneView
+from theoria.physics.params import Param, ParameterError
+from theoria.physics.scenarios import all_scenarios, get
+from theoria.physics.scenarios import base as scen_base
 from tests.test_app_scene import FakeScene
 
 # small runs of the scenarios whose defaults take seconds (the scene logic does not depend on length)
@@ -246,7 +246,7 @@ class FakeClient:
 
 @contextlib.contextmanager
 def _session(scenario):
-    from app.server import ClientSession
+    from theoria.app.server import ClientSession
 
     client = FakeClient()
     s = ClientSession(None, client, scenario)
@@ -299,7 +299,7 @@ def test_switching_scenario_in_the_session_updates_presets_camera_and_scene():
 
 
 def test_long_run_shows_throttled_progress_then_hides_it(monkeypatch):
-    from app import server as server_mod
+    from theoria.app import server as server_mod
 
     steps = 40
 
@@ -329,7 +329,7 @@ def test_long_run_shows_throttled_progress_then_hides_it(monkeypatch):
 def test_long_run_without_progress_reports_still_shows_the_bar(monkeypatch):
     """A run in a phase that reports nothing (e.g. the REBOUND calibration before a long
     integration) shows the bar at 0 after PROGRESS_SHOW_AFTER and hides it at the end."""
-    from app import server as server_mod
+    from theoria.app import server as server_mod
 
     def silent(values, progress=None):
         time.sleep(0.6)

@@ -8,14 +8,14 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
-from physics import libration as lib
-from physics.gravity_gradient import (ellipsoid_quadrature, exact_torque_force, extra_force_first_order,
+from theoria.physics import libration as lib
+from theoria.physics.gravity_gradient import (ellipsoid_quadrature, exact_torque_force, extra_force_first_order,
                                       fitted_order, force_error_vs_size, starting_axis, torque_error_vs_size,
                                       torque_euler_components, torque_first_order)
-from physics.inertia import ellipsoid_moments
-from physics.orbits import KeplerOrbit, solve_kepler
-from physics.params import ParameterError
-from physics.scenarios.base import get
+from theoria.physics.inertia import ellipsoid_moments
+from theoria.physics.orbits import KeplerOrbit, solve_kepler
+from theoria.physics.params import ParameterError
+from theoria.physics.scenarios.base import get
 
 SEMI = np.array([1.0, 0.8, 0.6])
 DIR = np.array([0.6, 0.5, 0.3])
@@ -122,7 +122,7 @@ def test_gravity_start_axis_and_rate():
 def test_gravity_start_axis_drifts_as_t_squared_against_dop853():
     """§820 holds at the first instant; at finite t the full equations (scipy DOP853, independent of
     the splitting integrator) pull the axis off Euler's as t² (ω = ω̇₀t + O(t³) from rest)."""
-    from physics.checks.libration import _angle_from, gravity_start_reference
+    from theoria.physics.checks.libration import _angle_from, gravity_start_reference
 
     sc = get("gravity-start")
     values = sc.resolve({"direction": "0.3,0.9,-0.5", "turn_deg": 20.0})
@@ -281,7 +281,7 @@ def test_forced_solution_search_gives_up_quickly_where_there_is_none():
     assert 3 <= len(calls) <= 100 and max(calls) <= 0.1
     # where a forced solution exists the search still finds it (e = 0.2, (B−A)/C = −0.45 and 0.25:
     # the previous search found these too), periodic to 1e-11 in λ and λ̇
-    from physics.scenarios.libration import ForcedSolution
+    from theoria.physics.scenarios.libration import ForcedSolution
 
     for g in (-0.45, 0.25):
         fs = ForcedSolution(g, 0.2, 1.0)
@@ -417,7 +417,7 @@ def test_lunar_position_and_optical_libration_against_meeus_examples():
     """Meeus, Astronomical Algorithms (2nd ed.), Example 47.a and 53.a: 1992 April 12, 0h TD
     (JD 2448724.5): λ = 133.162655°, β = −3.229126°, Δ = 368409.7 km (of date, no nutation);
     l′ = −1.206°, b′ = +4.194° (his values include nutation, ~0.005°)."""
-    from physics import moon
+    from theoria.physics import moon
     t = np.array([2448724.5 - 2451545.0])
     lon, lat, dist = moon.moon_geocentric(t)
     lon_of_date = np.degrees(lon[0]) + moon.PRECESSION_DEG_PER_CY * t[0] / 36525.0
@@ -437,8 +437,8 @@ def test_lunar_position_and_optical_libration_against_meeus_examples():
 
 
 def test_moon_physical_libration_against_dop853_euler_and_published_terms():
-    from physics import moon
-    from physics.checks.libration import moon_runs
+    from theoria.physics import moon
+    from theoria.physics.checks.libration import moon_runs
 
     runs = moon_runs()  # the 6-year run, the same at twice the step, and scipy DOP853 of the same model
     m = runs["run"]

@@ -12,14 +12,14 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from physics import quaternion as quat
-from physics.euler_equations import rhs_state
-from physics.params import ParameterError
-from physics.precession import (ARCSEC, equal_moments_841, euler_N, fit_pole, linear_theory, pole_rates_840,
+from theoria.physics import quaternion as quat
+from theoria.physics.euler_equations import rhs_state
+from theoria.physics.params import ParameterError
+from theoria.physics.precession import (ARCSEC, equal_moments_841, euler_N, fit_pole, linear_theory, pole_rates_840,
                                 resonance_849)
-from physics.scenarios.base import get
-from physics.scenarios.precession import fit_circular, simulate_circular, spheroid_moments
-from physics.trajectory import Trajectory
+from theoria.physics.scenarios.base import get
+from theoria.physics.scenarios.precession import fit_circular, simulate_circular, spheroid_moments
+from theoria.physics.trajectory import Trajectory
 
 N_DEG = 23.44
 
@@ -218,7 +218,7 @@ def _iau2000_terms(years=40.0):
 def _newtonian_psi_a_rate():
     """ψ_A without the geodesic precession (1.919883″/cy, Capitaine et al. 2003), which ψ_A holds
     with the sense opposite to the luni-solar precession and a Newtonian rigid Earth has not."""
-    from physics.earth_precession import GEODESIC_PRECESSION
+    from theoria.physics.earth_precession import GEODESIC_PRECESSION
 
     return _iau2006_psi_a_rate() + GEODESIC_PRECESSION / 100
 
@@ -272,7 +272,7 @@ def test_earth_nutation_18_6yr_semiannual_and_fortnightly_vs_iau2000(earth):
     # and the moon's node regression really comes out of the REBOUND integration
     # (against the fixed ecliptic: the sidereal period; the model has no planets and no J2, which
     # lengthen it by a few 1e-4, see E13)
-    from physics.three_body.lunar_elements import NODE_PERIOD_SIDEREAL_YR
+    from theoria.physics.three_body.lunar_elements import NODE_PERIOD_SIDEREAL_YR
 
     assert m["moon_node_period_yr"] == pytest.approx(NODE_PERIOD_SIDEREAL_YR, rel=1e-3)
 
@@ -293,9 +293,9 @@ LONG_VIEW_TOL = 6e-4
 
 
 def test_long_view_pole_reaches_vega_region_and_passes_polaris():
-    from app.bright_stars import load_bright_stars
-    from physics.earth_precession import pole_star_passages
-    from physics.scenarios.earth_precession import run_long_view
+    from theoria.app.bright_stars import load_bright_stars
+    from theoria.physics.earth_precession import pole_star_passages
+    from theoria.physics.scenarios.earth_precession import run_long_view
 
     cat = load_bright_stars()
     assert {"Polaris", "Vega", "Thuban", "Deneb", "Alderamin"} <= set(cat.names)
@@ -327,7 +327,7 @@ def _capped(name, given):
 def test_presets_give_finite_metrics_or_say_why_not(name):
     """Every preset (shortened): each metric is finite, or missing (NaN, null in JSON) with a note
     saying it is not measurable; and the Earth's are near the IAU values, never absurd."""
-    from physics.earth_precession import IAU2000_NUTATION as iau
+    from theoria.physics.earth_precession import IAU2000_NUTATION as iau
 
     s = get(name)
     for preset, given in s.presets:

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from rerun.chunk import RrdReader
 
-from app.record import record
-from physics.scenarios import get
+from theoria.app.record import record
+from theoria.physics.scenarios import get
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -72,9 +72,9 @@ def test_recording_holds_entities_and_every_step(tmp_path):
 
 def test_orbit_like_bodies_are_recorded(tmp_path):
     """A trajectory with Trajectory.bodies (as the orbit scenarios produce) gets points per step."""
-    from app.record import record_result
-    from physics.scenarios.base import Result, Scenario
-    from physics.trajectory import Trajectory
+    from theoria.app.record import record_result
+    from theoria.physics.scenarios.base import Result, Scenario
+    from theoria.physics.trajectory import Trajectory
 
     n = 50
     t = np.linspace(0, 1, n)
@@ -95,7 +95,7 @@ def test_footer_written_when_interrupted(tmp_path):
     out = tmp_path / "killed.rrd"
     code = textwrap.dedent(f"""
         import sys, time
-        import app.record as R
+        import theoria.app.record as R
         orig = R._write
         def slow(rec, *a):
             orig(rec, *a)

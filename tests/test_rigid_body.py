@@ -6,11 +6,11 @@ from scipy.integrate import solve_ivp
 from scipy.special import ellipj as sp_ellipj
 from scipy.spatial.transform import Rotation
 
-from physics import quaternion as quat
-from physics.euler_equations import rhs_state
-from physics.free_flow import ellipj, free_flow, prepare, drift
-from physics.integrator import PointMass, integrate
-from physics.torque_free_exact import exact_free_motion, free_motion
+from theoria.physics import quaternion as quat
+from theoria.physics.euler_equations import rhs_state
+from theoria.physics.free_flow import ellipj, free_flow, prepare, drift
+from theoria.physics.integrator import PointMass, integrate
+from theoria.physics.torque_free_exact import exact_free_motion, free_motion
 
 BODIES = [
     ((1.0, 2.0, 3.0), (0.3, 1.0, 0.2)),  # circulates about C
@@ -173,7 +173,7 @@ def test_free_tumble_polhode_period_euler_simulated_modern(I, w0):
     """free-tumble's row: Euler's §808 quadrature (×2; for A = B his equations' circle), the period
     measured in theoria's run, and the modern 4K/λ, all against sign changes of ω on the middle
     axis in an independent DOP853 run."""
-    from physics.scenarios import get
+    from theoria.physics.scenarios import get
 
     spec = get("free-tumble")
     res = spec.simulate_fn(spec.resolve({"inertia": ",".join(map(str, I)), "omega0": ",".join(map(str, w0)),

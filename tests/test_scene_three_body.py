@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.scene import ORBIT_RADIUS, SceneView
-from app.scene_extras.three_body import contour_segments, rot_zx, to_corotating
-from physics import quaternion
-from physics.three_body import collinear as col
+from theoria.app.scene import ORBIT_RADIUS, SceneView
+from theoria.app.scene_extras.three_body import contour_segments, rot_zx, to_corotating
+from theoria.physics import quaternion
+from theoria.physics.three_body import collinear as col
 
 from test_app_scene import FakeHandle, FakeScene, _result
 
@@ -168,9 +168,9 @@ def test_plot_choices_read_the_physics_series():
 def test_orbit_cameras_are_shifted_clear_of_the_panel():
     """Orbit scenes: camera and look-at point moved by the same vector, to the screen's right
     (so the scene sits left of the control panel); rotation scenes keep the gallery's view."""
-    from app import gallery
-    from app.server import PANEL_SHIFT, camera_view
-    from physics.scenarios import get
+    from theoria.app import gallery
+    from theoria.app.server import PANEL_SHIFT, camera_view
+    from theoria.physics.scenarios import get
 
     for name in ("collinear", "syzygy", "lunar-perturbation"):
         spec = get(name)

@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from physics.params import ParameterError
-from physics.scenarios.base import get
-from physics.three_body import collinear as col
-from physics.three_body import lunar_elements as le
-from physics.three_body import syzygy as sz
-from physics.three_body.nbody import integrate_dop853, integrate_rebound
+from theoria.physics.params import ParameterError
+from theoria.physics.scenarios.base import get
+from theoria.physics.three_body import collinear as col
+from theoria.physics.three_body import lunar_elements as le
+from theoria.physics.three_body import syzygy as sz
+from theoria.physics.three_body.nbody import integrate_dop853, integrate_rebound
 
 
 # --- 1767: collinear -------------------------------------------------------------------------
@@ -391,7 +391,7 @@ def test_oblateness_node_share_vs_averaged_torque():
     small-i limit: O(i²) = 0.8% corrections allowed (2%)."""
     from scipy.integrate import solve_ivp
 
-    from physics.three_body.constants import OBLIQUITY_RAD
+    from theoria.physics.three_body.constants import OBLIQUITY_RAD
 
     eps, inc = OBLIQUITY_RAD, math.radians(5.145396)
     P, z = np.array([0.0, -math.sin(eps), math.cos(eps)]), np.array([0.0, 0.0, 1.0])

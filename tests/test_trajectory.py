@@ -1,7 +1,7 @@
 """Derived paths of the Trajectory: Poinsot's construction holds for a free body."""
 import numpy as np
 
-from physics.scenarios import get
+from theoria.physics.scenarios import get
 
 
 def test_free_tumble_paths_obey_poinsot():

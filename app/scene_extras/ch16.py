@@ -37,7 +37,7 @@ import functools
 import numpy as np
 import trimesh
 
-from physics import quaternion as quat
+from theoria.physics import quaternion as quat
 
 from ..scene import CELESTIAL_RADIUS, ORBIT_RADIUS, SceneExtra, register_extra, segments
 
@@ -661,7 +661,7 @@ LABELLED_STARS = ("Polaris", "Vega", "Thuban", "Deneb")
 
 def star_directions(catalogue):
     """Unit vectors in the J2000 ecliptic frame (the frame of the earth scenarios)."""
-    from physics.earth_precession import equatorial_to_ecliptic
+    from theoria.physics.earth_precession import equatorial_to_ecliptic
 
     return equatorial_to_ecliptic(catalogue.ra_deg, catalogue.dec_deg)
 

@@ -1,34 +1,60 @@
 """`theoria bench`: each benchmark is a ratio against a baseline measured in the same run.
 
-Modules register benchmarks with `register_bench(name)`; the function returns a dict with
-theoria_s, baseline_s, theoria_error, baseline_error (and optional extra fields). The ratio
-printed is baseline_s / theoria_s (> 1: theoria is faster).
+Every module of this package registers its rows with `register_bench(name, needs=...)`; the
+function returns a dict with theoria_s, baseline_s, theoria_error, baseline_error (and optional
+extra fields). The ratio printed is baseline_s / theoria_s (> 1: theoria is faster).
+
+`needs` names the modules a row imports beyond a plain install (Playwright drives Chromium,
+psutil reads a server's memory): without them the row says which extra to install
+(`pip install "theoria-motus[bench]"`) instead of failing.
 """
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import math
+import pkgutil
 from typing import Callable
 
 BENCHES: dict[str, Callable[[], dict]] = {}
+NEEDS: dict[str, tuple[str, ...]] = {}
+EXTRA = "bench"
 
 
-def register_bench(name: str):
+def register_bench(name: str, needs: tuple[str, ...] = ()):
     def deco(fn):
         BENCHES[name] = fn
+        NEEDS[name] = tuple(needs)
         return fn
 
     return deco
 
 
-def run_benches(names: list[str] | None = None, progress: Callable[[str], None] | None = None) -> list[dict]:
-    from . import bench_all  # noqa: F401  (registers every benchmark module)
+def _load_all() -> None:
+    """Import every module of this package: each registers its rows (no list to keep)."""
+    for m in pkgutil.iter_modules(__path__):
+        importlib.import_module(f"{__name__}.{m.name}")
 
+
+def missing(name: str) -> list[str]:
+    """The modules row `name` needs that this installation lacks."""
+    return [m for m in NEEDS.get(name, ()) if importlib.util.find_spec(m) is None]
+
+
+def run_benches(names: list[str] | None = None, progress: Callable[[str], None] | None = None) -> list[dict]:
+    _load_all()
     out = []
     for name, fn in BENCHES.items():
         if names and name not in names:
             continue
         if progress:
             progress(name)
+        lacking = missing(name)
+        if lacking:
+            out.append({"name": name, "skipped": f"needs {', '.join(lacking)}: pip install "
+                        f"\"theoria-motus[{EXTRA}]\"", "theoria_s": None, "baseline_s": None,
+                        "theoria_error": None, "baseline_error": None, "ratio": None})
+            continue
         try:
             r = dict(fn())
         except Exception as e:  # a broken benchmark is reported, not fatal

@@ -7,12 +7,12 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from physics import quaternion as quat
-from physics.euler_equations import rhs_state
-from physics.integrator import integrate
-from physics.torque_free_exact import exact_free_motion
+from theoria.physics import quaternion as quat
+from theoria.physics.euler_equations import rhs_state
+from theoria.physics.integrator import integrate
+from theoria.physics.torque_free_exact import exact_free_motion
 
-from .bench import register_bench
+from . import register_bench
 
 
 def _best_of(fn, n=3):

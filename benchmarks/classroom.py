@@ -1,6 +1,6 @@
 """A classroom on one laptop (issue 7 item 3): thirty browsers on one `theoria serve`.
 
-The server runs in its own process (`python -m app.cli serve`), exactly as a teacher starts
+The server runs in its own process (`python -m theoria.app.cli serve`), exactly as a teacher starts
 it; its resident memory is read with psutil. The thirty clients are protocol-level viser
 clients (`ViserProtocolClient`), not Chromium tabs (thirty software-WebGL tabs do not fit on
 two cores): each speaks viser's own websocket protocol as the page's worker does
@@ -26,7 +26,7 @@ for 1–4 s, and moves it again, until the soak ends. Memory: the server's RSS s
 2 s; "flat" is judged from the last half of the soak (slope in MB/min) and first/last values.
 
 Duration: env THEORIA_SOAK_S (default 60 s for `theoria bench`); the 30-minute soak is
-`THEORIA_SOAK_S=1800 python -m app.bench_classroom`.
+`THEORIA_SOAK_S=1800 python -m theoria.benchmarks.classroom`.
 """
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ import time
 
 import numpy as np
 
-from .bench import register_bench
+from . import register_bench
 
 N_CLIENTS = 30
 SCENARIO = "middle-axis-flip"
@@ -199,7 +199,7 @@ def start_server_process(port: int, scenario: str = SCENARIO) -> subprocess.Pope
     """`theoria serve` in its own process, waiting until it accepts connections."""
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     env = dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "serve", "--port", str(port), "--scenario", scenario],
+    proc = subprocess.Popen([sys.executable, "-m", "theoria.app.cli", "serve", "--port", str(port), "--scenario", scenario],
                             cwd=root, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     t0 = time.time()
     while True:
@@ -316,7 +316,7 @@ def run_classroom(soak_s: float | None = None, n: int = N_CLIENTS) -> dict:
             server.kill()
 
 
-@register_bench("classroom-30-clients")
+@register_bench("classroom-30-clients", needs=("psutil",))
 def classroom():
     r = run_classroom()
     r.pop("rss_series", None)

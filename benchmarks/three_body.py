@@ -10,9 +10,9 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from physics.three_body import lunar_elements as le
+from theoria.physics.three_body import lunar_elements as le
 
-from .bench import register_bench
+from . import register_bench
 
 
 def _rhs(t, y, mu, mus, sun):

@@ -11,10 +11,10 @@ import time
 
 import numpy as np
 
-from physics import libration as lib
-from physics.scenarios.hyperion import ensemble_starts
+from theoria.physics import libration as lib
+from theoria.physics.scenarios.hyperion import ensemble_starts
 
-from .bench import register_bench
+from . import register_bench
 
 E, W0 = 0.1, 0.89
 

@@ -30,7 +30,7 @@ import time
 
 import numpy as np
 
-from .bench import register_bench
+from . import register_bench
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
@@ -106,7 +106,7 @@ def _open(browser, url, viewport=None):
 
 
 def _quiet_server(**kw):
-    from .server import make_server
+    from theoria.app.server import make_server
 
     with contextlib.redirect_stdout(io.StringIO()):
         return make_server(port=_free_port(), host="127.0.0.1", verbose=False, **kw)
@@ -120,7 +120,7 @@ def _wait_updates(session, n, timeout=120.0):
         time.sleep(0.02)
 
 
-@register_bench("app-slider-latency")
+@register_bench("app-slider-latency", needs=("playwright",))
 def slider_latency():
     srv, sessions = _quiet_server(scenario="middle-axis-flip")
     try:
@@ -156,7 +156,7 @@ def _naive_server(result, spec):
     """The naive player: every frame re-sends the growing trails (axis trail, polhode, herpolhode)."""
     import viser
 
-    from .scene import AXIS_TRAIL_RADIUS, SceneView, decimate_index
+    from theoria.app.scene import AXIS_TRAIL_RADIUS, SceneView, decimate_index
 
     with contextlib.redirect_stdout(io.StringIO()):
         server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
@@ -259,9 +259,9 @@ def _empty_page_fps(b, viewport) -> float:
     return fps
 
 
-@register_bench("app-playback-fps")
+@register_bench("app-playback-fps", needs=("playwright",))
 def playback_fps():
-    from physics.scenarios import get
+    from theoria.physics.scenarios import get
 
     spec = get("middle-axis-flip")
     given = {"duration": "100", "step": "0.005"}  # 20001 samples → 10⁴-point trails
@@ -294,10 +294,10 @@ def playback_fps():
 
 
 def _long_result(steps=100_000):
-    from physics.integrator import integrate
-    from physics.scenarios import get
-    from physics.scenarios.base import Result
-    from physics.trajectory import Trajectory
+    from theoria.physics.integrator import integrate
+    from theoria.physics.scenarios import get
+    from theoria.physics.scenarios.base import Result
+    from theoria.physics.trajectory import Trajectory
 
     spec = get("free-tumble")
     I = np.array([2.0, 3.0, 4.0])
@@ -314,7 +314,7 @@ def _long_result(steps=100_000):
 def _naive_record(res, out, steps):
     import rerun as rr
 
-    from physics.quaternion import to_xyzw
+    from theoria.physics.quaternion import to_xyzw
 
     traj = res.trajectory
     rec = rr.RecordingStream("theoria-naive")
@@ -339,7 +339,7 @@ def _naive_record(res, out, steps):
 
 @register_bench("record-1e5-steps")
 def record_steps():
-    from .record import record_result
+    from theoria.app.record import record_result
 
     steps = 100_000
     spec, res = _long_result(steps)

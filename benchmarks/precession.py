@@ -11,13 +11,13 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from physics import earth_precession as EP
-from physics import quaternion as quat
-from physics.euler_equations import rhs_state
-from physics.precession import ARCSEC
-from physics.scenarios.earth_precession import run_long_view
+from theoria.physics import earth_precession as EP
+from theoria.physics import quaternion as quat
+from theoria.physics.euler_equations import rhs_state
+from theoria.physics.precession import ARCSEC
+from theoria.physics.scenarios.earth_precession import run_long_view
 
-from .bench import register_bench
+from . import register_bench
 
 YEARS = 25800.0
 BASE_YEARS = 10.0

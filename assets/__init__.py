@@ -1,0 +1,1 @@
+"""Data files shipped with theoria (installed as the package data of `theoria.assets`)."""

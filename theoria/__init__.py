@@ -1,0 +1,1 @@
+"""theoria: a laboratory of Euler's rotational celestial mechanics."""
