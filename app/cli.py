@@ -47,31 +47,21 @@ def _parse_sets(items: list[str] | None) -> dict[str, str]:
 
 
 def _scenario_values(name: str, sets: list[str] | None, duration: float | None, preset: str | None = None):
-    from theoria.physics.scenarios import get
+    from theoria.scenarios import get
 
     sc = get(name)
     given = {}
     if preset is not None:  # the preset's values first; --set and --duration override them
-        given.update(dict(sc.presets).get(_preset_name(sc, preset), {}))
+        try:
+            given.update(sc.presets[sc.preset_name(preset)])
+        except ParameterError as e:
+            raise ParameterError("--preset", preset, e.allowed) from None
     given.update(_parse_sets(sets))
     if duration is not None:
         if not any(p.name == "duration" for p in sc.params):
             raise ParameterError("--duration", duration, f"not a parameter of {name}")
         given["duration"] = duration
     return sc, sc.resolve(given)
-
-
-def _preset_name(sc, text: str) -> str:
-    """The preset called `text`: its exact name, or the one preset whose name contains it (any case)."""
-    names = [n for n, _ in sc.presets]
-    if text in names:
-        return text
-    hits = [n for n in names if text.casefold() in n.casefold()]
-    if len(hits) == 1:
-        return hits[0]
-    allowed = "; ".join(f'"{n}"' for n in names) if names else "none (this scenario has no presets)"
-    raise ParameterError("--preset", text, ("one of " if names else "") + allowed +
-                         (" (more than one matches)" if len(hits) > 1 else ""))
 
 
 def _fmt(x) -> str:
@@ -85,15 +75,13 @@ def _fmt(x) -> str:
 
 
 def cmd_list(args) -> int:
-    from theoria.physics.scenarios import all_scenarios
+    from theoria.scenarios import all_scenarios
 
-    from .gallery import ordered
-
-    items = ordered(all_scenarios())
+    items = all_scenarios()
     if args.json:
         print(json.dumps({"scenarios": [
             {"name": s.name, "title": s.title, "section": s.section, "group": s.group, "kind": s.kind,
-             "summary": s.summary, "presets": [n for n, _ in s.presets],
+             "summary": s.summary, "presets": [n for n in s.presets],
              "params": [{"name": p.name, "default": p.default, "min": p.minimum, "max": p.maximum,
                          "unit": p.unit, "kind": p.kind, "help": p.help} for p in s.params]}
             for s in items]}, indent=2))
@@ -105,7 +93,7 @@ def cmd_list(args) -> int:
             group = s.group
             print(f"{'' if s is items[0] else chr(10)}{group}")
         print(f"  {s.name:<{w}}  {s.section:<26} {s.title}")
-        for n, _ in s.presets:
+        for n in s.presets:
             print(f"  {'':<{w}}    --preset \"{n}\"")
     return 0
 
@@ -115,7 +103,7 @@ def cmd_run(args) -> int:
     prog = Progress(f"run {sc.name}", quiet=False)
     result = sc.simulate_fn(values, progress=prog)
     prog.done()
-    out = result.to_json(sc)
+    out = result.to_json()
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
@@ -158,7 +146,7 @@ def _fmt3(x, digits: int = 9) -> str:
 
 
 def cmd_check(args) -> int:
-    from theoria.physics.checks import run_checks
+    from theoria.scenarios.checks import run_checks
 
     t0 = time.perf_counter()
 
@@ -195,7 +183,7 @@ def cmd_serve(args) -> int:
     from theoria.app.server import serve
 
     if args.scenario is not None:
-        from theoria.physics.scenarios import get
+        from theoria.scenarios import get
 
         get(args.scenario)  # unknown name: exit 2 before the server starts
     serve(port=args.port, host=args.host, scenario=args.scenario)

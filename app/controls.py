@@ -86,7 +86,7 @@ class ParamControls:
         vals = spec.resolve(None) if values is None else values
         with self.folder:
             for p in spec.params:
-                presets = [given[p.name] for _, given in spec.presets if p.name in given]
+                presets = [given[p.name] for given in spec.presets.values() if p.name in given]
                 h = add_param_control(gui, p, vals[p.name], presets)
                 self.handles[p.name] = h
                 if on_change is not None:

@@ -61,7 +61,7 @@ def export_result(result, spec, out: str, frames: int = FRAMES, fps: float = FPS
 
 def export(name: str, out: str, values: dict | None = None) -> dict:
     """Simulate scenario `name` with resolved parameter `values`; write a standalone HTML replay."""
-    from theoria.physics.scenarios import get
+    from theoria.scenarios import get
 
     spec = get(name)
     values = spec.resolve(values) if values is not None else spec.resolve(None)

@@ -193,7 +193,7 @@ def _safe(name: str) -> str:
 
 def record(name: str, out: str, values: dict | None = None) -> dict:
     """Simulate scenario `name` with resolved parameter `values` and write a recording to `out`."""
-    from theoria.physics.scenarios import get
+    from theoria.scenarios import get
 
     spec = get(name)
     values = spec.resolve(values) if values is not None else spec.resolve(None)

@@ -409,11 +409,9 @@ class SceneView:
 
     # ---- building --------------------------------------------------------------------------
     def default_overlays(self, spec) -> dict[str, bool]:
-        from .gallery import OVERLAY_DEFAULTS
-
         ch15 = spec is not None and spec.group == "ch. 15"
         out = {k: (v[1] if ch15 else v[2]) for k, v in OVERLAYS.items()}
-        out.update(OVERLAY_DEFAULTS.get(spec.name, {}) if spec is not None else {})
+        out.update(spec.overlays if spec is not None else {})
         return out
 
     def show(self, result, spec, overlays: dict[str, bool] | None = None, exaggerate: float | None = None) -> None:

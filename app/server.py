@@ -25,7 +25,7 @@ import numpy as np
 import viser
 
 from theoria.physics.params import ParameterError
-from theoria.physics.scenarios import all_scenarios, get
+from theoria.scenarios import all_scenarios, get
 
 from . import gallery
 from .controls import ParamControls

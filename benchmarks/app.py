@@ -261,7 +261,7 @@ def _empty_page_fps(b, viewport) -> float:
 
 @register_bench("app-playback-fps", needs=("playwright",))
 def playback_fps():
-    from theoria.physics.scenarios import get
+    from theoria.scenarios import get
 
     spec = get("middle-axis-flip")
     given = {"duration": "100", "step": "0.005"}  # 20001 samples → 10⁴-point trails
@@ -295,8 +295,8 @@ def playback_fps():
 
 def _long_result(steps=100_000):
     from theoria.physics.integrator import integrate
-    from theoria.physics.scenarios import get
-    from theoria.physics.scenarios.base import Result
+    from theoria.scenarios import get
+    from theoria.scenarios.base import Run
     from theoria.physics.trajectory import Trajectory
 
     spec = get("free-tumble")
@@ -305,7 +305,7 @@ def _long_result(steps=100_000):
     h = 0.01
     t, L, q = integrate(I, w0, steps * h, h, stride=1)
     traj = Trajectory(t, q, L, I)
-    res = Result("free-tumble", spec.resolve({"duration": str(steps * h), "step": str(h)}), traj,
+    res = Run("free-tumble", spec.resolve({"duration": str(steps * h), "step": str(h)}), traj,
                  {"energy_J": float(traj.energy[0])},
                  plot_series={"ω₁": traj.omega_body[:, 0], "ω₂": traj.omega_body[:, 1], "ω₃": traj.omega_body[:, 2]})
     return spec, res

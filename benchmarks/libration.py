@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from theoria.physics import libration as lib
-from theoria.physics.scenarios.hyperion import ensemble_starts
+from theoria.scenarios.hyperion import ensemble_starts
 
 from . import register_bench
 

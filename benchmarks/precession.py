@@ -15,7 +15,7 @@ from theoria.physics import earth_precession as EP
 from theoria.physics import quaternion as quat
 from theoria.physics.euler_equations import rhs_state
 from theoria.physics.precession import ARCSEC
-from theoria.physics.scenarios.earth_precession import run_long_view
+from theoria.scenarios.earth_long_view import run_long_view
 
 from . import register_bench
 

@@ -20,6 +20,8 @@ import math
 import numba as nb
 import numpy as np
 
+from .errors import StepTooLarge
+
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(10)
 GL_X = 0.5 * (_GL_X + 1.0)  # nodes on [0, 1]
 GL_W = 0.5 * _GL_W
@@ -235,7 +237,7 @@ def prepare(L, I, h):
     v = lam * h
     du_max = 0.5 * math.sqrt(max(J1 * p / (J2 * r), 1e-6))
     if not abs(v) / du_max <= MAX_NSUB:
-        raise ValueError("free flow: step too large for this spin")
+        raise StepTooLarge("free flow: step too large for this spin")
     nsub = max(1, int(math.ceil(abs(v) / du_max)))
     ip[5] = nsub
     n = GL_X.shape[0]

@@ -24,7 +24,7 @@ import numpy as np
 from . import quaternion as quat
 from .free_flow import drift, prepare, rotate_inverse
 from .inertia import validate_moments
-from .params import ParameterError
+from .errors import ParameterError, StepTooLarge
 
 _W1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 _W0 = -(2.0 ** (1.0 / 3.0)) * _W1
@@ -144,9 +144,7 @@ def integrate(
         except ZeroDivisionError:  # found by tests/test_fuzz.py: spin 1e-155 with moments ~1e-6 underflows
             raise ParameterError("parameters", "these values", "rates so small that their squares underflow "
                                  "(|ω| below ~1e-150): practically at rest; use larger rates or torques") from None
-        except ValueError as e:  # free_flow.prepare refuses a step far too large for the spin reached
-            if "free flow" not in str(e):
-                raise
+        except StepTooLarge:  # free_flow.prepare refuses a step far too large for the spin reached
             raise ParameterError("step", step, f"too large for the spin this run reaches near t={t0 + h * done:.4g} "
                                  "(thousands of turns per step); use a smaller step, torque or spread of moments") from None
         t_out.append(t0 + h * (done + stride * np.arange(1, rows + 1)))

@@ -9,32 +9,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
-
-class ParameterError(ValueError):
-    """A parameter value outside what the model allows."""
-
-    def __init__(self, name: str, value: Any, allowed: str):
-        self.name = name
-        self.value = value
-        self.allowed = allowed
-        super().__init__(f"{name}={_show(value)}: {allowed}")
-
-
-def _show(value: Any) -> str:
-    """The value as it appears in the one-line message: control characters escaped, long text
-    (a 400-digit integer, a pasted paragraph) cut to SHOW_MAX characters (found by tests/test_fuzz.py)."""
-    if isinstance(value, (list, tuple)):
-        text = ",".join(_show(v) for v in value)
-    elif isinstance(value, float):
-        text = f"{value:g}"
-    else:
-        text = str(value)
-    if not text.isprintable():
-        text = repr(text)[1:-1]
-    return text if len(text) <= SHOW_MAX else text[: SHOW_MAX - 1] + "…"
-
-
-SHOW_MAX = 60
+from .errors import ParameterError
 
 
 @dataclass(frozen=True)

@@ -264,7 +264,7 @@ def test_switching_to_an_orbit_scenario_draws_its_bodies(browser, tumble_app):
     """The dropdown (grouped by chapter) switches this browser to an orbit scenario: the rotating
     body goes, a sphere and a trail per Trajectory.bodies entry come, the parameters follow."""
     from theoria.app.server import scenario_label
-    from theoria.physics.scenarios import all_scenarios
+    from theoria.scenarios import all_scenarios
 
     orbit = next((s for s in all_scenarios() if s.kind == "orbit"), None)
     if orbit is None:
@@ -296,7 +296,7 @@ def test_switching_to_an_orbit_scenario_draws_its_bodies(browser, tumble_app):
 
 def test_exported_html_plays_from_file(browser, tmp_path):
     from theoria.app.export_html import export
-    from theoria.physics.scenarios import get
+    from theoria.scenarios import get
 
     out = tmp_path / "tumble.html"
     info = export("free-tumble", str(out), get("free-tumble").resolve({"duration": "10"}))
@@ -318,7 +318,7 @@ def test_exported_html_plays_from_file(browser, tmp_path):
 
 def test_a_failing_scenario_never_kills_the_server(browser):
     """A scenario whose simulation raises: the browser is told, the server keeps serving."""
-    from theoria.physics.scenarios import base
+    from theoria.scenarios import base
     from theoria.physics.params import Param
 
     def boom(values, progress=None):

@@ -7,7 +7,7 @@ import pytest
 
 from theoria.app.scene import REPEAT_CELL, SceneView, drop_repeats, z_to_many
 from theoria.physics.quaternion import rotate
-from theoria.physics.scenarios import get
+from theoria.scenarios import get
 from tests.test_app_scene import FakeScene
 
 

@@ -9,8 +9,8 @@ from theoria.app.controls import slider_range
 from theoria.app.scene import MAX_DRAW_POINTS, SceneView, densify, shape_semi_axes
 from theoria.physics.inertia import ellipsoid_moments
 from theoria.physics.params import Param
-from theoria.physics.scenarios import get
-from theoria.physics.scenarios.base import Result, Scenario
+from theoria.scenarios import get
+from theoria.scenarios.base import Run, Scenario
 from theoria.physics.trajectory import Trajectory
 
 
@@ -106,7 +106,7 @@ def test_switching_kind_clears_and_orbit_bodies_are_drawn():
     orbit = Scenario("demo-orbit", "demo", "§0", "three bodies", "demo", (), lambda v, progress=None: None,
                      kind="orbit")
     scene.log.clear()
-    view.show(Result("demo-orbit", {}, traj, {}), orbit)
+    view.show(Run("demo-orbit", {}, traj, {}), orbit)
     assert any(e[0] == "remove" and e[2] == "/world/body/mesh" for e in scene.log)
     added = {e[2] for e in scene.log if e[0] == "add"}
     assert {"/world/bodies/earth", "/world/bodies/moon"} <= added
@@ -159,7 +159,7 @@ def test_every_control_starts_at_the_scenarios_defaults_and_presets_set_them_exa
     import viser
 
     from theoria.app.controls import ParamControls
-    from theoria.physics.scenarios import all_scenarios
+    from theoria.scenarios import all_scenarios
 
     with contextlib.redirect_stdout(io.StringIO()):
         server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
@@ -167,7 +167,7 @@ def test_every_control_starts_at_the_scenarios_defaults_and_presets_set_them_exa
         for spec in all_scenarios():
             c = ParamControls(server.gui, spec)
             assert spec.resolve(c.values()) == spec.resolve(None), spec.name
-            for name, _ in spec.presets:
+            for name in spec.presets:
                 c.set_values(spec.preset(name))
                 assert spec.resolve(c.values()) == spec.preset(name), (spec.name, name)
             c.remove()

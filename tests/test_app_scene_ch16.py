@@ -11,7 +11,7 @@ import pytest
 from theoria.app.scene import SceneView
 from theoria.app.scene_extras import ch16
 from theoria.physics import quaternion as quat
-from theoria.physics.scenarios import get
+from theoria.scenarios import get
 
 from test_app_scene import FakeScene
 

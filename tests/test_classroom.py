@@ -95,7 +95,7 @@ def test_app_reports_divergence_and_survives_a_raising_scenario():
     import numpy as np
 
     from theoria.physics.params import Param
-    from theoria.physics.scenarios import base
+    from theoria.scenarios import base
     from theoria.physics.trajectory import Trajectory
 
     def blowup(values, progress=None):
@@ -103,7 +103,7 @@ def test_app_reports_divergence_and_survives_a_raising_scenario():
         L = np.tile([1.0, 0.5, 0.2], (51, 1)) * (1 + t[:, None])
         L[t >= 3.0] = np.inf
         traj = Trajectory(t, np.tile([1.0, 0, 0, 0], (51, 1)), L, np.array([1.0, 2.0, 3.0]))
-        return base.Result("test-blowup", dict(values), traj, {})
+        return base.Run("test-blowup", dict(values), traj, {})
 
     def boom(values, progress=None):
         raise RuntimeError("deliberate failure in a test scenario")

@@ -97,7 +97,7 @@ def test_list_json_has_every_scenario():
 
 
 def test_preset_flag_gives_the_preset_values_and_set_overrides_them(capsys):
-    from theoria.physics.scenarios import get
+    from theoria.scenarios import get
 
     spec = get("free-tumble")
     want = spec.preset("Tumble: spin near the short axis, a small polhode")

@@ -17,8 +17,8 @@ import pytest
 from theoria.app.cli import main
 from theoria.app.replay import ReplayError, check
 from theoria.physics.params import Param, ParameterError
-from theoria.physics.scenarios import get
-from theoria.physics.scenarios.base import Diverged, Result, Scenario
+from theoria.scenarios import get
+from theoria.scenarios.base import Diverged, Run, Scenario
 from theoria.physics.trajectory import Trajectory
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -126,7 +126,7 @@ def _blowup_scenario(nan_at: float | None = 3.0, kind: str = "rotation"):
             L[t >= nan_at] = np.nan
         q = np.tile([1.0, 0.0, 0.0, 0.0], (len(t), 1))
         traj = Trajectory(t, q, L, np.array([1.0, 2.0, 3.0]), bodies={"moon": np.c_[np.cos(t), np.sin(t), 0 * t]})
-        return Result("blowup", dict(values), traj, {"final_spin": float(np.linalg.norm(L[-1]))},
+        return Run("blowup", dict(values), traj, {"final_spin": float(np.linalg.norm(L[-1]))},
                       plot_series={"spin": np.linalg.norm(L, axis=1)})
 
     return Scenario("blowup", "blow-up", "§0", "ch. 15", "test", (Param("x", 1.0, 0.0, 2.0),), simulate, kind=kind)
@@ -141,7 +141,7 @@ def test_diverged_run_is_cut_and_reported():
     assert np.all(np.isfinite(res.trajectory.L_body)) and np.all(np.isfinite(res.trajectory.omega_inertial))
     assert len(res.plot_series["spin"]) == 30 and res.trajectory.bodies["moon"].shape == (30, 3)
     assert len(res.warnings) == 1 and res.warnings[0].startswith("diverged at t=3 s") and "angular momentum" in res.warnings[0]
-    out = res.to_json(spec)
+    out = res.to_json()
     assert out["status"] == "diverged" and out["warnings"] == res.warnings
     assert out["metrics"]["final_spin"] is None  # NaN metric → null, never NaN in the JSON
     json.dumps(out, allow_nan=False)
@@ -154,7 +154,7 @@ def test_diverged_run_is_cut_and_reported():
 def test_ok_run_untouched_and_no_finite_sample_refused():
     ok = _blowup_scenario(None).simulate({})
     assert ok.status == "ok" and ok.warnings == [] and len(ok.trajectory.t) == 51
-    assert ok.to_json(_blowup_scenario(None))["status"] == "ok"
+    assert ok.to_json()["status"] == "ok"
     with pytest.raises(Diverged) as ei:
         _blowup_scenario(0.0).simulate({})
     assert isinstance(ei.value, ParameterError) and "diverged at the start" in str(ei.value)
@@ -175,7 +175,7 @@ def test_overflow_without_nan_is_divergence():
 
 def test_cli_json_reports_divergence(capsys, monkeypatch):
     """`theoria run --json` on a diverging scenario: status and warning in the JSON, exit 0."""
-    from theoria.physics.scenarios import base
+    from theoria.scenarios import base
 
     spec = _blowup_scenario(3.0)
     monkeypatch.setitem(base.REGISTRY, "blowup", spec)

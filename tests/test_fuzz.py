@@ -33,7 +33,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from theoria.physics.params import ParameterError
 
 DERANDOMIZE = os.environ.get("THEORIA_FUZZ_RANDOM") != "1"
-from theoria.physics.scenarios import all_scenarios
+from theoria.scenarios import all_scenarios
 
 SCENARIOS = sorted(all_scenarios(), key=lambda s: s.name)
 NAMES = [s.name for s in SCENARIOS]
@@ -259,7 +259,7 @@ def simulate_fuzzed(name, data):
         FOUND.append(f"{name}: {e}")
         check_error(spec, e, set(given_) | {"parameters"})
         return
-    out = result.to_json(spec)
+    out = result.to_json()
     json.dumps(out, allow_nan=False)  # strict JSON: no NaN / Infinity
     tr = result.trajectory
     if tr is None:

@@ -15,7 +15,7 @@ from theoria.physics.gravity_gradient import (ellipsoid_quadrature, exact_torque
 from theoria.physics.inertia import ellipsoid_moments
 from theoria.physics.orbits import KeplerOrbit, solve_kepler
 from theoria.physics.params import ParameterError
-from theoria.physics.scenarios.base import get
+from theoria.scenarios.base import get
 
 SEMI = np.array([1.0, 0.8, 0.6])
 DIR = np.array([0.6, 0.5, 0.3])
@@ -122,7 +122,7 @@ def test_gravity_start_axis_and_rate():
 def test_gravity_start_axis_drifts_as_t_squared_against_dop853():
     """§820 holds at the first instant; at finite t the full equations (scipy DOP853, independent of
     the splitting integrator) pull the axis off Euler's as t² (ω = ω̇₀t + O(t³) from rest)."""
-    from theoria.physics.checks.libration import _angle_from, gravity_start_reference
+    from theoria.scenarios.gravity_start import _angle_from, gravity_start_reference
 
     sc = get("gravity-start")
     values = sc.resolve({"direction": "0.3,0.9,-0.5", "turn_deg": 20.0})
@@ -181,7 +181,7 @@ def test_euler_small_oscillation_period_within_its_order_zeta0_squared():
 def test_four_cases_of_826():
     sc = get("libration-circular")
     # 1st: locked — stays exactly
-    r = sc.simulate({"preset": "locked"})
+    r = sc.simulate({"start": "locked"})
     assert np.max(np.abs(r.plot_series["zeta_rad"])) < 1e-12
     assert r.notes[0].startswith("Euler's case: locked")
     # 2nd: librating, bounded by arcsin k
@@ -190,7 +190,7 @@ def test_four_cases_of_826():
     assert np.max(np.abs(r.plot_series["zeta_rad"])) < np.pi / 2
     assert abs(r.metrics["libration_amplitude_rad"] - r.metrics["libration_amplitude_exact_rad"]) < 1e-5
     # 3rd: separatrix — the time to creep from 10° to 80° is Euler's ln tan(45° + ζ/2)/√(2n)
-    r = sc.simulate({"preset": "separatrix", "zeta0_deg": 10.0})
+    r = sc.simulate({"start": "separatrix", "zeta0_deg": 10.0})
     assert "separatrix" in r.notes[0]
     assert abs(r.metrics["separatrix_time_to_80deg"] / r.metrics["separatrix_time_to_80deg_euler"] - 1) < 1e-4
     # 4th: circulating — ζ passes 90° and keeps going; period of a half turn = 2K(1/k)/(k√(2N))
@@ -281,7 +281,7 @@ def test_forced_solution_search_gives_up_quickly_where_there_is_none():
     assert 3 <= len(calls) <= 100 and max(calls) <= 0.1
     # where a forced solution exists the search still finds it (e = 0.2, (B−A)/C = −0.45 and 0.25:
     # the previous search found these too), periodic to 1e-11 in λ and λ̇
-    from theoria.physics.scenarios.libration import ForcedSolution
+    from theoria.scenarios.libration_eccentric import ForcedSolution
 
     for g in (-0.45, 0.25):
         fs = ForcedSolution(g, 0.2, 1.0)
@@ -438,7 +438,7 @@ def test_lunar_position_and_optical_libration_against_meeus_examples():
 
 def test_moon_physical_libration_against_dop853_euler_and_published_terms():
     from theoria.physics import moon
-    from theoria.physics.checks.libration import moon_runs
+    from theoria.scenarios.moon import moon_runs
 
     runs = moon_runs()  # the 6-year run, the same at twice the step, and scipy DOP853 of the same model
     m = runs["run"]

@@ -17,8 +17,8 @@ from theoria.physics.euler_equations import rhs_state
 from theoria.physics.params import ParameterError
 from theoria.physics.precession import (ARCSEC, equal_moments_841, euler_N, fit_pole, linear_theory, pole_rates_840,
                                 resonance_849)
-from theoria.physics.scenarios.base import get
-from theoria.physics.scenarios.precession import fit_circular, simulate_circular, spheroid_moments
+from theoria.scenarios.base import get
+from theoria.scenarios.precession_circular import fit_circular, simulate_circular, spheroid_moments
 from theoria.physics.trajectory import Trajectory
 
 N_DEG = 23.44
@@ -295,7 +295,7 @@ LONG_VIEW_TOL = 6e-4
 def test_long_view_pole_reaches_vega_region_and_passes_polaris():
     from theoria.app.bright_stars import load_bright_stars
     from theoria.physics.earth_precession import pole_star_passages
-    from theoria.physics.scenarios.earth_precession import run_long_view
+    from theoria.scenarios.earth_long_view import run_long_view
 
     cat = load_bright_stars()
     assert {"Polaris", "Vega", "Thuban", "Deneb", "Alderamin"} <= set(cat.names)
@@ -330,7 +330,7 @@ def test_presets_give_finite_metrics_or_say_why_not(name):
     from theoria.physics.earth_precession import IAU2000_NUTATION as iau
 
     s = get(name)
-    for preset, given in s.presets:
+    for preset, given in s.presets.items():
         r = s.simulate(_capped(name, given))
         assert r.status == "ok", preset
         missing = [k for k, v in r.metrics.items() if not np.isfinite(v)]

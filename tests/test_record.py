@@ -14,7 +14,7 @@ import pytest
 from rerun.chunk import RrdReader
 
 from theoria.app.record import record
-from theoria.physics.scenarios import get
+from theoria.scenarios import get
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -73,7 +73,7 @@ def test_recording_holds_entities_and_every_step(tmp_path):
 def test_orbit_like_bodies_are_recorded(tmp_path):
     """A trajectory with Trajectory.bodies (as the orbit scenarios produce) gets points per step."""
     from theoria.app.record import record_result
-    from theoria.physics.scenarios.base import Result, Scenario
+    from theoria.scenarios.base import Run, Scenario
     from theoria.physics.trajectory import Trajectory
 
     n = 50
@@ -83,7 +83,7 @@ def test_orbit_like_bodies_are_recorded(tmp_path):
                       bodies={"moon": pos, "sun": -pos})
     spec = Scenario("demo-orbit", "demo", "§0", "three bodies", "demo", (), lambda v, progress=None: None, kind="orbit")
     out = tmp_path / "orbit.rrd"
-    record_result(Result("demo-orbit", {}, traj, {"x_m": 1.0}), spec, str(out))
+    record_result(Run("demo-orbit", {}, traj, {"x_m": 1.0}), spec, str(out))
     ents = _read(out)
     assert ents["/world/bodies/moon"]["rows"] == n and ents["/world/bodies/sun"]["rows"] == n
     assert ents["/world/trails/moon"]["static"] == 1

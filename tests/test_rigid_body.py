@@ -173,7 +173,7 @@ def test_free_tumble_polhode_period_euler_simulated_modern(I, w0):
     """free-tumble's row: Euler's §808 quadrature (×2; for A = B his equations' circle), the period
     measured in theoria's run, and the modern 4K/λ, all against sign changes of ω on the middle
     axis in an independent DOP853 run."""
-    from theoria.physics.scenarios import get
+    from theoria.scenarios import get
 
     spec = get("free-tumble")
     res = spec.simulate_fn(spec.resolve({"inertia": ",".join(map(str, I)), "omega0": ",".join(map(str, w0)),

@@ -170,7 +170,7 @@ def test_orbit_cameras_are_shifted_clear_of_the_panel():
     (so the scene sits left of the control panel); rotation scenes keep the gallery's view."""
     from theoria.app import gallery
     from theoria.app.server import PANEL_SHIFT, camera_view
-    from theoria.physics.scenarios import get
+    from theoria.scenarios import get
 
     for name in ("collinear", "syzygy", "lunar-perturbation"):
         spec = get(name)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from theoria.physics.params import ParameterError
-from theoria.physics.scenarios.base import get
+from theoria.scenarios.base import get
 from theoria.physics.three_body import collinear as col
 from theoria.physics.three_body import lunar_elements as le
 from theoria.physics.three_body import syzygy as sz

@@ -1,7 +1,7 @@
 """Derived paths of the Trajectory: Poinsot's construction holds for a free body."""
 import numpy as np
 
-from theoria.physics.scenarios import get
+from theoria.scenarios import get
 
 
 def test_free_tumble_paths_obey_poinsot():

@@ -1,1 +1,59 @@
-"""theoria: a laboratory of Euler's rotational celestial mechanics."""
+"""theoria: a laboratory of Euler's rotational celestial mechanics.
+
+One import gives what a notebook needs::
+
+    import theoria as th
+    th.scenarios()                          # names, in gallery order
+    sc = th.scenario("middle-axis-flip")
+    sc.parameters                           # name -> Param (unit, allowed range, default, help)
+    sc.presets                              # name -> parameter values
+    run = sc.simulate(spin=1, perturbation=0.01, duration=200)
+    run.metrics, run.comparisons, run.warnings, run.trajectory
+    run.to_dataframe(); run.record("x.rrd"); run.export_html("x.html"); run.show()
+    th.check("E2")                          # rows of `theoria check`
+
+A bad value raises `th.ParameterError` (a ValueError) naming the parameter, the value and the
+allowed range: the same line the command line prints with exit status 2. The physics
+(`theoria.physics`), the scenarios (`theoria.scenarios`) and the app (`theoria.app`) are
+reachable but not needed.
+"""
+from __future__ import annotations
+
+from importlib import metadata as _metadata
+
+from .physics.errors import Cancelled, Diverged, ParameterError
+from .physics.params import Param
+from .physics.trajectory import Trajectory
+from .scenarios.base import Comparison, Run, Scenario
+
+try:
+    __version__ = _metadata.version("theoria-motus")
+except _metadata.PackageNotFoundError:  # imported from a checkout that was never installed
+    __version__ = "0+unknown"
+
+__all__ = ["scenarios", "scenario", "check", "Scenario", "Run", "Comparison", "Param", "Trajectory",
+           "ParameterError", "Diverged", "Cancelled", "__version__"]
+
+
+def scenarios() -> list[str]:
+    """The names of every scenario, in gallery order (Euler's ch. 15, ch. 16, then the three-body
+    papers, each in the order of the § it illustrates)."""
+    from .scenarios.base import all_scenarios
+
+    return [s.name for s in all_scenarios()]
+
+
+def scenario(name: str) -> Scenario:
+    """The scenario called `name` (one of `scenarios()`); ParameterError names the ones there are."""
+    from .scenarios.base import get
+
+    return get(name)
+
+
+def check(*ids: str) -> list[Comparison]:
+    """Rows of `theoria check` (every row when no id is given; "E8" selects E8, E8.free, ...):
+    Euler's value, the simulated one, the modern reference, the relative error, the tolerance
+    and the verdict (`.passed`)."""
+    from .scenarios.checks import run_checks
+
+    return run_checks(list(ids) or None)

@@ -10,15 +10,16 @@ Hyperion, hence the large chaotic sea.
 from __future__ import annotations
 
 import numpy as np
+from ..physics import libration as lib
+from ..physics import quaternion as quat
+from ..physics.integrator import PointMass, integrate
+from ..physics.orbits import KeplerOrbit
+from ..physics.trajectory import Trajectory
+from ..physics.params import Param
+from .drawing import Camera
+from .base import Comparison, Run, Scenario, register
+from ._libration import planar_moments, zeta_of
 
-from .. import libration as lib
-from .. import quaternion as quat
-from ..integrator import PointMass, integrate
-from ..orbits import KeplerOrbit
-from ..trajectory import Trajectory
-from ..params import Param
-from .base import Comparison, Result, Scenario, register
-from .libration import planar_moments, zeta_of
 
 RESONANCES = (0.5, 1.0, 1.5, 2.0, 2.5)
 
@@ -110,7 +111,7 @@ def _hyperion(values, progress=None):
     else:
         notes.append("ω₀ = 1 is Euler's resonance A² = 2N: his forced libration 2e/(1 − ω₀²)·sin M is "
                      "infinite there, so no Euler curve is drawn.")
-    return Result("hyperion", values, traj, m, comps, notes, plot_series=series, extras=extras)
+    return Run("hyperion", values, traj, m, comps, notes, plot_series=series, extras=extras)
 
 
 register(Scenario(
@@ -134,6 +135,7 @@ register(Scenario(
         Param("probe_rate", 1.4, -1.0, 4.0, "n", "the drawn body: θ̇/n at periapse"),
         Param("probe_orbits", 20.0, 1.0, 200.0, "", "orbits drawn"),
     ),
+    camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
     simulate_fn=_hyperion,
     euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f)\n"
                    "θ: the body's long axis, f: the moon's direction seen from the planet, r: its distance"),

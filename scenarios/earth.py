@@ -1,23 +1,84 @@
-"""The Earth under the Sun and the Moon: luni-solar precession and nutation (beyond Euler,
-§844–849 with modern values), and the long view of a whole precession cycle."""
+"""The Earth under the Sun and the Moon (§844–849 with modern values): luni-solar precession
+and the main nutation terms of a rigid Earth, against IAU 2006/2000A.
+
+Check rows E10.earth-*: precession rate, the 18.6-year and the semi-annual nutation.
+"""
 from __future__ import annotations
 
 import functools
-import math
-
 import numpy as np
+from ..physics import earth_precession as EP
+from ..physics.precession import linear_theory
+from .drawing import Camera
+from .base import get
+from .checks import register_check
+import math
+from ..physics import quaternion as quat
+from ..physics.params import Param, ParameterError
+from ..physics.precession import ARCSEC, euler_N, fit_pole, pole_angles
+from ..physics.three_body.lunar_elements import NODE_PERIOD_SIDEREAL_YR, NODE_PERIOD_YR
+from ..physics.trajectory import Trajectory
+from .base import Comparison, Run, Scenario, register
+from ._earth import MIN_STEPS, YR
 
-from .. import earth_precession as EP
-from .. import quaternion as quat
-from ..params import Param, ParameterError
-from ..precession import ARCSEC, euler_N, fit_pole, linear_theory, pole_angles
-from ..three_body.lunar_elements import NODE_PERIOD_SIDEREAL_YR, NODE_PERIOD_YR
-from ..trajectory import Trajectory
-from .base import Comparison, Result, Scenario, register
+
+@functools.lru_cache(maxsize=1)
+def _earth_run():
+    return get("earth").simulate({"years": 40.0})
+
+
+@register_check("E10.earth-precession", "Earth: luni-solar precession vs IAU 2006 ψ_A + geodesic precession (40-yr run)",
+                "§846, modern")
+def e10_earth_precession():
+    m = _earth_run().metrics
+    sim, psi_a = m["precession_rate_arcsec_per_yr"], m["precession_rate_iau2006_psi_a_arcsec_per_yr"]
+    ref = psi_a + EP.GEODESIC_PRECESSION / 100
+    return dict(euler=m["precession_rate_euler_arcsec_per_yr"], simulated=sim, modern=ref,
+                rel_error=abs(sim - ref) / ref, tolerance=1e-4, unit="arcsec/yr",
+                note=f"modern = IAU 2006 ψ_A {psi_a:.6f} + the geodesic precession {EP.GEODESIC_PRECESSION / 100:.6f}″/yr "
+                     "(ψ_A holds it with the opposite sense, a relativistic effect no Newtonian rigid Earth has; "
+                     f"Capitaine et al. 2003). Without it the gap would be {sim - psi_a:+.6f}″/yr. "
+                     f"A consistency check, not a prediction: H_d (MHB2000) was fitted to the observed precession. "
+                     "Tolerance 1e-4 (5 mas/yr): the second-order and non-rigid contributions to ψ_A that a rigid "
+                     "first-order torque model leaves out are of the mas/yr order (Lambert & Capitaine 2004: "
+                     "−4.9 mas/cy from zonal deformation), and the 40-yr fit of the 18.6-yr term beside the secular "
+                     f"one. Solar {m['precession_solar_arcsec_per_yr']:.3f}, lunar "
+                     f"{m['precession_lunar_arcsec_per_yr']:.3f}″/yr; period {m['precession_period_yr']:.0f} yr")
+
+
+@register_check("E10.earth-nutation", "Earth: 18.6-yr nutation Δψ, Δε vs IAU 2000A (40-yr run)", "modern")
+def e10_earth_nutation():
+    m = _earth_run().metrics
+    a = m["nutation_longitude_18_6yr_arcsec"], m["nutation_obliquity_18_6yr_arcsec"]
+    b = m["nutation_longitude_18_6yr_iau2000_arcsec"], m["nutation_obliquity_18_6yr_iau2000_arcsec"]
+    rel = max(abs(a[0] / b[0] - 1), abs(a[1] / b[1] - 1))
+    return dict(euler=None, simulated=a[0], modern=b[0], rel_error=rel, tolerance=0.003, unit="arcsec",
+                note=f"Δε {a[1]:.4f}″ vs {b[1]:.4f}″; worst of the two; Euler has no 18.6-yr term (his centre moves in "
+                     f"the ecliptic). Moon's node period {m['moon_node_period_yr']:.3f} yr from REBOUND. Tolerance 0.3% = "
+                     "3× the measured gap (0.07% in Δψ, 0.10% in Δε): IAU 2000A is the non-rigid Earth (MHB2000), "
+                     "whose response at 18.6 yr is close to the rigid one; the gap is that non-rigid response (not "
+                     "modelled), and the issue's 3% bound is far outside it")
+
+
+@register_check("E10.earth-semiannual", "Earth: semi-annual nutation vs IAU 2000A and Euler's 2φ term", "§844, modern")
+def e10_earth_semiannual():
+    m = _earth_run().metrics
+    sim, ref = m["nutation_longitude_semiannual_arcsec"], m["nutation_longitude_semiannual_iau2000_arcsec"]
+    se, re_ = m["nutation_obliquity_semiannual_arcsec"], m["nutation_obliquity_semiannual_iau2000_arcsec"]
+    rel = max(abs(sim / ref - 1), abs(se / re_ - 1))
+    return dict(euler=m["nutation_longitude_semiannual_euler_arcsec"], simulated=sim, modern=ref, rel_error=rel,
+                tolerance=0.05, unit="arcsec",
+                note=f"Δε {se:.4f}″ vs {re_:.4f}″ (Euler {m['nutation_obliquity_semiannual_euler_arcsec']:.4f}″). "
+                     "A rigid Earth: IAU 2000A (the non-rigid MHB2000 Earth) is larger, measured 2.9% in Δψ and 3.4% in "
+                     "Δε, by the non-rigid response (elastic mantle, fluid core, the free-core-nutation resonance) "
+                     "that the rigid model leaves out; tolerance 5% ≈ 1.5× that gap (the issue's 10% is only an outer "
+                     "bound). The rigid-Earth value itself is Euler's linear theory within 0.2%")
+
 
 MAX_SAMPLES = 20000
+
+
 NODE_MIN_YEARS = 2.0  # shortest run whose fitted mean node and perigee motions are reported
-YR = EP.DAYS_PER_YEAR
 
 
 def _traj(t_days, L, q, I, eph_sun, eph_moon, stride):
@@ -51,9 +112,13 @@ def euler_nutation_terms(moon: EP.MeanElements, H=EP.H_DYN, obliquity=EP.OBLIQUI
 # 18.6 yr for the node). Measured on the 1-yr preset: the semi-annual term within 1.3% of the
 # 40-yr run's, against 3% off when the annual term is left out of the fit.
 FIT_ORDER = ("18.6yr", "semiannual", "13.66d", "9.3yr", "annual", "27.55d", "9.13d")
+
+
 TERM_LABEL = {"18.6yr": "18.6-year (Ω)", "semiannual": "semi-annual (2L☉)", "13.66d": "13.66-day (2L☾)",
               "9.3yr": "9.3-year (2Ω)", "annual": "annual (l')", "27.55d": "27.55-day (l)",
               "9.13d": "13.63-day (2L☾ − Ω)"}
+
+
 RAYLEIGH_SLACK = 0.97
 
 
@@ -207,8 +272,8 @@ def _earth(values, progress=None):
         f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr." if lunar_ok else
         f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr.",
         "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψ_A, not the general precession p_A.",
-        f"Moon's orbit: the osculating a, e, i at J2000 are calibrated so that the integrated mean month, e and i equal "
-        f"the observed ones; the node then regresses " + (f"with period {node_period:.3f} yr" if long_enough else "")
+        "Moon's orbit: the osculating a, e, i at J2000 are calibrated so that the integrated mean month, e and i equal "
+        "the observed ones; the node then regresses " + (f"with period {node_period:.3f} yr" if long_enough else "")
         + f" (observed {NODE_PERIOD_SIDEREAL_YR:.4f} yr against the fixed ecliptic, {NODE_PERIOD_YR:.3f} yr from the "
         "moving equinox, which sets the nutation periods).",
     ]
@@ -259,10 +324,9 @@ def _earth(values, progress=None):
         "obliquity − ε₀ (arcsec)": ((p - obl) / ARCSEC)[sel],
         "obliquity − ε₀, Euler (arcsec)": (deps_e - deps_e[0])[sel],
     }
-    return Result("earth", values, traj, m, comps, notes, plot_series=plot)
+    return Run("earth", values, traj, m, comps, notes, plot_series=plot)
 
 
-MIN_STEPS = 20  # integrator steps in the shortest run
 MIN_YEARS = 0.05  # 18 days: at least one cycle of the shortest term fitted (13.66 d)
 
 
@@ -296,6 +360,7 @@ register(Scenario(
         Param("obliquity_deg", math.degrees(EP.OBLIQUITY), 0.0, 89.0, "deg", "obliquity at J2000 (IAU 2006: 23.4392794°)",
               exclusive_min=True),
     ),
+    camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
     simulate_fn=_earth,
     check=_check_earth,
     euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)\n"
@@ -304,103 +369,5 @@ register(Scenario(
         ("Earth: a century of precession and nutation", {}),
         ("Earth: one 18.6-year nod", {"years": 18.6}),
         ("Earth: one year, the half-year nod", {"years": 1.0}),
-    ),
-))
-
-
-# --- the long view: a whole precession cycle ----------------------------------------------
-
-@functools.lru_cache(maxsize=4)
-def mean_orbits(calibration_years=40.0) -> EP.MeanOrbits:
-    """The mean-element orbits of the long view, from a REBOUND run of `calibration_years`
-    (cached: a 40-year IAS15 run takes seconds and depends on nothing else)."""
-    el = EP.calibrated_moon_elements()
-    eph = EP.integrate_orbits(calibration_years * YR, 0.5, moon_elements=el)
-    return EP.MeanOrbits(EP.moon_mean_elements(eph))
-
-
-LONG_MIN_SAMPLES = 5
-
-
-def _check_long(values):
-    """A straight line through the pole longitude needs a few stored samples and steps."""
-    lo = max(LONG_MIN_SAMPLES * values["sample_years"], MIN_STEPS * values["step_days"] / YR, 100.0)
-    if values["years"] < lo:
-        raise ParameterError("years", values["years"],
-                             f"{lo:.4g} ≤ years ≤ 30000 (at least 100 yr, {LONG_MIN_SAMPLES} samples of sample_years = "
-                             f"{values['sample_years']:g} and {MIN_STEPS} steps)")
-
-
-def run_long_view(years=25800.0, step_days=2.0, sample_years=5.0, scheme="strang", progress=None,
-                  calibration_years=40.0):
-    """One run over a whole precession cycle. The Sun on its Kepler ellipse; the Moon on a Kepler
-    ellipse whose node and perigee turn at the rates measured from a REBOUND run of
-    `calibration_years` (the node regression comes from the integration, not imposed).
-    Returns (t_days, L, q, I, MeanOrbits)."""
-    orb = mean_orbits(float(calibration_years))
-    t, L, q, I = EP.run_earth(orb.sun, orb.moon_pos, years * YR, step_days, scheme=scheme,
-                              sample_days=sample_years * YR, progress=progress)
-    return t, L, q, I, orb
-
-
-def _earth_long(values, progress=None):
-    t, L, q, I, orb = run_long_view(values["years"], values["step_days"], values["sample_years"], progress=progress)
-    axis = quat.rotate(q, L)
-    p, lam = pole_angles(axis)
-    ty = t / YR
-    c = np.polyfit(ty, lam, 1)
-    rate = -c[0] / ARCSEC
-    mod = EP.precession_parts_modern(orb.moon)
-    eul = -(mod["euler_sun"] + mod["euler_moon"]) / ARCSEC * YR
-    m = dict(precession_rate_arcsec_per_yr=rate, precession_rate_euler_arcsec_per_yr=eul,
-             precession_period_yr=360 * 3600 / rate, precession_period_euler_yr=360 * 3600 / eul,
-             turned_deg=float(np.degrees(lam[0] - lam[-1])),
-             obliquity_min_deg=float(np.degrees(p.min())), obliquity_max_deg=float(np.degrees(p.max())),
-             moon_node_period_yr=orb.moon.node_period_yr)
-    # the celestial pole in J2000 equatorial RA/Dec, for the star chart
-    ce, se = math.cos(EP.OBLIQUITY), math.sin(EP.OBLIQUITY)
-    ye = ce * axis[:, 1] - se * axis[:, 2]
-    ze = se * axis[:, 1] + ce * axis[:, 2]
-    ra = np.degrees(np.unwrap(np.arctan2(ye, axis[:, 0])))
-    dec = np.degrees(np.arcsin(np.clip(ze, -1, 1)))
-    sun = orb.sun(t)
-    moon = orb.moon_pos(t)
-    traj = Trajectory(ty, q, L * YR, I, time_unit="yr",
-                      bodies={"sun": sun / np.linalg.norm(sun, axis=1, keepdims=True),
-                              "moon": moon / np.linalg.norm(moon, axis=1, keepdims=True)})
-    lam_e = lam[0] - eul * ARCSEC * ty
-    return Result("earth-long-view", values, traj, m,
-                  [Comparison("precession period", 360 * 3600 / eul, m["precession_period_yr"],
-                              360 * 3600 / (EP.PSI_A_RATE / 100), "yr",
-                              "modern: IAU 2006 ψ_A rate (fixed ecliptic); with the ecliptic's motion (p_A) 25,772 yr")],
-                  ["Nutation is sampled too sparsely here to be seen (samples every "
-                   f"{values['sample_years']:g} yr); the pole path is the angular-momentum axis in the J2000 ecliptic.",
-                   "Pass the bright-star catalogue (assets/bright_stars.csv, read by the app) to "
-                   "physics.earth_precession.pole_star_passages to list the pole stars along the path."],
-                  plot_series={"pole longitude (deg)": np.degrees(lam), "pole longitude, Euler (deg)": np.degrees(lam_e),
-                               "obliquity (deg)": np.degrees(p), "obliquity, Euler (deg)": np.full_like(p, np.degrees(p[0])),
-                               "pole RA J2000 (deg)": ra, "pole Dec J2000 (deg)": dec})
-
-
-register(Scenario(
-    name="earth-long-view",
-    title="A whole precession cycle: the pole among the stars",
-    section="§846 (modern values)",
-    group="ch. 16",
-    summary=("One run over ~25,800 years: the Earth's axis, tilted 23.4°, circles the pole of the "
-            "ecliptic once. On the celestial sphere the pole passes Polaris now, was near Thuban 5,000 "
-            "years ago and will be near Vega in about 12,000 years. A long run: the progress bar shows "
-            "how far it has got."),
-    params=(
-        Param("years", 25800.0, 0.0, 30000.0, "yr", "length of the run from J2000", exclusive_min=True, step=100.0),
-        Param("step_days", 2.0, 0.0, 5.0, "day", "integrator step", exclusive_min=True, step=0.5),
-        Param("sample_years", 5.0, 0.0, 1000.0, "yr", "spacing of the stored states", exclusive_min=True),
-    ),
-    simulate_fn=_earth_long,
-    check=_check_long,
-    euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)"),
-    presets=(
-        ("Earth: 25,800 years", {}),
-        ("Earth: to Vega, 13,000 years", {"years": 13000.0}),
     ),
 ))

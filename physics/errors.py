@@ -1,0 +1,54 @@
+"""The errors theoria raises, by type: callers branch on the type, never on the message.
+
+- `ParameterError` (a ValueError): a value outside what the model allows. Its message names the
+  parameter, the value and the allowed range in one line; the CLI prints it and exits 2, the app
+  shows it and keeps its last good state, `import theoria` users catch `theoria.ParameterError`.
+- `Diverged`: a run with no finite sample at all (a ParameterError: these values cannot be run).
+- `Cancelled`: a run stopped from its progress callback (a newer request, a closed tab, Ctrl-C).
+- `StepTooLarge`: the exact free flow refuses a step of thousands of turns (raised inside the
+  integrator, reworded there as a ParameterError naming the scenario's step).
+"""
+from __future__ import annotations
+
+from typing import Any
+
+
+class ParameterError(ValueError):
+    """A parameter value outside what the model allows."""
+
+    def __init__(self, name: str, value: Any, allowed: str):
+        self.name = name
+        self.value = value
+        self.allowed = allowed
+        super().__init__(f"{name}={show_value(value)}: {allowed}")
+
+
+class Diverged(ParameterError):
+    """The run has no finite sample at all: these parameter values cannot be simulated."""
+
+
+class Cancelled(Exception):
+    """The run was stopped from its progress callback before it finished."""
+
+
+class StepTooLarge(ValueError):
+    """The free flow was asked for a step of thousands of turns (`free_flow.prepare`)."""
+
+
+SHOW_MAX = 60  # characters of a value shown in a message: a pasted paragraph is cut, never echoed
+
+
+def show_value(value: Any) -> str:
+    """The value as it appears in a one-line message: control characters escaped, long text (a
+    400-digit integer, a pasted paragraph) cut to SHOW_MAX characters."""
+    if isinstance(value, (list, tuple)):
+        text = ",".join(show_value(v) for v in value[:8]) + (",…" if len(value) > 8 else "")
+    elif isinstance(value, float):
+        text = f"{value:g}"
+    elif isinstance(value, str) and len(value) > 4 * SHOW_MAX:
+        text = value[: 4 * SHOW_MAX]
+    else:
+        text = str(value)
+    if not text.isprintable():
+        text = repr(text)[1:-1]
+    return text if len(text) <= SHOW_MAX else text[: SHOW_MAX - 1] + "…"

@@ -1,0 +1,53 @@
+"""Shared by the ch. 15 scenarios: the body's moments as a parameter and its integration.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import brentq
+from ..physics.free_flow import free_flow
+from ..physics.inertia import validate_moments
+from ..physics.integrator import integrate
+from ..physics.trajectory import Trajectory
+
+
+MAX_SAMPLES = 20000  # states kept for drawing; the integrator steps finer
+
+
+INERTIA_PARAM = dict(kind="vec3", minimum=1e-6, maximum=1e6, unit="kg m^2",
+                help="principal moments A, B, C about the body x, y, z axes")
+
+
+def check_body(values):
+    validate_moments(values["inertia"], "inertia")
+
+
+def stride_for(duration, step):
+    n = max(1, int(np.ceil(duration / step - 1e-9)))
+    return max(1, int(np.ceil(n / MAX_SAMPLES)))
+
+
+def integrate_body(values, omega0, torque=None, progress=None):
+    I = validate_moments(values["inertia"], "inertia")
+    t, L, q = integrate(I, omega0, values["duration"], values["step"], torque_body=torque,
+                        stride=stride_for(values["duration"], values["step"]), progress=progress)
+    return Trajectory(t, q, L, I)
+
+
+def drift_metrics(traj):
+    de, dl = traj.relative_drift()
+    return {"energy_rel_drift": de, "momentum_rel_drift": dl}
+
+
+def middle_axis_crossings(traj: Trajectory) -> np.ndarray:
+    """Times where ω on the middle axis changes sign (the flips), each located to round-off by
+    root-finding on the exact free flow from the sample before it (valid for a free body)."""
+    I = traj.inertia
+    k = int(np.argsort(I)[1])
+    w = traj.omega_body[:, k]
+    idx = np.nonzero(np.sign(w[:-1]) * np.sign(w[1:]) < 0)[0]
+    out = []
+    for i in idx:
+        L0, q0 = traj.L_body[i], traj.quat_wxyz[i]
+        f = lambda d: free_flow(L0, q0, I, d)[0][k]  # noqa: E731
+        out.append(traj.t[i] + brentq(f, 0.0, traj.t[i + 1] - traj.t[i], xtol=1e-14, rtol=1e-15))
+    return np.array(out)

@@ -1,0 +1,441 @@
+"""What a scenario is (design.md): the unit users pick, and the Run it gives.
+
+A `Scenario` carries its parameters (names, units, ranges, defaults, help), named presets, the §
+it illustrates, the text a class reads (title, what to look for, Euler's formula), its camera and
+what it draws, and a simulate function. `Scenario.simulate(**values)` validates the values once
+(`theoria.ParameterError` names the parameter, the value and the allowed range) and returns a
+`Run`: the one object every consumer reads (the CLI's --json, the app, the recording, the HTML
+replay, a notebook).
+"""
+from __future__ import annotations
+
+import dataclasses
+import functools
+import importlib
+import math
+import pkgutil
+import re
+import sys
+import types
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from ..physics.errors import Diverged, ParameterError
+from ..physics.params import Param, resolve
+from ..physics.trajectory import Trajectory
+from .drawing import Camera
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """One "Euler says / simulated / modern" row: in a run's table, and (with `id`, `section`,
+    `rel_error`, `tolerance` and `passed`) as a row of `theoria check`."""
+
+    label: str
+    euler: float | None
+    simulated: float | None
+    modern: float | None = None
+    unit: str = ""
+    note: str = ""
+    # a `theoria check` row also says how far the simulation is from its reference and what it must meet
+    id: str | None = None
+    section: str = ""
+    rel_error: float | None = None
+    tolerance: float | None = None
+    passed: bool | None = None
+
+    @property
+    def title(self) -> str:  # a check row's title is its label
+        return self.label
+
+    def to_json(self) -> dict:
+        out = {"label": self.label, "euler": jsonable(self.euler), "simulated": jsonable(self.simulated),
+               "modern": jsonable(self.modern), "unit": self.unit, "note": self.note}
+        if self.id is not None:
+            out = {"id": self.id, "title": self.label, "section": self.section, **out,
+                   "rel_error": jsonable(self.rel_error), "tolerance": self.tolerance, "pass": bool(self.passed)}
+            del out["label"]
+        return out
+
+
+def jsonable(v):
+    """Plain JSON values: numpy scalars and arrays as numbers and lists, NaN and ±inf as null."""
+    if v is None:
+        return None
+    if isinstance(v, (tuple, list, np.ndarray)):
+        return [jsonable(x) for x in v]
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        return v if math.isfinite(v) else None
+    return v
+
+
+@dataclass
+class Run:
+    """One simulation: parameters, trajectory, metrics, the Euler / simulated / modern table and
+    the warnings. Every consumer (CLI, app, recorder, HTML replay, a notebook) reads this object.
+
+    - `metrics`: name → number; each name carries its unit (`flip_interval_s`), exactly the CLI's
+      `--json` "metrics".
+    - `comparisons`: the Euler / simulated / modern rows.
+    - `warnings`: one sentence per result outside the validity of a formula or of the numerics
+      (empty when the run is inside every limit); `status` is "ok" or says what went wrong
+      ("diverged": only the finite part before the trouble is kept).
+    - `trajectory`: times, attitudes (w, x, y, z), ω and L on the body axes, positions of other
+      bodies, and the derived paths (numpy arrays).
+    """
+
+    scenario: str
+    params: dict[str, Any]
+    trajectory: Trajectory | None
+    metrics: dict[str, float]
+    comparisons: list[Comparison] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    # key quantities over time for the live plot: name → (N,) on trajectory.t
+    plot_series: dict[str, np.ndarray] = field(default_factory=dict)
+    # data for drawing that is not a time series (e.g. a zero-velocity grid): name → anything
+    extras: dict[str, Any] = field(default_factory=dict)
+    status: str = "ok"
+    warnings: list[str] = field(default_factory=list)
+    spec: "Scenario | None" = field(default=None, repr=False, compare=False)  # set by Scenario.simulate
+
+    @property
+    def diverged(self) -> bool:
+        return self.status == "diverged"
+
+    def _spec(self) -> "Scenario":
+        return self.spec if self.spec is not None else get(self.scenario)
+
+    def to_json(self) -> dict:
+        """The CLI's `theoria run NAME --json`: scenario, params (with units), metrics,
+        comparisons, notes, status, warnings, and for rotation scenarios the final state."""
+        spec = self._spec()
+        out = {
+            "scenario": self.scenario,
+            "params": {p.name: {"value": jsonable(self.params[p.name]), "unit": p.unit} for p in spec.params},
+            "metrics": {k: jsonable(v) for k, v in self.metrics.items()},
+            "comparisons": [c.to_json() for c in self.comparisons],
+            "notes": list(self.notes),
+            "status": self.status,
+            "warnings": list(self.warnings),
+        }
+        if self.trajectory is not None and spec.kind == "rotation":
+            out["final_state"] = self.trajectory.final_state()
+        return out
+
+    def to_dataframe(self):
+        """One row per sample: t, the attitude, ω and L on the body axes, the other bodies'
+        positions and every per-sample series of the run (pandas; `pip install theoria-motus[pandas]`)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Run.to_dataframe needs pandas: pip install pandas "
+                              "(or theoria-motus[pandas])") from None
+        return pd.DataFrame(self.columns())
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The per-sample columns of `to_dataframe` as numpy arrays (name → (N,)); units in the names
+        where the run has them (t is in `trajectory.time_unit`)."""
+        tr = self.trajectory
+        if tr is None:
+            return {}
+        n = len(tr.t)
+        cols: dict[str, np.ndarray] = {f"t_{tr.time_unit}": tr.t}
+        if self._spec().kind == "rotation":
+            for k, c in enumerate("wxyz"):
+                cols[f"q_{c}"] = tr.quat_wxyz[:, k]
+            for k, c in enumerate("xyz"):
+                cols[f"omega_body_{c}"] = tr.omega_body[:, k]
+            for k, c in enumerate("xyz"):
+                cols[f"L_body_{c}"] = tr.L_body[:, k]
+            cols["energy"] = tr.energy
+        for name, pos in tr.bodies.items():
+            pos = np.asarray(pos, float)
+            if pos.shape == (n, 3):
+                for k, c in enumerate("xyz"):
+                    cols[f"{name}_{c}"] = pos[:, k]
+        for src in (tr.series, self.plot_series):
+            for name, v in src.items():
+                v = np.asarray(v)
+                if v.shape == (n,) and name not in cols:
+                    cols[name] = v
+        return cols
+
+    # ---- the app's writers: the Run hands itself over (physics stays free of viser and rerun) ----
+    def record(self, path, **kw) -> dict:
+        """Write a rerun recording (.rrd) of this run: the app's drawing, camera and text."""
+        from ..app.record import record_run
+
+        return record_run(self, path, **kw)
+
+    def export_html(self, path, **kw) -> dict:
+        """Write a standalone HTML replay of this run (plays from file://, no network)."""
+        from ..app.export_html import export_run
+
+        return export_run(self, path, **kw)
+
+    def show(self, port: int = 8080, host: str = "127.0.0.1", block: bool | None = None):
+        """Serve this run in the app (http://127.0.0.1:8080 by default) with its parameters. Blocks
+        until Ctrl-C in a script; returns at once in an interactive session (the server runs on
+        in the background: call `.stop()` on what this returns)."""
+        from ..app.server import show_run
+
+        return show_run(self, port=port, host=host, block=block)
+
+
+DIVERGENCE_LIMIT = 1e100  # |x| beyond this in a trajectory is an overflow in the making, not physics
+
+
+def _first_bad(a) -> int | None:
+    """Index of the first sample (axis 0) holding a non-finite or absurdly large value."""
+    a = np.asarray(a)
+    if a.ndim == 0 or a.size == 0 or not np.issubdtype(a.dtype, np.number):
+        return None
+    flat = a.reshape(len(a), -1)
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(flat) | (np.abs(flat) > DIVERGENCE_LIMIT)
+    rows = np.flatnonzero(bad.any(axis=1))
+    return int(rows[0]) if rows.size else None
+
+
+def guard_result(result):
+    """The divergence check every scenario's run goes through.
+
+    A run in which NaN, ±inf or values beyond DIVERGENCE_LIMIT appear (a step too large, a body
+    thrown out, an overflow) is not drawn as garbage: the trajectory and the plot series are cut
+    just before the first bad sample, `status` becomes "diverged", and a warning "diverged at
+    t=..." goes into `warnings` and `notes`. With no finite sample at all, `Diverged` (a
+    ParameterError) is raised: the CLI exits 2 with one line, the app keeps the last good state.
+    """
+    tr = getattr(result, "trajectory", None)
+    if not isinstance(result, Run) or tr is None:
+        return result
+    n = len(tr.t)
+    per_sample = {"t": tr.t, "attitude": tr.quat_wxyz, "angular momentum": tr.L_body, "ω": tr.omega_body}
+    per_sample.update({f"position of {k}": v for k, v in tr.bodies.items()})
+    per_sample.update({f"series {k}": v for k, v in tr.series.items()})
+    per_sample.update({f"plot {k}": v for k, v in result.plot_series.items()})
+    first: dict[str, int] = {}
+    for name, arr in per_sample.items():
+        arr = np.asarray(arr)
+        if arr.ndim >= 1 and len(arr) == n:
+            k = _first_bad(arr)
+            if k is not None:
+                first[name] = k
+    if not first:
+        return result
+    k = min(first.values())
+    what = ", ".join(name for name, i in first.items() if i == k)
+    t_bad = tr.t[k] if np.isfinite(tr.t[k]) else (tr.t[k - 1] if k > 0 else float("nan"))
+    unit = tr.time_unit
+    if k == 0:
+        raise Diverged("parameters", "these values",
+                       f"diverged at the start (non-finite {what}); try a smaller step or less extreme values")
+
+    def cut(d):
+        return {key: (np.asarray(v)[:k] if np.ndim(v) >= 1 and len(v) == n else v) for key, v in d.items()}
+
+    result.trajectory = dataclasses.replace(
+        tr, t=tr.t[:k], quat_wxyz=tr.quat_wxyz[:k], L_body=tr.L_body[:k], bodies=cut(tr.bodies), series=cut(tr.series))
+    result.plot_series = cut(result.plot_series)
+    msg = (f"diverged at t={t_bad:.6g} {unit}: non-finite or overflowing {what}; showing the finite part "
+           f"up to t={tr.t[k - 1]:.6g} {unit} ({k} of {n} samples)")
+    result.status = "diverged"
+    result.warnings.append(msg)
+    result.notes.append(msg)
+    return result
+
+
+def _rename_error(e: ParameterError, params, values) -> ParameterError:
+    """A ParameterError about a derived quantity (e.g. the integrator's `step`, computed from
+    steps_per_turn) is re-worded to name the scenario's own parameter that sets it, with its
+    allowed range (pole-near-axis once said "step=157080: ...", a name the user never typed)."""
+    names = [p.name for p in params]
+    if e.name in names or e.name in ("parameters", "scenario", "preset"):
+        return e
+    stem = e.name.split("_")[0]
+    related = [p for p in params if p.name.startswith(stem) or stem in p.name]
+    if len(related) == 1:
+        p = related[0]
+        return ParameterError(p.name, values.get(p.name) if isinstance(values, dict) else None,
+                              f"gives {e}; {p.allowed()}")
+    return ParameterError("parameters", "these values", str(e))
+
+
+RESERVED = ("progress", "preset")  # keywords of Scenario.simulate: no parameter may be called so
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A scenario: what a user picks in the app, `theoria run NAME` runs and `theoria.scenario(NAME)`
+    returns. Everything about it is declared once, here, in its own module."""
+
+    name: str
+    title: str
+    section: str  # e.g. "§805, §808"
+    group: str  # "ch. 15", "ch. 16", "three bodies"
+    summary: str  # what to look for, one paragraph
+    params: tuple[Param, ...]
+    simulate_fn: Callable[..., Run]
+    euler_formula: str = ""  # plain Unicode text (no TeX: neither viser's markdown nor rerun's text panel renders math)
+    kind: str = "rotation"  # "rotation" scenes draw a body; "orbit" scenes draw bodies only
+    check: Callable[[dict[str, Any]], None] | None = None  # cross-parameter validation
+    # named starting points, each named after what it shows ("Brick: the flip"): name → {param: value};
+    # partial (the rest keep their defaults), validated like any input. Given as a dict or as pairs.
+    presets: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    camera: Camera | None = None  # the curated view; None: a default for the kind of scene
+    # overlays switched on/off against the default for the scene's group (drawings that say nothing here)
+    overlays: Mapping[str, bool] = field(default_factory=dict)
+
+    def __post_init__(self):
+        for p in self.params:
+            if p.name in RESERVED:
+                raise ValueError(f"scenario {self.name}: a parameter may not be called {p.name!r}")
+        presets = self.presets.items() if isinstance(self.presets, Mapping) else self.presets
+        object.__setattr__(self, "presets", types.MappingProxyType({n: dict(v) for n, v in presets}))
+        object.__setattr__(self, "overlays", types.MappingProxyType(dict(self.overlays)))
+        object.__setattr__(self, "simulate_fn", self._guarded(self.simulate_fn))
+
+    def _guarded(self, fn):
+        """Every caller (front door, CLI, app, record, export, checks, tests) gets the same contract:
+        derived-quantity errors reworded to name this scenario's parameters, the divergence check,
+        and the run tied to its scenario."""
+        if getattr(fn, "__theoria_guarded__", False):
+            return fn
+
+        @functools.wraps(fn)
+        def simulate_fn(values, *args, **kwargs):
+            try:
+                run = fn(values, *args, **kwargs)
+            except ParameterError as e:
+                raise _rename_error(e, self.params, values) from None
+            run = guard_result(run)
+            if isinstance(run, Run):
+                run.spec = self
+            return run
+
+        simulate_fn.__theoria_guarded__ = True
+        return simulate_fn
+
+    # ---- the front door ------------------------------------------------------------------------
+    @property
+    def parameters(self) -> Mapping[str, Param]:
+        """name → Param (unit, allowed range, default, help), in the order the app shows them."""
+        return types.MappingProxyType({p.name: p for p in self.params})
+
+    @property
+    def defaults(self) -> dict[str, Any]:
+        return self.resolve(None)
+
+    def simulate(self, given: Mapping[str, Any] | None = None, /, *, preset: str | None = None,
+                 progress: Callable[[float], None] | None = None, **values) -> Run:
+        """Run the scenario. Values come from the defaults, then `preset` (its name), then `given`
+        (a mapping, e.g. of strings from a command line) and the keywords; every value is checked
+        (`ParameterError` names the parameter, the value and the allowed range)."""
+        merged: dict[str, Any] = {}
+        if preset is not None:
+            merged.update(self.presets.get(self.preset_name(preset), {}))
+        merged.update(given or {})
+        merged.update(values)
+        return self.simulate_fn(self.resolve(merged), progress=progress)
+
+    def resolve(self, given: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """The full, validated values: defaults overridden by `given`."""
+        values = resolve(self.params, dict(given or {}))
+        if self.check is not None:
+            self.check(values)
+        return values
+
+    def preset(self, name: str) -> dict[str, Any]:
+        """The full, validated values of preset `name` (defaults for the parameters it leaves out)."""
+        return self.resolve(self.presets[self.preset_name(name)])
+
+    def preset_name(self, text: str) -> str:
+        """The preset called `text`: its exact name, or the one preset whose name contains it (any case)."""
+        names = list(self.presets)
+        if text in names:
+            return text
+        hits = [n for n in names if str(text).casefold() in n.casefold()]
+        if len(hits) == 1:
+            return hits[0]
+        allowed = "; ".join(f'"{n}"' for n in names) if names else "none (this scenario has no presets)"
+        raise ParameterError("preset", text, ("one of " if names else "") + allowed +
+                             (" (more than one matches)" if len(hits) > 1 else ""))
+
+    def param(self, name: str) -> Param:
+        for p in self.params:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+    def __repr__(self) -> str:
+        return f"<theoria scenario {self.name!r}: {self.title} ({self.section})>"
+
+
+REGISTRY: dict[str, Scenario] = {}
+
+
+def register(s: Scenario) -> Scenario:
+    if s.name in REGISTRY and REGISTRY[s.name].simulate_fn.__module__ != s.simulate_fn.__module__:
+        raise ValueError(f"two scenarios are called {s.name!r}")
+    REGISTRY[s.name] = s
+    return s
+
+
+NOT_SCENARIOS = ("base", "checks", "drawing")
+
+
+def load_all() -> None:
+    """Import every scenario module of this package (each registers itself): no list to keep."""
+    pkg = sys.modules[__package__]
+    for m in pkgutil.iter_modules(pkg.__path__):
+        if not m.name.startswith("_") and m.name not in NOT_SCENARIOS:
+            importlib.import_module(f"{__package__}.{m.name}")
+
+
+def get(name: str) -> Scenario:
+    load_all()
+    if name not in REGISTRY:
+        raise ParameterError("scenario", name, "one of " + ", ".join(s.name for s in all_scenarios()))
+    return REGISTRY[name]
+
+
+GROUP_ORDER = ("ch. 15", "ch. 16", "three bodies")
+_ROMAN = {"I": 1, "V": 5, "X": 10, "L": 50, "C": 100}
+
+
+def _roman(s: str) -> int:
+    total = 0
+    for a, b in zip(s, s[1:] + " "):
+        v = _ROMAN[a]
+        total += -v if _ROMAN.get(b, 0) > v else v
+    return total
+
+
+def section_key(section: str) -> tuple:
+    """Sort key of a § string: (year of the paper, first §, 1 if the scene goes beyond Euler)."""
+    year = re.search(r"\b(1[78]\d\d)\b", section)
+    m = re.search(r"§\s*(\d+|[IVXLC]+)", section)
+    first = 0
+    if m:
+        first = int(m.group(1)) if m.group(1).isdigit() else _roman(m.group(1))
+    beyond = 1 if "(" in section else 0  # "(modern values)", "(beyond Euler)" after Euler's own
+    return (int(year.group(1)) if year else 0, first, beyond)
+
+
+def all_scenarios() -> list[Scenario]:
+    """Every scenario in gallery order: Euler's ch. 15, ch. 16, then the three-body papers, each in
+    the order of the § it illustrates."""
+    load_all()
+
+    def key(s):
+        g = GROUP_ORDER.index(s.group) if s.group in GROUP_ORDER else len(GROUP_ORDER)
+        return (g, s.group, section_key(s.section), s.name)
+
+    return sorted(REGISTRY.values(), key=key)

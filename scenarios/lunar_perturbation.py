@@ -1,0 +1,224 @@
+"""The Moon perturbed by the Sun, by its elements (Euler 1768, §XIII–§XXXIV): regression of the
+node, motion of the apsides, Euler's identities along the orbit.
+
+Check rows E13, E13.apse and E13.identities.
+"""
+from __future__ import annotations
+
+import math
+import numpy as np
+from ..physics.params import Param, ParameterError
+from .drawing import Camera
+from .base import Comparison, Run, Scenario, register
+import functools
+from ..physics.three_body import lunar_elements as le
+from .checks import register_check
+from ._three_body import GROUP, orbit_trajectory
+
+
+def _lunar(values, progress=None):
+    from ..physics.three_body import lunar_elements as le
+
+    el0, sun, mu, mus = le.initial_conditions(values["eccentricity"], values["inclination_deg"],
+                                              sun_eccentricity=values["sun_eccentricity"])
+    el0 = le.calibrate_mean_elements(el0, sun, mu, mus, le.MOON_J2000["sidereal_month_days"],
+                                     values["eccentricity"], math.radians(values["inclination_deg"]))
+    if progress:
+        progress(0.1)
+    days = values["duration_yr"] * le.YEAR_DAYS
+    h, ds = values["step_days"], values["sample_days"]
+    series = values["solar_force"] == "euler-series"
+    t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series)
+    if progress:
+        progress(0.5)
+    r0, v0 = le.elements_to_cartesian(el0, mu)
+    _, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), days, h, ds, mu, mus, sun)
+    if progress:
+        progress(0.9)
+    P = le.elements_to_position(E)
+    err = float(np.max(np.linalg.norm(P - C[:, :3], axis=1)))
+    na = le.node_and_apse(t, E)
+    inc = np.degrees(E[:, 4])
+    fo = le.first_order_rates(sun, le.MOON_J2000["sidereal_month_days"], math.radians(values["inclination_deg"]))
+    node_fo = 2 * math.pi / abs(fo["node_rate"]) / le.YEAR_DAYS
+    apse_fo = 2 * math.pi / abs(fo["apse_rate"]) / le.YEAR_DAYS
+    # Euler's identities (§VII–IX) on a dense 60-day piece of the Cartesian solution
+    td, Cd = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), 60.0, h, h, mu, mus, sun)
+    Ed = le.cartesian_to_elements(Cd[:, :3], Cd[:, 3:], mu)
+    id1, id2 = le.euler_identity_residuals(td, Ed, Cd[:, :3], Cd[:, 3:])
+    # the dΥ equation with the sign as printed (§XXVII.4), same 60 days
+    _, Ep = le.integrate_rk4("elements", el0, 60.0, h, h, mu, mus, sun, printed_sign=True)
+    err_printed = float(np.max(np.linalg.norm(le.elements_to_position(Ep) - Cd[: len(Ep), :3], axis=1)))
+    metrics = {
+        "node_period_yr": na["node_period_yr"],
+        "apse_period_yr": na["apse_period_yr"],
+        "inclination_min_deg": float(inc.min()),
+        "inclination_max_deg": float(inc.max()),
+        "eccentricity_min": float(E[:, 1].min()),
+        "eccentricity_max": float(E[:, 1].max()),
+        "elements_vs_cartesian_max_error": err,
+        "elements_vs_cartesian_max_error_km": err * le.KM_PER_UNIT,
+        "node_period_first_order_yr": node_fo,
+        "apse_period_first_order_yr": apse_fo,
+        "apse_first_order_fraction": fo["apse_rate"] / na["apse_rate"],
+        "printed_sign_error_60d": err_printed,
+        "identity_inclination_node_residual": id1,
+        "identity_latitude_argument_residual": id2,
+        "sidereal_month_days": 2 * math.pi / le.mean_motion(t, E),
+    }
+    comps = [
+        Comparison("regression of the node", node_fo, na["node_period_yr"], le.NODE_PERIOD_SIDEREAL_YR, "yr",
+                   "Euler column: first-order rate (3/4)n'²/n·cos i; modern: 6793.48 d against the stars, the frame of "
+                   "this model (the often quoted 6798.38 d counts from the moving equinox)"),
+        Comparison("advance of the apsides", apse_fo, na["apse_period_yr"], le.APSE_PERIOD_YR, "yr",
+                   f"first order gives {fo['apse_rate'] / na['apse_rate']:.2f} of the motion — the historical "
+                   "'half the apse motion' (Clairaut 1747); modern: 3232.6 d against the stars"),
+        Comparison("inclination min", None, float(inc.min()), le.INCLINATION_RANGE_DEG[0], "deg", "osculating, period ≈ 173 d"),
+        Comparison("inclination max", None, float(inc.max()), le.INCLINATION_RANGE_DEG[1], "deg", ""),
+        Comparison("Euler's elements vs Cartesian integration, max distance", 0.0, err, None, "lunar distance",
+                   "same forces, same RK4 step: the element equations (sign of §XXVII.4 corrected) reproduce the orbit"),
+        Comparison("§XXVII.4 with the printed sign: max distance after 60 d", None, err_printed, None,
+                   "lunar distance", "the sign error makes the orbit wrong within weeks"),
+        Comparison("dω sin σ − dψ sin ω cos σ (§VII)", 0.0, id1, None, "rel.",
+                   "along the Cartesian solution, osculating elements, 4th-order differences"),
+        Comparison("dσ − (d∅ − dψ cos ω) (§IX)", 0.0, id2, None, "rel.", ""),
+    ]
+    notes = [
+        "§XXVII item 4 (dΥ) prints '−' before the term n v²u(1/w³ − 1/u³)/q[…]: it must be '+'. With the printed "
+        "sign the anomaly equation contradicts Euler's own relation q(d∅ − dΥ) sin Υ = dp/v − dq cos Υ.",
+        "§XXVIII item 2 prints dω/sin σ; it is dω/sin ω.",
+        "Initial elements: J2000 mean elements (Simon et al. 1994); the osculating a, e, i are adjusted so the "
+        "mean sidereal month, mean e and mean i match (27.3217 d, 0.0549, 5.145°).",
+        "Sun drawn at 3 lunar distances along its true direction (true distance ≈ 389 lunar distances).",
+    ]
+    if series:
+        notes.append("Element equations with Euler's §XXXIII expansion of 1/w³; the Cartesian reference keeps the "
+                     "exact force, so elements_vs_cartesian_max_error measures the neglected (v/u)³ terms.")
+    # bodies (lunar distances), at most ~20000 samples for drawing
+    stride = max(1, int(math.ceil(len(t) / 20000)))
+    sl = slice(None, None, stride)
+    tt = t[sl]
+    sunpos = np.array([le.sun_state(float(x), np.asarray(sun, float))[:2] for x in tt])
+    sund = 3.0 * sunpos / np.linalg.norm(sunpos, axis=1)[:, None]
+    sund = np.concatenate([sund, np.zeros((len(tt), 1))], axis=1)
+    Es = E[sl]
+    psi, om = Es[:, 3], Es[:, 4]
+    normal = np.stack([np.sin(om) * np.sin(psi), -np.sin(om) * np.cos(psi), np.cos(om)], axis=1)
+    node_deg = np.degrees(np.unwrap(psi))
+    varpi_deg = np.degrees(np.unwrap(na["varpi"][sl]))
+    years = tt / le.YEAR_DAYS
+    series = {"node_longitude_deg": np.degrees(np.mod(psi, 2 * np.pi)), "inclination_deg": np.degrees(om),
+              "perigee_longitude_deg": np.degrees(np.mod(na["varpi"][sl], 2 * np.pi)), "eccentricity": Es[:, 1],
+              "orbit_normal_x": normal[:, 0], "orbit_normal_y": normal[:, 1], "orbit_normal_z": normal[:, 2],
+              "frame_angle_rad": np.unwrap(np.arctan2(sunpos[:, 1], sunpos[:, 0]))}  # the Sun's longitude
+    traj = orbit_trajectory(years, {"sun": sund, "earth": np.zeros((len(tt), 3)), "moon": P[sl]}, "yr", series)
+    plot = {
+        "node longitude (deg, simulated)": node_deg,
+        "node longitude (deg, first order)": node_deg[0] + np.degrees(fo["node_rate"]) * tt,
+        "inclination (deg)": np.degrees(om),
+        "perigee longitude (deg, simulated)": varpi_deg,
+        "perigee longitude (deg, first order: half)": varpi_deg[0] + np.degrees(fo["apse_rate"]) * tt,
+    }
+    return Run("lunar-perturbation", values, traj, metrics, comps, notes, plot_series=plot)
+
+
+register(Scenario(
+    name="lunar-perturbation",
+    title="The Moon perturbed by the Sun, by its elements",
+    section="Euler 1768, §XIII–§XXXIV",
+    group=GROUP,
+    summary=("Euler wrote the Moon's motion as eight equations for its orbital elements (the size, "
+            "shape, tilt and orientation of its orbit) and could not integrate them. Here they are "
+            "integrated for decades. Look at the plot: the orbit plane turns backwards once in 18.6 "
+            "years while its tilt nods between 5.0° and 5.3°, and the perigee advances once in 8.85 "
+            "years, twice as fast as first-order theory gives."),
+    params=(
+        Param("duration_yr", 40.0, 1.0, 200.0, "yr", "length of the run"),
+        Param("step_days", 0.025, 0.005, 0.2, "d", "fixed RK4 step (the error scales as step⁴)"),
+        Param("sample_days", 0.5, 0.05, 10.0, "d", "spacing of the stored states"),
+        Param("eccentricity", 0.0549, 0.005, 0.3, "1", "Moon's mean eccentricity"),
+        Param("inclination_deg", 5.145396, 0.1, 60.0, "deg", "Moon's mean inclination to the ecliptic"),
+        Param("sun_eccentricity", 0.0167086, 0.0, 0.3, "1", "eccentricity of the Sun's apparent orbit"),
+        Param("solar_force", "exact", kind="choice", choices=("exact", "euler-series"),
+              help="exact 1/w³, or Euler's §XXXIII expansion to second order in v/u in the element equations"),
+    ),
+    camera=Camera((0.9, -3.1, 2.1), (0.0, 0.0, 0.35)),  # oblique: orbit plane, node line, normal
+    simulate_fn=_lunar,
+    euler_formula=("dψ = −n v³ u d∅ sin σ sin(θ − ψ)/p · (1/w³ − 1/u³) (§XXVIII)\n"
+                   "dω / sin ω = dψ / tan σ, dσ = d∅ − dψ cos ω"),
+    kind="orbit",
+    check=lambda v: (_ for _ in ()).throw(ParameterError("sample_days", v["sample_days"],
+                                                         f"at least step_days = {v['step_days']:g} d"))
+    if v["sample_days"] < v["step_days"] else None,
+    presets=(
+        ("Moon's orbit: node and perigee over 40 years", {}),
+        ("Moon's orbit: one node cycle", {"duration_yr": 19.0}),
+        ("Moon's orbit: Euler's series for the Sun's force", {"solar_force": "euler-series"}),
+    ),
+))
+
+
+@functools.lru_cache(maxsize=1)
+def _lunar_run():
+    el, sun, mu, mus = le.initial_conditions()
+    el = le.calibrate_mean_elements(el, sun, mu, mus, le.MOON_J2000["sidereal_month_days"],
+                                    le.MOON_J2000["eccentricity"], math.radians(le.MOON_J2000["inclination_deg"]))
+    t, E = le.integrate_rk4("elements", el, 40 * le.YEAR_DAYS, 0.025, 0.5, mu, mus, sun)
+    return le.node_and_apse(t, E)
+
+
+def _secular_row(kind: str):
+    """Node (kind="node") or perigee ("apse") period of the 40-yr run of Euler's element equations
+    against the published period referred to the fixed stars (our frame; see `constants`).
+
+    Left out of the model, hence allowed: the Earth's J2 (computed in `oblateness_rates`: 8.5e-5
+    of the node rate, 4.1e-5 of the perigee rate, both making the real periods shorter) and the
+    planets (not computed here; their secular share of these rates is of the same order). The
+    tolerance is 3× the J2 share. (The issue's done-criterion — 1% and 2% — is a much looser bound
+    that this meets many times over.)"""
+    na = _lunar_run()
+    el, sun, mu, mus = le.initial_conditions()
+    i = math.radians(le.MOON_J2000["inclination_deg"])
+    month = le.MOON_J2000["sidereal_month_days"]
+    fo = le.first_order_rates(sun, month, i)
+    j2 = le.oblateness_rates(month, le.MOON_J2000["eccentricity"])
+    if kind == "node":
+        pub, sim, rate = le.NODE_PERIOD_SIDEREAL_YR, na["node_period_yr"], fo["node_rate"]
+    else:
+        pub, sim, rate = le.APSE_PERIOD_SIDEREAL_YR, na["apse_period_yr"], fo["apse_rate"]
+    j2_share = abs(j2[kind + "_rate"]) / (2 * math.pi / (pub * le.YEAR_DAYS))
+    rel = abs(sim / pub - 1)
+    return dict(euler=2 * math.pi / abs(rate) / le.YEAR_DAYS, simulated=sim, modern=pub, rel_error=rel,
+                tolerance=3 * j2_share, unit="yr"), j2_share, sim / pub - 1
+
+
+@register_check("E13", "regression of the Moon's node from Euler's element equations (40 yr)", "Euler 1768 §XXVIII, §XXXII")
+def e13():
+    row, j2, signed = _secular_row("node")
+    row["note"] = (f"Euler column: first-order rate (3/4)n'²/n cos i; modern: 6793.48 d against the stars (Simon et al. "
+                   f"1994 rate −1934.1363°/cy of date minus the general precession 1.3969°/cy; the quoted 6798.38 d "
+                   f"counts from the moving equinox); simulated/modern − 1 = {signed:+.1e}; left out: Earth's J2 "
+                   f"({j2:.1e} of the rate, computed) and the planets (same order, not computed): tolerance 3× J2")
+    return row
+
+
+@register_check("E13.apse", "advance of the Moon's perigee from Euler's element equations (40 yr)", "Euler 1768 §XXVII, §XXXII")
+def e13_apse():
+    row, j2, signed = _secular_row("apse")
+    row["note"] = (f"Euler column: the first-order rate, half the observed motion (Clairaut's 1747 puzzle); modern: "
+                   f"3232.61 d against the stars (4069.0137°/cy of date minus 1.3969°/cy); simulated/modern − 1 = "
+                   f"{signed:+.1e}; left out: Earth's J2 ({j2:.1e} of the rate, computed) and the planets (same order, "
+                   f"not computed): tolerance 3× J2")
+    return row
+
+
+@register_check("E13.identities", "Euler's identities dω/sin ω = dψ/tan σ and dσ = d∅ − dψ cos ω along the orbit", "Euler 1768 §VII–§IX")
+def e13_identities():
+    el, sun, mu, mus = le.initial_conditions()
+    r0, v0 = le.elements_to_cartesian(el, mu)
+    t, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), 60.0, 0.02, 0.02, mu, mus, sun)
+    E = le.cartesian_to_elements(C[:, :3], C[:, 3:], mu)
+    a, b = le.euler_identity_residuals(t, E, C[:, :3], C[:, 3:])
+    return dict(euler=0.0, simulated=max(a, b), modern=0.0, rel_error=max(a, b), tolerance=1e-6, unit="relative residual",
+                note="osculating elements of a direct Cartesian integration, differentiated to 4th order "
+                     "(difference error ~ (h·2n)⁴ ≈ 1e-8)")
