@@ -1,14 +1,17 @@
-"""`theoria export NAME --out FILE.html`: a standalone HTML replay of the scene.
+"""`theoria export NAME --out FILE.html`: a standalone HTML replay of a run's drawing.
 
-A private viser server (127.0.0.1, a free port, no client needed) builds the same SceneView on
-`server.scene`; viser's scene serializer records the nodes once and then, frame by frame, only
-the pose of the body, the two arrows and the visibility of the trail chunks (a growing trail
-re-sent each frame would make the file grow quadratically). `as_html()` inlines the viser client
-and the recording: the file plays from file:// with no server and no network.
+The same viser renderer as the live app (`app.scene.SceneView`) draws the run's `Drawing` on a
+private viser server (127.0.0.1, a free port, no client); viser's scene serializer records the
+nodes once and then, frame by frame, only what moves (poses, arrows, trail-chunk visibility, read-
+outs). `as_html()` inlines the viser client and the recording: the file plays from file:// with no
+server and no network. The camera starts where the app's does, looking at the same point, and a
+panel carries the scenario's title, §, what to look for, Euler's formula and the Euler /
+simulated / modern table (the serializer records no GUI, so the text is written into the page).
 """
 from __future__ import annotations
 
 import contextlib
+import html as html_lib
 import io
 import socket
 
@@ -16,13 +19,11 @@ import numpy as np
 import viser
 
 from .scene import SceneView
-from .server import camera_position, configure_lighting
 
 FRAMES = 240  # frames in the replay
+FPS = 30.0
 # identifies theoria's own export (checked by `theoria replay FILE.html`, app/replay.py)
 MARKER = '<meta name="generator" content="theoria export_html" data-theoria-scenario="{name}" />'
-
-FPS = 30.0
 
 
 def _free_port() -> int:
@@ -31,39 +32,79 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def export_result(result, spec, out: str, frames: int = FRAMES, fps: float = FPS) -> dict:
+def configure_scene(scene) -> None:
+    """Plain lights, no image-based environment map and no shadows: in software WebGL
+    (SwiftShader) the environment map alone takes the body scene from ~28 to ~10 frames/s."""
+    scene.set_up_direction("+z")
+    scene.configure_environment_map(hdri=None)
+    scene.configure_default_lights(enabled=True, cast_shadow=False)
+    scene.add_light_ambient("/lights/ambient", intensity=1.2)
+
+
+def text_panel(drawing, run) -> str:
+    """The scenario's text as an HTML panel over the scene (top left, scrollable)."""
+    from .format import comparison_rows
+
+    e = html_lib.escape
+    rows = "".join(f"<tr><td>{e(r[0])}</td><td>{e(r[1])}</td><td>{e(r[2])}</td><td>{e(r[3])}</td><td>{e(r[4])}</td></tr>"
+                   for r in comparison_rows(run.comparisons))
+    table = (f"<table><tr><th></th><th>Euler says</th><th>simulated</th><th>modern</th><th>unit</th></tr>{rows}</table>"
+             if rows else "")
+    formula = "".join(f"<div class='f'>{e(line)}</div>" for line in drawing.formula.splitlines() if line.strip())
+    warns = "".join(f"<p class='w'>{e(w)}</p>" for w in run.warnings)
+    return (
+        "<div id='theoria-text' style='position:fixed;top:8px;left:8px;max-width:380px;max-height:45vh;overflow:auto;"
+        "background:rgba(255,255,255,0.88);font:13px/1.35 sans-serif;padding:8px 10px;border-radius:6px;z-index:10'>"
+        "<style>#theoria-text table{border-collapse:collapse;font-size:12px}#theoria-text td,#theoria-text th"
+        "{border-bottom:1px solid #ddd;padding:1px 4px;text-align:right}#theoria-text td:first-child{text-align:left}"
+        "#theoria-text .f{font-family:serif;font-style:italic}#theoria-text .w{color:#a40}</style>"
+        f"<b>{e(drawing.title)}</b> <span style='color:#555'>({e(drawing.section)})</span>"
+        f"<p>{e(drawing.summary)}</p>{formula}{table}{warns}</div>")
+
+
+def render_html(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
+    """The standalone replay of `drawing` (of `run`) as one HTML string."""
     with contextlib.redirect_stdout(io.StringIO()):  # no URL banner: nobody connects to this one
         server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
     try:
-        server.scene.set_up_direction("+z")
-        configure_lighting(server.scene)
-        server.initial_camera.position = camera_position(spec)
-        server.initial_camera.look_at = (0.0, 0.0, 0.0)
-        server.initial_camera.up = (0.0, 0.0, 1.0)
+        configure_scene(server.scene)
+        cam = drawing.camera
+        server.initial_camera.position = cam.position
+        server.initial_camera.look_at = cam.look_at
+        server.initial_camera.up = cam.up
+        if cam.fov_deg is not None:
+            server.initial_camera.fov = float(np.radians(cam.fov_deg))
         view = SceneView(server.scene, "/world")
-        view.show(result, spec)
-        server.scene.add_label("/title", f"{spec.title} ({spec.section})", position=(0.0, 0.0, 2.0))
+        view.show(drawing)
         ser = server.get_scene_serializer()
-        n = len(result.trajectory.t)
-        idx = np.unique(np.linspace(0, n - 1, min(frames, n)).round().astype(int))
-        for i in idx:
-            view.set_frame(int(i))
+        n = drawing.n_frames
+        for k in np.unique(np.linspace(0, n - 1, min(frames, n)).round().astype(int)):
+            view.set_frame(int(k))
             ser.insert_sleep(1.0 / fps)
-        html = ser.as_html()
+        page = ser.as_html()
     finally:
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
-    html = html.replace("<head>", "<head>\n    " + MARKER.format(name=spec.name), 1)
-    with open(out, "w", encoding="utf-8") as f:
-        f.write(html)
-    return {"path": out, "frames": int(len(idx)), "bytes": len(html.encode())}
+    page = page.replace("<head>", "<head>\n    " + MARKER.format(name=html_lib.escape(run.scenario)) +
+                        f"\n    <title>theoria — {html_lib.escape(drawing.title)}</title>", 1)
+    return page.replace("<body>", "<body>\n" + text_panel(drawing, run), 1) if "<body>" in page else \
+        page.replace("</body>", text_panel(drawing, run) + "</body>", 1)
+
+
+def export_run(run, out, frames: int = FRAMES, fps: float = FPS, view=None) -> dict:
+    """Write the standalone HTML replay of `run` to `out`."""
+    drawing = run._spec().drawing(run, view)
+    page = render_html(drawing, run, frames, fps)
+    data = page.encode("utf-8")
+    with open(out, "wb") as f:
+        f.write(data)
+    return {"path": str(out), "frames": int(min(frames, drawing.n_frames)), "bytes": len(data)}
 
 
 def export(name: str, out: str, values: dict | None = None) -> dict:
-    """Simulate scenario `name` with resolved parameter `values`; write a standalone HTML replay."""
+    """Simulate scenario `name` with `values` and write its standalone HTML replay."""
     from theoria.scenarios import get
 
     spec = get(name)
-    values = spec.resolve(values) if values is not None else spec.resolve(None)
-    result = spec.simulate_fn(values)
-    return export_result(result, spec, out)
+    run = spec.simulate_fn(spec.resolve(values))
+    return export_run(run, out)

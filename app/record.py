@@ -1,19 +1,26 @@
-"""`theoria record NAME --out FILE.rrd`: a rerun recording of one run.
+"""`theoria record NAME --out FILE.rrd`: a rerun recording of a run's drawing.
 
-Everything is sent column-wise (`rr.send_columns`), one call per entity for the whole run, on
-two timelines: `t` (a duration, in seconds of the run's time unit converted to seconds) and
-`step` (the sample index). The file always gets its footer: `rec.disconnect()` runs in a
-`finally`, and SIGTERM is turned into an exception while recording so that the `finally` runs
-(SIGINT already raises KeyboardInterrupt).
+The rerun renderer of a scenario's `Drawing` (theoria.scenarios.drawing): each item becomes the
+entity "/world/<its name>" (rerun composes transforms along entity paths as viser does along node
+names, so "body/polhode" turns with the body), with the same colours and scale as the app.
+What moves is sent column-wise (`rr.send_columns`, one call per entity for the whole run) on the
+`frame` timeline and the `t` timeline (the run's time in seconds, or `t_milli` = 1000 × t in the
+run's own unit when that is not a time or does not fit rerun's durations). The run's series
+(energy, the scenario's plot) and its metrics go to time series views on the run's own samples.
 
-Replay: `rerun FILE.rrd` (native viewer) or `rerun FILE.rrd --web-viewer` (the wheel carries
-the web viewer).
+The blueprint opens the 3D view where the app's camera is, looking at the same point, beside the
+plots and a text panel with the title, §, what to look for, Euler's formula, the parameters, the
+Euler / simulated / modern table and the warnings. Overlays that are off by default in the app are
+left out of the view's contents (present in the file, one click away in rerun).
+
+Differences that rerun imposes: paths are drawn whole (rerun has no "appear at frame" for points
+of one strip), lights are not recorded (rerun lights the scene itself), and a camera that follows
+the run (the Moon seen from the Earth) is recorded as the starting view only.
+
+Replay: `rerun FILE.rrd`, or `theoria replay FILE.rrd --web-viewer`.
 """
 from __future__ import annotations
 
-import contextlib
-import signal
-import threading
 import uuid
 
 import numpy as np
@@ -21,18 +28,24 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from theoria.physics.quaternion import to_xyzw
+from theoria.scenarios.drawing import Arrows, Frame, Label, Light, Mesh, Path, Points, Segments, Sphere
 
-from .scene import shape_semi_axes, AXIS_COLORS, L_COLOR, OMEGA_COLOR, POLHODE_COLOR, TRAIL_COLOR, HERPOLHODE_COLOR, palette
+from .format import comparison_rows
 
 SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0, "day": 86400.0, "days": 86400.0, "d": 86400.0,
            "yr": 365.25 * 86400.0, "year": 365.25 * 86400.0, "years": 365.25 * 86400.0}
-MAX_TRAIL_POINTS = 100_000
+APPLICATION_ID = "theoria"
 
 
-def blueprint(series_paths: list[str]) -> rrb.Blueprint:
+def blueprint(drawing) -> rrb.Blueprint:
+    cam = drawing.camera
+    hidden = sorted({f"- /world/{it.name}/**" for it in drawing.items if not drawing.shown(it)} |
+                    {f"- /world/{it.name}" for it in drawing.items if not drawing.shown(it)})
     return rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Spatial3DView(origin="/world", name="scene"),
+            rrb.Spatial3DView(origin="/world", name=drawing.title or "scene", contents=["$origin/**", *hidden],
+                              eye_controls=rrb.EyeControls3D(position=cam.position, look_target=cam.look_at,
+                                                             eye_up=cam.up)),
             rrb.Vertical(
                 rrb.TimeSeriesView(origin="/series", name="key quantities"),
                 rrb.TimeSeriesView(origin="/metrics", name="metrics"),
@@ -45,131 +58,150 @@ def blueprint(series_paths: list[str]) -> rrb.Blueprint:
     )
 
 
-def text_of(spec, result) -> str:
-    from .server import comparison_markdown
-
-    lines = [f"# {spec.title}", f"**{spec.section}** · {spec.group} · `{spec.name}`", "", spec.summary, ""]
-    if spec.euler_formula:
-        lines += ["**Euler:** " + spec.euler_formula, ""]
-    lines += [f"Time: timeline `t` (seconds), or `t_milli` = 1000 × t in {result.trajectory.time_unit} "
-              "when the unit is not a time or the run is longer than rerun's durations allow.", "",
+def text_of(drawing, run) -> str:
+    """The scenario's text as markdown: what the app's panel says."""
+    lines = [f"# {drawing.title}", f"**{drawing.section}** · `{run.scenario}`", "", drawing.summary, ""]
+    if drawing.formula:
+        lines += ["**Euler:**", ""] + [f"> {ln.strip()}  " for ln in drawing.formula.splitlines() if ln.strip()] + [""]
+    lines += [f"Time: timeline `t` (seconds), or `t_milli` = 1000 × t in {drawing.time_unit} when the unit is "
+              "not a time or the run is longer than rerun's durations allow; `frame` steps through the drawing.", "",
               "## Parameters", ""]
+    spec = run._spec()
     for p in spec.params:
-        lines.append(f"- `{p.name}` = {result.params.get(p.name)} {p.unit}")
-    lines += ["", "## Euler says / simulated / modern", "", comparison_markdown(result)]
+        lines.append(f"- {p.name} = {run.params.get(p.name)} {p.unit}".rstrip())
+    rows = comparison_rows(run.comparisons)
+    if rows:
+        lines += ["", "## Euler says / simulated / modern", "", "| | Euler says | simulated | modern | unit |",
+                  "|---|---|---|---|---|"]
+        lines += ["| " + " | ".join(c.replace("|", "\\|") for c in r) + " |" for r in rows]
+    if run.warnings:
+        lines += ["", "## Warnings", ""] + [f"- {w}" for w in run.warnings]
+    if run.notes:
+        lines += [""] + [f"*{n}*" for n in run.notes]
     return "\n".join(lines)
 
 
-@contextlib.contextmanager
-def _sigterm_raises():
-    """While recording, SIGTERM raises SystemExit so that `finally` writes the footer."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
+def _time_columns(t, unit_name, index_name, index) -> list:
+    """`index_name` as a sequence, and `t` as a duration in seconds when the unit is known and fits
+    rerun's int64 nanoseconds (±292 years), else `t_milli` = 1000 × t in the run's own unit."""
+    t = np.asarray(t, float)
+    cols = [rr.TimeColumn(index_name, sequence=np.asarray(index, np.int64))]
+    unit = SECONDS.get(unit_name)
+    if unit is not None and np.all(np.abs(t * unit) < 9e9):
+        return cols + [rr.TimeColumn("t", duration=t * unit)]
+    return cols + [rr.TimeColumn("t_milli", sequence=np.round(1000.0 * t).astype(np.int64))]
+
+
+def _rgb(c):
+    a = np.asarray(c, np.uint8)
+    return a.reshape(-1, 3)
+
+
+def _log_item(rec, it, path, tcols, n_frames) -> None:
+    anim = it.animated()
+    if isinstance(it, Light):
+        return  # rerun lights the scene itself
+    if isinstance(it, (Frame, Mesh)):
+        if anim and ("wxyz" in anim or "position" in anim):
+            kw = {}
+            if "wxyz" in anim:
+                kw["quaternion"] = to_xyzw(np.asarray(it.wxyz, float))
+            if "position" in anim:
+                kw["translation"] = np.asarray(it.position, float)
+            rec.send_columns(path, indexes=tcols, columns=rr.Transform3D.columns(**kw))
+        static = {}
+        if "wxyz" not in anim:
+            static["quaternion"] = rr.Quaternion(xyzw=to_xyzw(np.asarray(it.wxyz, float)))
+        if "position" not in anim:
+            static["translation"] = np.asarray(it.position, float)
+        if isinstance(it, Mesh):
+            static["scale"] = np.asarray(it.scale, float)
+        rec.log(path, rr.Transform3D(**static), static=True)
+        if isinstance(it, Mesh):
+            rgba = list(_rgb(it.color)[0]) + [int(255 * it.opacity)]
+            rec.log(path, rr.Mesh3D(vertex_positions=np.asarray(it.vertices, np.float32),
+                                    triangle_indices=np.asarray(it.faces, np.uint32), albedo_factor=rgba), static=True)
         return
+    if isinstance(it, Sphere):
+        if "position" in anim:
+            rec.send_columns(path, indexes=tcols, columns=rr.Transform3D.columns(translation=np.asarray(it.position, float)))
+        else:
+            rec.log(path, rr.Transform3D(translation=np.asarray(it.position, float)), static=True)
+        rec.log(path, rr.Ellipsoids3D(half_sizes=[[it.radius] * 3], colors=_rgb(it.color),
+                                      fill_mode=rr.components.FillMode.Solid), static=True)
+        return
+    if isinstance(it, Path):
+        rec.log(path, rr.LineStrips3D([np.asarray(it.points, np.float32)], colors=_rgb(it.color),
+                                      radii=[0.5 * it.thickness]), static=True)
+        return
+    if isinstance(it, Points):
+        cols = _rgb(it.colors)
+        rec.log(path, rr.Points3D(np.asarray(it.points, np.float32), colors=cols if len(cols) > 1 else cols[0],
+                                  radii=[0.5 * it.size]), static=True)
+        return
+    if isinstance(it, Segments):
+        cols = _rgb(np.asarray(it.colors)[..., 0, :] if np.ndim(it.colors) == 3 else it.colors)
+        if "points" in anim:
+            segs = np.asarray(it.points, np.float32)  # (F, K, 2, 3)
+            F, K = segs.shape[:2]
+            rec.send_columns(path, indexes=tcols,
+                             columns=rr.LineStrips3D.columns(strips=list(segs.reshape(F * K, 2, 3))).partition([K] * F))
+            rec.log(path, rr.LineStrips3D.from_fields(colors=cols, radii=[0.5 * it.thickness]), static=True)
+        else:
+            rec.log(path, rr.LineStrips3D(list(np.asarray(it.points, np.float32)), colors=cols,
+                                          radii=[0.5 * it.thickness]), static=True)
+        return
+    if isinstance(it, Arrows):
+        origins = np.asarray(it.origins, np.float32).reshape(-1, 3)
+        cols = _rgb(it.colors)
+        labels = [str(x) for x in it.labels] or None
+        if "vectors" in anim:
+            v = np.asarray(it.vectors, np.float32)  # (F, K, 3)
+            F, K = v.shape[:2]
+            rec.send_columns(path, indexes=tcols, columns=rr.Arrows3D.columns(
+                vectors=v.reshape(F * K, 3), origins=np.tile(origins, (F, 1))).partition([K] * F))
+            rec.log(path, rr.Arrows3D.from_fields(colors=cols, labels=labels, radii=[it.shaft_radius]), static=True)
+        else:
+            rec.log(path, rr.Arrows3D(origins=origins, vectors=np.asarray(it.vectors, np.float32), colors=cols,
+                                      labels=labels, radii=[it.shaft_radius]), static=True)
+        return
+    if isinstance(it, Label):
+        if "position" in anim:
+            rec.send_columns(path, indexes=tcols, columns=rr.Transform3D.columns(translation=np.asarray(it.position, float)))
+            pos = np.zeros(3)
+        else:
+            pos = np.asarray(it.position, float)
+        if "text" in anim:
+            rec.send_columns(path, indexes=tcols, columns=rr.Points3D.columns(
+                positions=np.tile(pos, (n_frames, 1)), labels=[str(x) for x in it.text]))
+            rec.log(path, rr.Points3D.from_fields(radii=[0.004], show_labels=True), static=True)
+        else:
+            rec.log(path, rr.Points3D([pos], labels=[str(it.text)], radii=[0.004], show_labels=True), static=True)
 
-    def handler(signum, frame):
-        raise SystemExit(128 + signum)
 
-    old = signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
-
-
-def _decimate(n: int, m: int) -> np.ndarray:
-    return np.arange(n) if n <= m else np.unique(np.linspace(0, n - 1, m).round().astype(int))
-
-
-def record_result(result, spec, out: str, application_id: str = "theoria") -> dict:
-    """Write `result` (physics.scenarios.Result of `spec`) to the .rrd file `out`."""
-    traj = result.trajectory
-    n = len(traj.t)
-    unit = SECONDS.get(traj.time_unit, None)
-    rec = rr.RecordingStream(application_id, recording_id=str(uuid.uuid4()))
-    with _sigterm_raises():
-        try:
-            rec.save(out, default_blueprint=blueprint([]))
-            _write(rec, result, spec, traj, n, unit)
-        finally:
-            rec.disconnect()  # writes the footer; a file without it is refused by the reader
-    return {"path": out, "steps": n}
-
-
-def _write(rec, result, spec, traj, n, unit):
-    tcols = [rr.TimeColumn("step", sequence=np.arange(n))] + _time_columns(traj.t, unit, traj.time_unit)
+def record_drawing(rec, drawing, run) -> None:
+    """Log `drawing` of `run` into the open recording stream `rec`."""
+    F = drawing.n_frames
+    tcols = _time_columns(drawing.times, drawing.time_unit, "frame", np.arange(F))
     rec.log("/world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    rec.log("/text", rr.TextDocument(text_of(spec, result), media_type=rr.MediaType.MARKDOWN), static=True)
-    idx = _decimate(n, MAX_TRAIL_POINTS)
-    rotation = spec.kind == "rotation"
-    if rotation:
-        semi = shape_semi_axes(traj.inertia)  # true proportions, a flat body given a little thickness
-        q = to_xyzw(np.asarray(traj.quat_wxyz, float))
-        rec.send_columns("/world/body", indexes=tcols,
-                         columns=rr.Transform3D.columns(quaternion=q))
-        rec.log("/world/body/ellipsoid", rr.Ellipsoids3D(half_sizes=[semi], colors=[(200, 190, 170)],
-                                                         fill_mode=rr.components.FillMode.Solid), static=True)
-        rec.log("/world/body/axes", rr.Arrows3D(vectors=np.diag(semi * 1.35), colors=list(AXIS_COLORS),
-                                                labels=[f"A={traj.inertia[0]:.4g}", f"B={traj.inertia[1]:.4g}",
-                                                        f"C={traj.inertia[2]:.4g}"]), static=True)
-        rec.log("/world/body", rr.TransformAxes3D(axis_length=0.6), static=True)
-        E0, L0 = float(traj.energy[0]), float(traj.momentum_norm[0])
-        if E0 > 0:  # the scale of the energy ellipsoid, as in the app
-            k_w = 1.3 / np.sqrt(2 * E0 / traj.inertia).max()
-        else:  # starts at rest: the largest ω of the run is drawn 1.3 long
-            wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
-            k_w = 1.3 / wmax if wmax > 0 else 1.0
-        w = k_w * np.asarray(traj.omega_inertial, float)
-        Lv = 1.3 * np.asarray(traj.L_inertial, float) / L0 if L0 > 0 else np.zeros((n, 3))
-        rec.send_columns("/world/omega", indexes=tcols, columns=rr.Arrows3D.columns(vectors=w))
-        rec.log("/world/omega", rr.Arrows3D.from_fields(colors=[OMEGA_COLOR], labels=["ω"]), static=True)
-        rec.send_columns("/world/L", indexes=tcols, columns=rr.Arrows3D.columns(vectors=Lv))
-        rec.log("/world/L", rr.Arrows3D.from_fields(colors=[L_COLOR], labels=["L"]), static=True)
-        # paths (static, whole run): polhode on the body, herpolhode and rotation-axis trail in space
-        wb = np.asarray(traj.omega_body, float)[idx]
-        nw = np.linalg.norm(wb, axis=1, keepdims=True)
-        ok = nw[:, 0] > 0
-        if ok.sum() >= 2:
-            u = wb[ok] / nw[ok]
-            s = 1.0 / np.sqrt(np.sum((u / semi) ** 2, axis=1, keepdims=True))
-            rec.log("/world/body/polhode", rr.LineStrips3D([1.01 * s * u], colors=[POLHODE_COLOR]), static=True)
-        rec.log("/world/herpolhode", rr.LineStrips3D([w[idx]], colors=[HERPOLHODE_COLOR]), static=True)
-        rec.log("/world/axis_trail", rr.LineStrips3D([1.6 * np.asarray(traj.rotation_axis)[idx]],
-                                                     colors=[TRAIL_COLOR]), static=True)
-        rec.log("/world/figure_axis_trail", rr.LineStrips3D([2.4 * np.asarray(traj.figure_axis)[idx]],
-                                                            colors=[AXIS_COLORS[2]]), static=True)
-        series = {"energy": traj.energy, "momentum_norm": traj.momentum_norm,
-                  "omega/x": traj.omega_body[:, 0], "omega/y": traj.omega_body[:, 1],
-                  "omega/z": traj.omega_body[:, 2]}
-    else:
-        series = {}
-    # other bodies: positions per step, trails static
-    if traj.bodies:
-        allpos = np.concatenate([np.asarray(p, float) for p in traj.bodies.values()])
-        span = float(np.max(np.linalg.norm(allpos, axis=1))) or 1.0
-        for k, (name, pos) in enumerate(traj.bodies.items()):
-            pos = np.asarray(pos, float)
-            if rotation:  # a distant attractor is drawn by its direction
-                pos = 3.0 * pos / np.maximum(np.linalg.norm(pos, axis=1, keepdims=True), 1e-300)
-            else:
-                pos = 3.0 * pos / span
-            rec.send_columns(f"/world/bodies/{name}", indexes=tcols, columns=rr.Points3D.columns(positions=pos))
-            rec.log(f"/world/bodies/{name}", rr.Points3D.from_fields(colors=[palette(k)], radii=[0.08],
-                                                                     labels=[name]), static=True)
-            rec.log(f"/world/trails/{name}", rr.LineStrips3D([pos[idx]], colors=[palette(k)]), static=True)
-    for name, v in traj.series.items():
-        series[f"trajectory/{name}"] = v
-    for name, v in result.plot_series.items():
-        series[f"plot/{name}"] = v
+    rec.log("/text", rr.TextDocument(text_of(drawing, run), media_type=rr.MediaType.MARKDOWN), static=True)
+    for it in drawing.items:
+        _log_item(rec, it, f"/world/{it.name}", tcols, F)
+    # the run's series on its own samples: the energy and |L| of a rotation, the scenario's plot
+    tr = run.trajectory
+    n = len(tr.t)
+    scols = _time_columns(tr.t, tr.time_unit, "step", np.arange(n))
+    series = {}
+    if drawing.rotation:
+        series.update({"energy": tr.energy, "momentum_norm": tr.momentum_norm})
+    series.update({f"plot/{k}": v for k, v in drawing.plot.items()})
     for name, v in series.items():
         v = np.asarray(v, float)
-        if v.shape != (n,):
-            continue
-        rec.send_columns(f"/series/{_safe(name)}", indexes=tcols, columns=rr.Scalars.columns(scalars=v))
-    # the metrics, as constant lines over the run (so they show beside the series)
+        if v.shape == (n,):
+            rec.send_columns(f"/series/{_safe(name)}", indexes=scols, columns=rr.Scalars.columns(scalars=v))
     ends = [0, n - 1]
-    mcols = [rr.TimeColumn("step", sequence=ends)] + _time_columns(np.asarray(traj.t)[ends], unit, traj.time_unit)
-    for name, v in result.metrics.items():
+    mcols = _time_columns(np.asarray(tr.t)[ends], tr.time_unit, "step", ends)
+    for name, v in run.metrics.items():
         try:
             v = float(v)
         except (TypeError, ValueError):
@@ -178,24 +210,26 @@ def _write(rec, result, spec, traj, n, unit):
             rec.send_columns(f"/metrics/{_safe(name)}", indexes=mcols, columns=rr.Scalars.columns(scalars=[v, v]))
 
 
-def _time_columns(t, unit, unit_name) -> list:
-    """The `t` timeline: a duration in seconds when the unit is known and fits rerun's int64
-    nanoseconds (±292 years); otherwise `t_milli`, a sequence of 1000 × t in the run's own unit."""
-    t = np.asarray(t, float)
-    if unit is not None and np.all(np.abs(t * unit) < 9e9):
-        return [rr.TimeColumn("t", duration=t * unit)]
-    return [rr.TimeColumn("t_milli", sequence=np.round(1000.0 * t).astype(np.int64))]
-
-
 def _safe(name: str) -> str:
     return "".join(c if (c.isalnum() or c in "_/-") else "_" for c in name).strip("_") or "x"
 
 
+def record_run(run, out, view=None, application_id: str = APPLICATION_ID) -> dict:
+    """Write the rerun recording of `run` (its drawing, camera and text) to the .rrd file `out`."""
+    drawing = run._spec().drawing(run, view)
+    rec = rr.RecordingStream(application_id, recording_id=str(uuid.uuid4()))
+    try:
+        rec.save(str(out), default_blueprint=blueprint(drawing))
+        record_drawing(rec, drawing, run)
+    finally:
+        rec.disconnect()  # writes the footer; a file without it is refused by the reader
+    return {"path": str(out), "steps": len(run.trajectory.t), "frames": drawing.n_frames}
+
+
 def record(name: str, out: str, values: dict | None = None) -> dict:
-    """Simulate scenario `name` with resolved parameter `values` and write a recording to `out`."""
+    """Simulate scenario `name` with `values` and write its recording to `out`."""
     from theoria.scenarios import get
 
     spec = get(name)
-    values = spec.resolve(values) if values is not None else spec.resolve(None)
-    result = spec.simulate_fn(values)
-    return record_result(result, spec, out)
+    run = spec.simulate_fn(spec.resolve(values))
+    return record_run(run, out)

@@ -1,184 +1,58 @@
-"""The 3D scene of one simulation result, drawn with viser (design.md: app/ reads the one
-Trajectory object and re-derives no physics).
+"""The viser renderer of a scenario's `Drawing` (theoria.scenarios.drawing): the live app's scene.
 
 `SceneView(scene)` works on any viser scene API: a client's (`client.scene`, each browser its own
-state) or the server's (`server.scene`, used by the standalone HTML export). `show(result, spec)`
-sends every path ONCE; `set_frame(i)` then only moves poses, short arrows and visibility.
+state) or a server's (`server.scene`, used by the standalone HTML export). It draws what the
+drawing lists and nothing else.
 
-Scene units: a rotation scene is scaled so that the body's largest semi-axis is 1.  Orbit scenes
-(kind="orbit", Trajectory.bodies only) are scaled so that the largest distance is `ORBIT_RADIUS`.
+- `show(drawing)` sends every item once. Nodes are cached by name: a new drawing of the same
+  scenario updates the existing handles in place (points, scale, pose), removes what is no longer
+  drawn, and the items of an overlay that is off are not sent at all until it is switched on.
+- `set_frame(k)` then only moves what changes with time: frame poses, marker positions, per-frame
+  segments and label text, the visibility of path chunks. Nothing else goes over the wire.
 
-What is drawn for a rotation scenario (Poinsot's construction, §805–808):
-- the body: homogeneous ellipsoid with the moments (A, B, C) (`ellipsoid_semi_axes`), bands of
-  latitude about the C axis and one meridian so rotation is visible; an "exaggerate shape" factor
-  multiplies the departures of the semi-axes from their mean for nearly spherical bodies;
-- principal axes A, B, C as red / green / blue labelled arrows (children of the body frame);
-- ω and L as arrows (ω scaled so that its tip lies on the energy ellipsoid, whose plane of
-  contact is the invariable plane);
-- the polhode: where the instantaneous axis pierces the body surface, drawn on the body (child of
-  the body frame, so it moves with it);
-- the herpolhode: the tip of ω in space, on the invariable plane (a disc normal to L);
-- the trail of the rotation axis in space (unit vector on a sphere of radius 1.6);
-- optional: the energy ellipsoid ω·Iω = 2E (body-fixed) and the momentum sphere |L| with the
-  path of L on the body; a celestial sphere with the paths of the rotation and figure axes.
+Paths are drawn as dense clouds of square points (resampled along the arc so that the gaps are
+under the point size, at most MAX_DRAW_POINTS; points that land on an earlier point of the same
+path are dropped, see REPEAT_CELL): in software WebGL a 10⁴-point fat line renders at a few
+frames per second, a 10⁴-point cloud at ~30. A path is sent once, in TRAIL_CHUNKS chunks of equal
+time span whose visibility follows playback, so a trail grows without being re-sent.
+
+A single arrow that turns with time (ω, L) is drawn along +z of a frame of its own: playback
+turns the frame (a pose update) and re-sends the arrow only when its length changes by more than
+VECTOR_LENGTH_TOL.
 """
 from __future__ import annotations
 
-import colorsys
-import functools
-from dataclasses import dataclass, field
+import hashlib
+from dataclasses import dataclass
 
 import numpy as np
-import trimesh
 
-from theoria.physics.inertia import ellipsoid_semi_axes
+from theoria.scenarios.drawing import (Arrows, Drawing, Frame, Item, Label, Light, Mesh, Path, Points, Segments,
+                                       Sphere, z_to_many)
 
-AXIS_COLORS = ((220, 50, 47), (60, 170, 60), (38, 110, 220))  # A red, B green, C blue
-OMEGA_COLOR = (255, 150, 0)
-L_COLOR = (170, 60, 200)
-TRAIL_COLOR = (240, 120, 30)
-POLHODE_COLOR = (250, 210, 40)
-HERPOLHODE_COLOR = (0, 190, 200)
-FIGURE_COLOR = (38, 110, 220)
-ORBIT_RADIUS = 2.0
 MAX_DRAW_POINTS = 10000  # points per drawn path (10⁴-point trails)
-TRAIL_CHUNKS = 24  # a path is sent once, in chunks whose visibility grows with time
+TRAIL_CHUNKS = 24
 # A path point is not drawn again where an earlier point of the same path already is: points are
 # quantised to cells of REPEAT_CELL × their size and only the first (in time) of each cell is kept.
-# viser draws a point `size` wide on each side of its centre (its gl_PointSize uses tan(fov/2), not
-# 2 tan(fov/2)), so a dropped point lies within 0.61 of a drawn point's width of one that is drawn
-# already at that time: the picture is the same, but a path that retraces itself (a periodic
-# polhode) costs far fewer points, and software WebGL pays per point.
+# viser draws a point `size` wide on each side of its centre, so a dropped point lies within 0.61 of
+# a drawn point's width of one that is drawn already at that time: the picture is the same, but a
+# path that retraces itself (a periodic polhode) costs far fewer points.
 REPEAT_CELL = 0.7
-DRAW_MAX = 1e4  # scene units; paths go out as float16 (inf beyond 65504): larger scales fall back (below)
-VECTOR_LENGTH_TOL = 0.02  # ω / L arrows: geometry re-sent only when the length changes by 2 %
-AXIS_TRAIL_RADIUS = 1.6
-# Paths live in scene units of order 1 (body ≈ 1, celestial sphere 2.4, orbits ≤ 3), where
-# float16 is good to ~1e-3 of a unit, far below a point's size: half the bytes per update.
+VECTOR_LENGTH_TOL = 0.02
+# Paths and points live in scene units of order 1, where float16 is good to ~1e-3 of a unit, far
+# below a point's size: half the bytes per update.
 PATH_PRECISION = "float16"
-CELESTIAL_RADIUS = 2.4
-
-OVERLAYS = {
-    # name: (label, default for ch. 15 rotation scenes, default elsewhere)
-    "axes": ("principal axes A, B, C", True, True),
-    "vectors": ("ω and L arrows", True, True),
-    "axis_trail": ("trail of the rotation axis", True, True),
-    "polhode": ("polhode (on the body)", True, True),
-    "herpolhode": ("herpolhode + invariable plane", True, False),
-    "energy_ellipsoid": ("energy ellipsoid (Poinsot)", False, False),
-    "momentum_sphere": ("momentum sphere (path of L on the body)", False, False),
-    "celestial": ("celestial sphere + pole paths", False, True),
-    "bodies": ("other bodies + trails", True, True),
-    "scenario": ("scenario drawings (orbit, markers, arcs)", True, True),
-}
-
-
-class SceneExtra:
-    """What one scenario adds to the generic scene (app/scene_extras/*.py).
-
-    Subclass, decorate with `register_extra("scenario-name", ...)`. `build` runs once per result
-    (when the "scenario" overlay is on): create nodes with `self.node(...)` / paths with
-    `self.path(...)` under `self.name(...)`, so that they are cached, updated in place, pruned
-    and shown/hidden with the overlay. `set_frame` moves poses only. `options` are checkboxes the
-    app shows in a "Scene options" folder; a change calls `set_option` (and `build` again if it
-    returns True).
-    """
-
-    options: dict[str, tuple[str, bool]] = {}
-
-    def __init__(self, view: "SceneView"):
-        self.view = view
-        self.values = {k: v[1] for k, v in self.options.items()}
-
-    # helpers over the view's node cache
-    def name(self, *parts: str) -> str:
-        return "/".join((self.view.root, "extra") + parts)
-
-    def node(self, name: str, create, **update):
-        h = self.view._node(name, create, **update)
-        self.view._static.setdefault("scenario", []).append(h)
-        return h
-
-    def path(self, name: str, points, color, thickness=0.02, idx=None) -> None:
-        self.view._add_path("scenario", name, points, color, thickness, idx=idx)
-
-    @property
-    def scene(self):
-        return self.view.scene
-
-    def build(self, traj, result) -> None:  # pragma: no cover - interface
-        pass
-
-    def set_frame(self, i: int) -> None:
-        pass
-
-    # what the generic "bodies" overlay draws for this scenario
-    def bodies(self, traj) -> dict | None:
-        """name → (N,3) positions to draw as spheres + trails instead of traj.bodies (e.g. in a
-        co-rotating frame, or without marker points the extra draws itself); None: traj.bodies."""
-        return None
-
-    def span(self, traj) -> float | None:
-        """Distance drawn at ORBIT_RADIUS (trajectory units); None: the largest body distance."""
-        return None
-
-    def trail(self, name: str) -> bool:
-        """Whether the generic overlay draws the trail of body `name`."""
-        return True
-
-    def set_option(self, key: str, value: bool) -> bool:
-        self.values[key] = bool(value)
-        return True
-
-    def plot_series(self, result) -> dict:
-        """The time series the app plots against t (override to leave out point clouds such as a
-        separatrix or a surface of section, which the extra draws itself)."""
-        return result.plot_series
-
-    def follow_camera(self, traj, i: int) -> dict | None:
-        """A camera the app applies at every frame i while this returns one (e.g. the Moon seen
-        from the Earth): dict(position, look_at, up, fov_deg). None leaves the camera alone."""
-        return None
-
-
-SCENE_EXTRAS: dict[str, type[SceneExtra]] = {}
-
-
-def register_extra(*names: str):
-    def deco(cls):
-        for n in names:
-            SCENE_EXTRAS[n] = cls
-        return cls
-
-    return deco
-
-
-def extra_for(name: str) -> type[SceneExtra] | None:
-    from . import scene_extras  # noqa: F401  (registers every module)
-
-    return SCENE_EXTRAS.get(name)
-
-
-def palette(k: int) -> tuple[int, int, int]:
-    r, g, b = colorsys.hsv_to_rgb((0.13 + 0.31 * k) % 1.0, 0.75, 0.95)
-    return int(255 * r), int(255 * g), int(255 * b)
-
-
-def decimate_index(n: int, max_points: int = MAX_DRAW_POINTS) -> np.ndarray:
-    """Indices of at most `max_points` samples out of n, first and last included."""
-    if n <= max_points:
-        return np.arange(n)
-    return np.unique(np.linspace(0, n - 1, max_points).round().astype(int))
+FLOAT16_MAX = 6.5e4
 
 
 def densify(path: np.ndarray, idx: np.ndarray, spacing: float, max_points: int):
     """Resample a polyline uniformly in arc length: gaps ≤ spacing where possible, at least the
-    original number of points (capped at max_points); `idx` (trajectory index of each point)
-    is interpolated alongside."""
+    original number of points (capped at max_points); `idx` (the frame of each point) is
+    interpolated alongside."""
     seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(seg)])
-    if s[-1] <= 0:
-        return path[: max_points], idx[: max_points]
+    if not np.isfinite(s[-1]) or s[-1] <= 0:
+        return path[:max_points], idx[:max_points]
     n = int(np.clip(s[-1] / spacing, len(path), max_points))
     if n == len(path) and n <= max_points:
         return path, idx
@@ -199,178 +73,109 @@ def drop_repeats(path: np.ndarray, idx: np.ndarray, cell: float):
     return path[keep], idx[keep]
 
 
-def z_to_many(v) -> tuple[np.ndarray, np.ndarray]:
-    """Unit quaternions (w, x, y, z) turning +z onto each row of v (N,3) (identity where v is zero or
-    not finite) and the lengths: (N,4), (N,). Computed once per result so that playback only
-    indexes arrays: the per-frame arrow poses (numpy calls on 3-vectors) were ~5 % of the server's
-    CPU in a py-spy profile under thirty browsers."""
-    v = np.asarray(v, float)
-    n = np.linalg.norm(v, axis=1)
-    ok = (n > 0) & np.isfinite(n)
-    u = np.where(ok[:, None], v / np.where(ok, n, 1.0)[:, None], [0.0, 0.0, 1.0])
-    q = np.stack([1.0 + u[:, 2], -u[:, 1], u[:, 0], np.zeros(len(u))], 1)
-    down = u[:, 2] < -1 + 1e-12
-    q[down] = (0.0, 1.0, 0.0, 0.0)
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
-    return q, np.where(ok, n, 0.0)
+def _content_key(*arrays) -> str:
+    """A short digest of arrays' contents: a mesh whose geometry is unchanged is not sent again."""
+    h = hashlib.blake2b(digest_size=12)
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
 
 
-def segments(path: np.ndarray) -> np.ndarray:
-    """(N,3) polyline → (N−1,2,3) line segments."""
-    path = np.asarray(path, np.float32)
-    return np.stack([path[:-1], path[1:]], axis=1)
+def _f32(x) -> np.ndarray:
+    return np.asarray(x, np.float32)
 
 
-def shape_semi_axes(inertia, exaggerate: float = 1.0) -> np.ndarray:
-    """Semi-axes of the body drawn: the true ellipsoid of the moments, normalised to a largest
-    semi-axis of 1, with departures from the mean multiplied by `exaggerate`."""
-    ax = ellipsoid_semi_axes(inertia)
-    ax = ax / ax.max()
-    mean = ax.mean()
-    ax = mean + exaggerate * (ax - mean)
-    ax = ax / ax.max()
-    return np.clip(ax, 0.12, None)  # a flat body (A + B = C) keeps a visible thickness
+def _tuple(v) -> tuple:
+    return tuple(float(x) for x in np.asarray(v, float).ravel())
 
 
-BAND_LIGHT, BAND_BLUE = (200, 190, 170), (120, 140, 175)
-MERIDIAN_COLOR, EQUATOR_COLOR = (60, 40, 30), (230, 80, 60)
-MERIDIAN_HALF_WIDTH, EQUATOR_HALF_WIDTH = 0.12, 0.05  # rad
-
-
-@functools.lru_cache(maxsize=4)
-def banded_sphere_parts(rows_per_band: int = 4, columns: int = 64) -> list[tuple[np.ndarray, np.ndarray, tuple]]:
-    """A unit sphere in latitude bands of π/8 about the body z (C) axis, a dark meridian in the
-    body x–z half-plane and a red equator, so that spin is visible: one (vertices, faces, colour)
-    per colour. The grid's rings and meridians fall on the band edges, so every edge is clean.
-
-    One plain mesh per colour rather than one vertex-coloured GLB: in software WebGL at 1280×800,
-    forced redraws, the GLB body cost 9–12 ms a frame and the plain meshes ~5 ms (docs/app.md)."""
-    lat = np.unique(np.concatenate([np.linspace(-np.pi / 2, np.pi / 2, 8 * rows_per_band + 1),
-                                    [-EQUATOR_HALF_WIDTH, EQUATOR_HALF_WIDTH]]))
-    lon = np.unique(np.concatenate([np.linspace(-np.pi, np.pi, columns + 1),
-                                    [-MERIDIAN_HALF_WIDTH, MERIDIAN_HALF_WIDTH]]))
-    la, lo = np.meshgrid(lat, lon, indexing="ij")
-    verts = np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], -1).reshape(-1, 3)
-    nl = len(lon)
-    i, j = np.meshgrid(np.arange(len(lat) - 1), np.arange(nl - 1), indexing="ij")
-    a, b, c, d = i * nl + j, i * nl + j + 1, (i + 1) * nl + j + 1, (i + 1) * nl + j  # counter-clockwise seen from outside
-    lat_c = 0.5 * (lat[:-1] + lat[1:])[i]
-    lon_c = 0.5 * (lon[:-1] + lon[1:])[j]
-    band = np.floor((lat_c + np.pi / 2) / (np.pi / 8)).astype(int) % 2
-    colour = np.where(band == 1, 0, 1)
-    colour = np.where(np.abs(lon_c) < MERIDIAN_HALF_WIDTH, 2, colour)
-    colour = np.where(np.abs(lat_c) < EQUATOR_HALF_WIDTH, 3, colour)
-    quads = np.stack([a, b, c, d], -1).reshape(-1, 4)
-    colour = colour.ravel()
-    parts = []
-    for k, rgb in enumerate((BAND_LIGHT, BAND_BLUE, MERIDIAN_COLOR, EQUATOR_COLOR)):
-        q = quads[colour == k]
-        tri = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
-        tri = tri[np.ptp(verts[tri], axis=1).max(axis=1) > 1e-12]  # no triangles collapsed at the poles
-        used, inv = np.unique(tri, return_inverse=True)
-        parts.append((verts[used].astype(np.float32), inv.reshape(-1, 3).astype(np.uint32), rgb))
-    return parts
-
-
-def flat_disc(radius: float, sections: int = 64) -> tuple[np.ndarray, np.ndarray]:
-    """A disc in the z = 0 plane (triangle fan): one layer, so a see-through disc is blended once
-    per pixel (a thin cylinder blends its top and its bottom)."""
-    th = np.linspace(0, 2 * np.pi, sections, endpoint=False)
-    v = np.vstack([[0.0, 0.0, 0.0], np.stack([radius * np.cos(th), radius * np.sin(th), 0 * th], 1)])
-    k = np.arange(sections)
-    return v.astype(np.float32), np.stack([np.zeros(sections, int), 1 + k, 1 + (k + 1) % sections], 1).astype(np.uint32)
-
-
-def wire_sphere(radius: float, n_lat: int = 5, n_lon: int = 8, n: int = 72) -> np.ndarray:
-    """Line segments of a latitude/longitude wire sphere."""
-    segs = []
-    th = np.linspace(0, 2 * np.pi, n)
-    for lat in np.linspace(-np.pi / 2, np.pi / 2, n_lat + 2)[1:-1]:
-        c = np.stack([np.cos(lat) * np.cos(th), np.cos(lat) * np.sin(th), np.full_like(th, np.sin(lat))], 1)
-        segs.append(segments(radius * c))
-    ph = np.linspace(-np.pi / 2, np.pi / 2, n // 2)
-    for lon in np.linspace(0, np.pi, n_lon, endpoint=False):
-        for s in (1, -1):
-            c = np.stack([s * np.cos(ph) * np.cos(lon), s * np.cos(ph) * np.sin(lon), np.sin(ph)], 1)
-            segs.append(segments(radius * c))
-    return np.concatenate(segs)
+def _rgb(c):
+    a = np.asarray(c)
+    return tuple(int(x) for x in a) if a.ndim == 1 else np.asarray(a, np.uint8)
 
 
 @dataclass
-class _Path:
-    """A path sent once as chunks; chunk k holds samples [starts[k], starts[k+1]]."""
+class _Chunks:
+    """A path sent once as chunks; chunk j appears at frame starts[j]."""
 
     handles: list
-    starts: np.ndarray  # trajectory sample index where each chunk begins
+    starts: np.ndarray
     shown: int = -1
     visible: bool = True
 
-    def set_time_index(self, i: int) -> None:
-        n = int(np.searchsorted(self.starts, i, side="right"))
+    def set_frame(self, k: int) -> None:
+        n = int(np.searchsorted(self.starts, k, side="right"))
         if n == self.shown:
             return
-        for k, h in enumerate(self.handles):
-            want = self.visible and k < n
+        for j, h in enumerate(self.handles):
+            want = self.visible and j < n
             if h.visible != want:
                 h.visible = want
         self.shown = n
 
-    def set_visible(self, on: bool, i: int) -> None:
+    def set_visible(self, on: bool, k: int) -> None:
         self.visible = on
         self.shown = -1
-        self.set_time_index(i)
+        self.set_frame(k)
 
 
 class SceneView:
-    """All nodes of one result under `root` (e.g. "/world") on a viser scene API.
-
-    Nodes are kept in a cache by name: a new result of the same scenario updates the existing
-    handles in place (points, scale, pose: no node is re-created, meshes are sent once as unit
-    shapes and scaled), nodes no longer needed are removed, and the paths of an overlay that is
-    switched off are not sent at all until it is switched on.
-    """
+    """The nodes of one drawing under `root` (e.g. "/world") on a viser scene API."""
 
     def __init__(self, scene, root: str = "/world", grow_trails: bool = True):
         self.scene = scene
         self.root = root
         self.grow_trails = grow_trails
+        self.drawing: Drawing | None = None
         self.overlays: dict[str, bool] = {}
-        self.exaggerate = 1.0
         self.frame = 0
-        self.n = 0
-        self._result = None
-        self._spec = None
-        self._h: dict[str, object] = {}  # name → handle (alive)
-        self._auto: set[str] = set()  # group nodes created by _ensure_parents
+        self._h: dict[str, object] = {}  # node name → handle (alive)
+        self._sig: dict[str, tuple] = {}  # node name → what it was created with (a change re-creates it)
+        self._auto: set[str] = set()  # group nodes made for children before their parent
         self._touched: set[str] = set()
-        self._paths: dict[str, list[_Path]] = {}  # overlay → paths
-        self._static: dict[str, list] = {}  # overlay → handles shown/hidden with it
-        self._built: set[str] = set()  # overlays built for the current result
-        self._markers: dict[str, tuple] = {}  # name → (handle, (N,3) positions)
-        self._labels = []
-        self.body_frame = self.omega_arrow = self.L_arrow = None
-        self.k_omega = 1.0
-        self.extra: SceneExtra | None = None
+        self._built: dict[str, list[Item]] = {}  # group → its items, sent
+        self._animated: list[tuple[Item, list]] = []  # (item, handles) moved by set_frame
+        self._chunks: dict[str, list[_Chunks]] = {}  # group → paths
+        self._static: dict[str, list] = {}  # group → handles shown/hidden with it
+        self._vectors: dict[str, list] = {}  # arrow name → [frame, arrow, label, drawn length, (wxyz, lengths)]
+        self._state: dict[str, object] = {}  # node name → the value last sent per animated attribute
+
+    @property
+    def n(self) -> int:
+        return self.drawing.n_frames if self.drawing is not None else 0
 
     # ---- node cache --------------------------------------------------------------------------
-    def _node(self, name: str, create, **update):
-        """The handle called `name`: created by `create()` the first time, else updated."""
+    def _node(self, name: str, create, sig=(), **update):
+        """The handle called `name`: created by `create()` the first time (or when `sig`, what it was
+        created with, changes), else updated with `update`."""
         self._ensure_parents(name)
         h = self._h.get(name)
+        if h is not None and name not in self._auto and self._sig.get(name) != sig:
+            self._remove(name)
+            h = None
         if h is None or name in self._auto:
-            self._auto.discard(name)  # a group made for a child before its parent: the real node replaces it
+            if name in self._auto:
+                self._remove(name)
             h = create()
             self._h[name] = h
+            self._sig[name] = sig
         else:
             for k, v in update.items():
                 setattr(h, k, v)
         self._touched.add(name)
         return h
 
-    def _segments(self, name, segs, color, thickness):
-        segs = np.asarray(segs, np.float32)
-        return self._node(name, lambda: self.scene.add_line_segments(name, segs, color, thickness=thickness,
-                                                                       thickness_units="world"), points=segs)
+    def _remove(self, name: str) -> None:
+        self._auto.discard(name)
+        self._sig.pop(name, None)
+        h = self._h.pop(name, None)
+        if h is not None:
+            try:
+                h.remove()
+            except Exception:  # a node already gone with its parent
+                pass
 
     def _ensure_parents(self, name: str) -> None:
         """Explicit (empty frame) nodes for the groups between the root and `name`: viser keeps a
@@ -386,329 +191,248 @@ class SceneView:
                 self._auto.add(prefix)
             self._touched.add(prefix)
 
-    def _prune(self, keep_prefixes=()):
+    def _prune(self) -> None:
         for name in sorted(self._h, key=lambda n: -n.count("/")):  # children first
-            if name not in self._touched and not name.startswith(keep_prefixes):
-                self._auto.discard(name)
-                try:
-                    self._h.pop(name).remove()
-                except Exception:
-                    pass
+            if name not in self._touched:
+                self._remove(name)
 
     def clear(self) -> None:
-        for name in sorted(self._h, key=lambda n: -n.count("/")):  # children first
-            try:
-                self._h.pop(name).remove()
-            except Exception:
-                pass
-        self._paths, self._static, self._built, self._markers = {}, {}, set(), {}
-        self._auto = set()
-        self.body_frame = self.omega_arrow = self.L_arrow = None
-        self.extra = None
-        self.n = 0
+        for name in sorted(self._h, key=lambda n: -n.count("/")):
+            self._remove(name)
+        self._h, self._sig, self._auto = {}, {}, set()
+        self._built, self._animated, self._chunks, self._static, self._vectors = {}, [], {}, {}, {}
+        self.drawing = None
 
-    # ---- building --------------------------------------------------------------------------
-    def default_overlays(self, spec) -> dict[str, bool]:
-        ch15 = spec is not None and spec.group == "ch. 15"
-        out = {k: (v[1] if ch15 else v[2]) for k, v in OVERLAYS.items()}
-        out.update(spec.overlays if spec is not None else {})
+    # ---- showing a drawing -------------------------------------------------------------------
+    def show(self, drawing: Drawing, overlays: dict[str, bool] | None = None) -> None:
+        """Show `drawing`, updating the nodes of the previous one in place. `overlays` (group → on)
+        defaults to the drawing's own defaults."""
+        self.overlays = dict(drawing.overlays if overlays is None else overlays)
+        self.drawing = drawing
+        self._touched = set()
+        self._built, self._animated, self._chunks, self._static, self._vectors = {}, [], {}, {}, {}
+        self._state = {}
+        for it in drawing.items:  # frames first and always: other items are placed in them
+            if isinstance(it, Frame):
+                self._draw(it)
+        groups = []
+        for it in drawing.items:
+            if it.group not in groups and not isinstance(it, Frame):
+                groups.append(it.group)
+        for g in groups:
+            if self._on(g):
+                self._build(g)
+        self._prune()
+        for g in groups:
+            self._apply_visibility(g, self._on(g))
+        self.frame = min(self.frame, max(self.n - 1, 0))
+        self.set_frame(self.frame, force=True)
+
+    def _on(self, group: str) -> bool:
+        return self.overlays.get(group, True)
+
+    def _build(self, group: str) -> None:
+        if group in self._built or self.drawing is None:
+            return
+        items = [it for it in self.drawing.items if it.group == group and not isinstance(it, Frame)]
+        items.sort(key=lambda it: it.name.count("/"))  # parents before children
+        self._built[group] = items
+        for it in items:
+            self._draw(it)
+
+    def _draw(self, it: Item) -> None:
+        name = f"{self.root}/{it.name}"
+        anim = it.animated()
+        handles = getattr(self, f"_draw_{type(it).__name__.lower()}")(it, name, anim)
+        handles = [h for h in handles if h is not None]
+        if not isinstance(it, Frame):  # frames are never hidden with a group: they carry other items
+            self._static.setdefault(it.group, []).extend(handles)
+        if anim:
+            self._animated.append((it, handles))
+
+    @staticmethod
+    def _static_value(v, anim: bool, k: int = 0):
+        return np.asarray(v)[k] if anim else v
+
+    def _draw_frame(self, it: Frame, name, anim):
+        wxyz = _tuple(self._static_value(it.wxyz, "wxyz" in anim))
+        pos = _tuple(self._static_value(it.position, "position" in anim))
+        return [self._node(name, lambda: self.scene.add_frame(name, show_axes=False, wxyz=wxyz, position=pos),
+                           wxyz=wxyz, position=pos)]
+
+    def _draw_mesh(self, it: Mesh, name, anim):
+        wxyz = _tuple(self._static_value(it.wxyz, "wxyz" in anim))
+        pos = _tuple(self._static_value(it.position, "position" in anim))
+        scale = _tuple(it.scale)
+        sig = (_content_key(it.vertices, it.faces), _rgb(it.color), it.opacity, it.double_sided)
+        return [self._node(name, lambda: self.scene.add_mesh_simple(
+            name, it.vertices, it.faces, color=_rgb(it.color), opacity=None if it.opacity >= 1 else float(it.opacity),
+            side="double" if it.double_sided else "front", scale=scale, wxyz=wxyz, position=pos,
+            cast_shadow=False, receive_shadow=False), sig=sig, scale=scale, wxyz=wxyz, position=pos)]
+
+    def _draw_sphere(self, it: Sphere, name, anim):
+        pos = _tuple(self._static_value(it.position, "position" in anim))
+        return [self._node(name, lambda: self.scene.add_icosphere(
+            name, radius=float(it.radius), color=_rgb(it.color), position=pos, cast_shadow=False,
+            receive_shadow=False), sig=(float(it.radius), _rgb(it.color)), position=pos)]
+
+    def _draw_points(self, it: Points, name, anim):
+        pts = _f32(it.points)
+        prec = PATH_PRECISION if np.all(np.abs(pts) < FLOAT16_MAX / 8) else "float32"
+        cols = _rgb(it.colors)
+        return [self._node(name, lambda: self.scene.add_point_cloud(
+            name, pts, cols, point_size=float(it.size), point_shape="circle", precision=prec),
+            sig=(float(it.size), prec), points=pts, colors=cols)]
+
+    def _draw_segments(self, it: Segments, name, anim):
+        pts = _f32(self._static_value(it.points, "points" in anim))
+        cols = _rgb(it.colors)
+        return [self._node(name, lambda: self.scene.add_line_segments(
+            name, pts, cols, thickness=float(it.thickness), thickness_units="world"),
+            sig=(float(it.thickness),), points=pts, colors=cols)]
+
+    def _draw_label(self, it: Label, name, anim):
+        text = str(self._static_value(it.text, "text" in anim))
+        pos = _tuple(self._static_value(it.position, "position" in anim))
+        return [self._node(name, lambda: self.scene.add_label(name, text, position=pos), text=text, position=pos)]
+
+    def _draw_light(self, it: Light, name, anim):
+        pos = _tuple(self._static_value(it.position, "position" in anim))
+        return [self._node(name, lambda: self.scene.add_light_directional(name, intensity=float(it.intensity),
+                                                                           position=pos), position=pos)]
+
+    def _draw_arrows(self, it: Arrows, name, anim):
+        style = dict(shaft_radius=float(it.shaft_radius), head_radius=float(it.head_radius),
+                     head_length=float(it.head_length))
+        cols = _rgb(np.asarray(it.colors, np.uint8).reshape(-1, 3) if np.ndim(it.colors) > 1 else it.colors)
+        origins = _f32(np.asarray(it.origins, float).reshape(-1, 3))
+        if "vectors" in anim and len(origins) == 1:
+            # one arrow turning with time: a frame of its own, turned each frame; the arrow along +z
+            v = np.asarray(it.vectors, float)[:, 0, :]
+            poses = z_to_many(v)
+            frame = self._node(name, lambda: self.scene.add_frame(name, show_axes=False, position=_tuple(origins[0])),
+                               position=_tuple(origins[0]))
+            col = cols if isinstance(cols, tuple) else tuple(int(x) for x in np.asarray(cols).reshape(-1, 3)[0])
+            arrow = self._node(f"{name}/arrow", lambda: self.scene.add_arrows(
+                f"{name}/arrow", np.zeros((1, 2, 3), np.float32), col, **style), sig=tuple(style.values()))
+            label = None
+            if it.labels:
+                label = self._node(f"{name}/label", lambda: self.scene.add_label(f"{name}/label", str(it.labels[0])),
+                                   text=str(it.labels[0]))
+            self._vectors[it.name] = [frame, arrow, label, -1.0, poses]
+            return [frame, arrow, label]
+        vec = _f32(self._static_value(it.vectors, "vectors" in anim))
+        pts = np.stack([origins, origins + vec], 1)
+        out = [self._node(name, lambda: self.scene.add_arrows(name, pts, cols, **style), sig=tuple(style.values()),
+                          points=pts)]
+        for j, text in enumerate(it.labels):
+            pos = _tuple(1.08 * pts[j, 1])
+            out.append(self._node(f"{name}/label_{j}", lambda text=text, pos=pos, j=j: self.scene.add_label(
+                f"{name}/label_{j}", str(text), position=pos), text=str(text), position=pos))
         return out
 
-    def show(self, result, spec, overlays: dict[str, bool] | None = None, exaggerate: float | None = None) -> None:
-        """Show `result` (a physics.scenarios.Result) of scenario `spec`, updating in place."""
-        if overlays is not None:
-            self.overlays = dict(overlays)
-        if not self.overlays:
-            self.overlays = self.default_overlays(spec)
-        if exaggerate is not None:
-            self.exaggerate = float(exaggerate)
-        if self._spec is not None and (spec.name != self._spec.name or spec.kind != self._spec.kind):
-            self.clear()
-        self._result, self._spec = result, spec
-        traj = result.trajectory
-        self.n = len(traj.t)
-        self._idx = decimate_index(self.n)
-        self._touched = set()
-        self._paths, self._static, self._built = {}, {}, set()
-        self._rotation = spec.kind == "rotation"
-        cls = extra_for(spec.name)
-        if cls is None:
-            self.extra = None
-        elif type(self.extra) is not cls:
-            self.extra = cls(self)
-        if self._rotation:
-            self._build_body(traj)
-        for name, on in self.overlays.items():
-            if on:
-                self._build(name)
-        self._prune()
-        for name, on in self.overlays.items():
-            self._apply_visibility(name, on)
-        self.frame = min(self.frame, self.n - 1)
-        self.set_frame(self.frame)
-
-    def _build(self, overlay: str) -> None:
-        if overlay in self._built or self._result is None:
-            return
-        self._built.add(overlay)
-        traj = self._result.trajectory
-        fn = getattr(self, f"_build_{overlay}", None)
-        if fn is not None and (self._rotation or overlay in ("bodies", "scenario")):
-            fn(traj)
-
-    def _build_scenario(self, traj) -> None:
-        if self.extra is not None:
-            self.extra.build(traj, self._result)
-
-    def set_option(self, key: str, value: bool) -> None:
-        """A scene option of the scenario's extra changed: rebuild its drawings if it asks."""
-        if self.extra is not None and self.extra.set_option(key, value) and self._result is not None:
-            self.show(self._result, self._spec)
-
-    def _cloud(self, name, pts, color, size):
-        pts = np.asarray(pts, np.float32)
-        return self._node(name, lambda: self.scene.add_point_cloud(
-            name, pts, color, point_size=size, point_shape="square", precision=PATH_PRECISION, point_shading="flat"),
-            points=pts)
-
-    def _add_path(self, overlay: str, name: str, path: np.ndarray, color, thickness=0.02,
-                  idx: np.ndarray | None = None) -> None:
-        """Send `path` (samples at trajectory indices `idx`) once, as TRAIL_CHUNKS chunks whose
-        visibility follows the playback time.
-
-        Paths are drawn as dense clouds of square points (resampled along the arc so that the
-        gaps are under the point size, at most MAX_DRAW_POINTS; points that would land on an
-        earlier point of the path are dropped, see REPEAT_CELL): in software WebGL a 10⁴-point
-        fat line (three's Line2) renders at a few frames per second, a 10⁴-point cloud at ~30.
-        """
-        path = np.asarray(path, float)
+    def _draw_path(self, it: Path, name, anim):
+        """Send the path once, as chunks whose visibility follows the playback frame."""
+        path = np.asarray(it.points, float)
         if len(path) < 2:
-            return
-        idx = np.arange(len(path)) if idx is None else np.asarray(idx, float)
-        path, idx = densify(path, idx, 0.6 * thickness, MAX_DRAW_POINTS)
-        path, idx = drop_repeats(path, idx, REPEAT_CELL * thickness)
-        k = TRAIL_CHUNKS if self.grow_trails else 1
-        # TRAIL_CHUNKS chunks of equal time span (after drop_repeats the points are not uniform in
-        # time); always the same number of chunks, so a new result updates the same nodes in place
-        # (a chunk left without a new point repeats the previous point)
-        grid = np.linspace(idx[0], idx[-1], k + 1)
-        bounds = np.concatenate([[0], np.searchsorted(idx, grid[1:-1], side="left"), [len(path)]]).astype(int)
+            return []
+        at = np.zeros(len(path)) if it.at is None else np.asarray(it.at, float)
+        path, at = densify(path, at, 0.6 * it.thickness, MAX_DRAW_POINTS)
+        path, at = drop_repeats(path, at, REPEAT_CELL * it.thickness)
+        grow = self.grow_trails and it.at is not None
+        k = TRAIL_CHUNKS if grow else 1
+        # chunks of equal time span (after drop_repeats the points are not uniform in time); always
+        # the same number, so a new drawing updates the same nodes in place (a chunk left without a
+        # point of its own repeats the previous point)
+        grid = np.linspace(at[0], at[-1], k + 1)
+        bounds = np.concatenate([[0], np.searchsorted(at, grid[1:-1], side="left"), [len(path)]]).astype(int)
         handles, starts = [], []
+        prec = PATH_PRECISION if np.all(np.abs(path) < FLOAT16_MAX / 8) else "float32"
+        col = _rgb(it.color)
         for j in range(k):
             a, b = bounds[j], bounds[j + 1]
-            pts = path[a:b] if b > a else path[max(a - 1, 0):max(a - 1, 0) + 1]
-            handles.append(self._cloud(f"{name}/{j}", pts, color, thickness))
-            starts.append(int(np.ceil(grid[j])) if self.grow_trails else 0)
-        self._paths.setdefault(overlay, []).append(_Path(handles, np.asarray(starts)))
+            pts = _f32(path[a:b] if b > a else path[max(a - 1, 0):max(a - 1, 0) + 1])
+            cname = f"{name}/{j}"
+            handles.append(self._node(cname, lambda cname=cname, pts=pts: self.scene.add_point_cloud(
+                cname, pts, col, point_size=float(it.thickness), point_shape="square", precision=prec,
+                point_shading="flat"), sig=(float(it.thickness), prec, col), points=pts))
+            starts.append(int(np.ceil(grid[j])) if grow else 0)
+        self._chunks.setdefault(it.group, []).append(_Chunks(handles, np.asarray(starts)))
+        return []  # chunk visibility is handled by _Chunks, not by the group's static list
 
-    def _build_body(self, traj) -> None:
-        sc, r = self.scene, self.root
-        semi = shape_semi_axes(traj.inertia, self.exaggerate)
-        self.body_frame = self._node(f"{r}/body", lambda: sc.add_frame(f"{r}/body", show_axes=False))
-        self._node(f"{r}/body/mesh", lambda: sc.add_frame(f"{r}/body/mesh", show_axes=False))
-        for k, (v, f, rgb) in enumerate(banded_sphere_parts()):  # unit sphere parts, scaled to the semi-axes
-            self._node(f"{r}/body/mesh/{k}", lambda v=v, f=f, rgb=rgb, k=k: sc.add_mesh_simple(
-                f"{r}/body/mesh/{k}", v, f, color=rgb, scale=tuple(semi), cast_shadow=False, receive_shadow=False),
-                scale=tuple(semi))
-        self._semi = semi
-        E = float(traj.energy[0])
-        Lmag = float(traj.momentum_norm[0])
-        self._E, self._Lmag = E, Lmag
-        if E > 0:  # ω drawn in the scale of the energy ellipsoid: its tip touches the invariable plane
-            self.k_omega = 1.3 / np.sqrt(2 * E / traj.inertia).max()
-        else:  # starts at rest (e.g. initial-axis): the largest ω of the run is drawn 1.3 long
-            wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
-            self.k_omega = 1.3 / wmax if wmax > 0 else 1.0
-        # a spin-up from nearly at rest (found by tests/test_fuzz.py: hyperion with probe_rate 1e-66 drew
-        # ω ~1e66 long, inf in float16): beyond DRAW_MAX the largest ω of the run is drawn 1.3 long
-        wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
-        if not (np.isfinite(self.k_omega) and self.k_omega * wmax <= DRAW_MAX):
-            self.k_omega = 1.3 / wmax if wmax > 0 and np.isfinite(1.3 / wmax) else 1.0
-        # ω and L: an arrow along +z of its own frame, with its label; playback turns the frame
-        # (a pose update, no geometry) and re-sends the arrow only when its length changes by
-        # more than VECTOR_LENGTH_TOL
-        self._vectors = {}
-        for key, color, text in (("omega", OMEGA_COLOR, "ω"), ("L", L_COLOR, "L")):
-            frame = self._node(f"{r}/{key}", lambda key=key: sc.add_frame(f"{r}/{key}", show_axes=False))
-            arrow = self._node(f"{r}/{key}/arrow", lambda key=key, color=color: sc.add_arrows(
-                f"{r}/{key}/arrow", np.zeros((1, 2, 3), np.float32), color, shaft_radius=0.025, head_radius=0.06,
-                head_length=0.12))
-            label = self._node(f"{r}/{key}/label", lambda key=key, text=text: sc.add_label(f"{r}/{key}/label", text))
-            self._vectors[key] = [frame, arrow, label, -1.0]
-        self.omega_arrow, self.L_arrow = self._vectors["omega"][0], self._vectors["L"][0]
-        # their poses at every sample: ω in the energy ellipsoid's scale, L drawn 1.3 long
-        Lm = np.asarray(traj.momentum_norm, float)[:, None]
-        L_drawn = np.where(Lm > 0, 1.3 * traj.L_inertial / np.where(Lm > 0, Lm, 1.0), 0.0)
-        self._vector_poses = {"omega": z_to_many(self.k_omega * traj.omega_inertial), "L": z_to_many(L_drawn)}
-        self._labels = [self._vectors["omega"][2], self._vectors["L"][2]]
-        # shown and hidden with the "vectors" overlay even when it starts off (nothing to build)
-        self._static["vectors"] = [self.omega_arrow, self.L_arrow]
-
-    def _set_vector(self, key: str, i: int) -> None:
-        frame, arrow, label, drawn = self._vectors[key]
-        wxyz, lengths = self._vector_poses[key]
-        length = float(lengths[i])
-        frame.wxyz = wxyz[i]
-        if drawn < 0 or abs(length - drawn) > VECTOR_LENGTH_TOL * max(drawn, 1e-9):
-            arrow.points = np.array([[[0, 0, 0], [0, 0, length]]], np.float32)
-            label.position = (0.0, 0.0, 1.1 * length)
-            self._vectors[key][3] = length
-
-    def _build_axes(self, traj) -> None:
-        sc, r, semi, I = self.scene, self.root, self._semi, traj.inertia
-        ends = np.diag(semi * 1.35).astype(np.float32)
-        arrows = np.stack([np.zeros((3, 3), np.float32), ends], 1)
-        cols = np.array(AXIS_COLORS, np.uint8)
-        hs = [self._node(f"{r}/body/axes", lambda: sc.add_arrows(f"{r}/body/axes", arrows, cols, shaft_radius=0.018,
-                                                                 head_radius=0.05, head_length=0.1), points=arrows)]
-        for k, lab in enumerate("ABC"):
-            text = f"{lab} = {I[k]:.4g}"
-            pos = tuple(float(x) for x in ends[k] * 1.08)
-            hs.append(self._node(f"{r}/body/axis_labels/{lab}",
-                                 lambda text=text, pos=pos, lab=lab: sc.add_label(f"{r}/body/axis_labels/{lab}", text,
-                                                                                  position=pos),
-                                 text=text, position=pos))
-        self._static["axes"] = hs
-
-    def _build_polhode(self, traj) -> None:
-        """Where the rotation axis pierces the body surface (ray/ellipsoid), on the body frame."""
-        idx, semi = self._idx, self._semi
-        w = traj.omega_body[idx]
-        nw = np.linalg.norm(w, axis=1, keepdims=True)
-        ok = nw[:, 0] > 0
-        if np.count_nonzero(ok) >= 2:
-            u = w[ok] / nw[ok]
-            s = 1.0 / np.sqrt(np.sum((u / semi) ** 2, axis=1, keepdims=True))
-            self._add_path("polhode", f"{self.root}/body/polhode", 1.015 * s * u, POLHODE_COLOR, 0.02, idx=idx[ok])
-
-    def _build_energy_ellipsoid(self, traj) -> None:
-        """Poinsot: the energy ellipsoid ω·Iω = 2E in ω-space (largest semi-axis drawn 1.3),
-        fixed in the body, with the polhode (tip of ω) on it."""
-        if self._E <= 0:
-            return
-        sc, r = self.scene, self.root
-        e_semi = tuple(float(x) for x in np.sqrt(2 * self._E / traj.inertia) * self.k_omega)
-        ico = trimesh.creation.icosphere(subdivisions=3)
-        h = self._node(f"{r}/body/energy_ellipsoid", lambda: sc.add_mesh_simple(
-            f"{r}/body/energy_ellipsoid", ico.vertices, ico.faces, color=(120, 200, 255), opacity=0.25,
-            side="double", scale=e_semi, cast_shadow=False, receive_shadow=False), scale=e_semi)
-        self._static["energy_ellipsoid"] = [h]
-        self._add_path("energy_ellipsoid", f"{r}/body/polhode_on_ellipsoid", self.k_omega * traj.omega_body[self._idx],
-                       POLHODE_COLOR, 0.012, idx=self._idx)
-
-    def _build_momentum_sphere(self, traj) -> None:
-        """The sphere |L| = const in the body frame, with the path of L on it."""
-        if self._Lmag <= 0:
-            return
-        sc, r = self.scene, self.root
-        sph = trimesh.creation.icosphere(subdivisions=3, radius=1.3)
-        h = self._node(f"{r}/body/momentum_sphere", lambda: sc.add_mesh_simple(
-            f"{r}/body/momentum_sphere", sph.vertices, sph.faces, color=(200, 150, 255), opacity=0.2, side="double",
-            cast_shadow=False, receive_shadow=False))
-        self._static["momentum_sphere"] = [h]
-        k_L = 1.3 / self._Lmag
-        Lmax = float(np.max(np.linalg.norm(traj.L_body, axis=1)))
-        if not (np.isfinite(k_L) and k_L * Lmax <= DRAW_MAX):  # |L| grows from nearly nothing (as ω above)
-            k_L = 1.3 / Lmax if Lmax > 0 and np.isfinite(1.3 / Lmax) else 1.0
-        self._add_path("momentum_sphere", f"{r}/body/L_path", k_L * traj.L_body[self._idx], L_COLOR,
-                       0.02, idx=self._idx)
-
-    def _build_herpolhode(self, traj) -> None:
-        """Tip of ω in space, on the invariable plane ω·L̂ = 2E/|L| (a disc normal to L₀)."""
-        if self._E <= 0 or self._Lmag <= 0:
-            return
-        sc, r = self.scene, self.root
-        self._add_path("herpolhode", f"{r}/herpolhode", self.k_omega * traj.omega_inertial[self._idx],
-                       HERPOLHODE_COLOR, 0.012, idx=self._idx)
-        Lhat = traj.L_inertial[0] / self._Lmag
-        d = self.k_omega * 2 * self._E / self._Lmag
-        wxyz = tuple(float(c) for c in z_to_many(Lhat[None])[0][0])  # the disc's normal (z) onto L
-        pos = tuple(float(x) for x in d * Lhat)
-        dv, df = flat_disc(1.25)
-        self._static["herpolhode"] = [self._node(f"{r}/invariable_plane", lambda: sc.add_mesh_simple(
-            f"{r}/invariable_plane", dv, df, color=(0, 160, 170), opacity=0.08, side="double",
-            position=pos, wxyz=wxyz, cast_shadow=False, receive_shadow=False), position=pos, wxyz=wxyz)]
-
-    def _build_axis_trail(self, traj) -> None:
-        self._add_path("axis_trail", f"{self.root}/axis_trail", AXIS_TRAIL_RADIUS * traj.rotation_axis[self._idx],
-                       TRAIL_COLOR, 0.012, idx=self._idx)
-
-    def _build_celestial(self, traj) -> None:
-        """A celestial sphere with the paths of the figure axis and of the rotation axis."""
-        sc, r = self.scene, self.root
-        self._static["celestial"] = [self._node(f"{r}/celestial/grid", lambda: sc.add_line_segments(
-            f"{r}/celestial/grid", wire_sphere(CELESTIAL_RADIUS), (150, 150, 160), thickness=0.004))]
-        self._add_path("celestial", f"{r}/celestial/figure_axis", CELESTIAL_RADIUS * traj.figure_axis[self._idx],
-                       FIGURE_COLOR, 0.03, idx=self._idx)
-        self._add_path("celestial", f"{r}/celestial/rotation_axis", CELESTIAL_RADIUS * traj.rotation_axis[self._idx],
-                       TRAIL_COLOR, 0.012, idx=self._idx)
-
-    def _build_bodies(self, traj) -> None:
-        bodies = self.extra.bodies(traj) if self.extra is not None else None
-        bodies = traj.bodies if bodies is None else bodies
-        if not bodies:
-            return
-        sc, r, idx = self.scene, self.root, self._idx
-        allpos = np.concatenate([np.asarray(p, float) for p in bodies.values()])
-        if self._rotation:  # a distant attractor is drawn by its direction, not its distance
-            def scale_fn(p):
-                return ORBIT_RADIUS * p / np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-300)
-        else:
-            span = (self.extra.span(traj) if self.extra is not None else None) or \
-                float(np.max(np.linalg.norm(allpos, axis=1))) or 1.0
-
-            def scale_fn(p):
-                return ORBIT_RADIUS * p / span
-        hs = []
-        self._markers = {}
-        for k, (name, pos) in enumerate(bodies.items()):
-            pos = scale_fn(np.asarray(pos, float))
-            col = palette(k)
-            h = self._node(f"{r}/bodies/{name}", lambda col=col, name=name: sc.add_icosphere(
-                f"{r}/bodies/{name}", radius=0.12, color=col, cast_shadow=False, receive_shadow=False))
-            lab = self._node(f"{r}/bodies/{name}/label", lambda name=name: sc.add_label(
-                f"{r}/bodies/{name}/label", name, position=(0, 0, 0.2)))
-            self._markers[name] = (h, pos)
-            hs += [h, lab]
-            if self.extra is None or self.extra.trail(name):
-                self._add_path("bodies", f"{r}/body_trails/{name}", pos[idx], col, 0.02, idx=idx)
-        self._static["bodies"] = hs
-
-    # ---- animating -------------------------------------------------------------------------
-    def _apply_visibility(self, name: str, on: bool) -> None:
-        for h in self._static.get(name, []):
+    # ---- changing what is shown --------------------------------------------------------------
+    def _apply_visibility(self, group: str, on: bool) -> None:
+        for h in self._static.get(group, []):
             if h.visible != on:
                 h.visible = on
-        for p in self._paths.get(name, []):
+        for p in self._chunks.get(group, []):
             p.set_visible(on, self.frame)
+        if on:  # items visible only at some frames
+            for it, hs in self._animated:
+                if it.group == group and it.visible is not None:
+                    self._state.pop(f"{it.name}#visible", None)
 
-    def set_overlay(self, name: str, on: bool) -> None:
-        self.overlays[name] = bool(on)
-        if on and name not in self._built:
-            self._build(name)  # first time on for this result: send its paths now
-        self._apply_visibility(name, bool(on))
+    def set_overlay(self, group: str, on: bool) -> None:
+        self.overlays[group] = bool(on)
+        if on and group not in self._built:
+            self._build(group)  # first time on for this drawing: send its items now
+        self._apply_visibility(group, bool(on))
+        self.set_frame(self.frame)
 
-    def set_exaggerate(self, factor: float) -> None:
-        """New proportions: rescale the body mesh, move the axes and redraw the polhode."""
-        self.exaggerate = float(factor)
-        if self._result is not None:
-            self.show(self._result, self._spec)
-
-    def set_frame(self, i: int) -> None:
+    def set_frame(self, k: int, force: bool = False) -> None:
+        """Move what changes with time to frame k."""
         if self.n == 0:
             return
-        i = int(np.clip(i, 0, self.n - 1))
-        self.frame = i
-        traj = self._result.trajectory
-        if self._rotation and self.body_frame is not None:
-            self.body_frame.wxyz = traj.quat_wxyz[i]
-            if self.overlays.get("vectors", True):
-                self._set_vector("omega", i)
-                self._set_vector("L", i)
-        for h, pos in self._markers.values():
-            h.position = pos[i]
-        if self.extra is not None and self.overlays.get("scenario", True):
-            self.extra.set_frame(i)
-        for paths in self._paths.values():
+        k = int(np.clip(k, 0, self.n - 1))
+        self.frame = k
+        for it, hs in self._animated:
+            if not (isinstance(it, Frame) or self._on(it.group)):
+                continue
+            if it.name in self._vectors:
+                self._set_vector(it.name, k, force)
+            else:
+                self._set_item(it, hs, k, force)
+        for group, paths in self._chunks.items():
             for p in paths:
-                p.set_time_index(i)
+                p.set_frame(k)
+
+    def _changed(self, key: str, value, force: bool) -> bool:
+        old = self._state.get(key)
+        if not force and old is not None and (old == value if not isinstance(value, np.ndarray)
+                                               else np.array_equal(old, value)):
+            return False
+        self._state[key] = value
+        return True
+
+    def _set_item(self, it: Item, hs: list, k: int, force: bool) -> None:
+        h = hs[0]
+        for attr in it.animated():
+            if attr == "visible":
+                v = bool(np.asarray(it.visible)[k])
+                if self._changed(f"{it.name}#visible", v, force):
+                    for x in hs:
+                        x.visible = v
+                continue
+            value = np.asarray(getattr(it, attr))[k] if attr != "text" else str(it.text[k])
+            if attr == "text":
+                if self._changed(f"{it.name}#text", value, force):
+                    h.text = value
+            elif attr in ("wxyz", "position"):
+                value = _tuple(value)
+                if self._changed(f"{it.name}#{attr}", value, force):
+                    setattr(h, attr, value)
+            elif isinstance(it, Segments):
+                h.points = _f32(value)
+            elif isinstance(it, Arrows):
+                o = _f32(np.asarray(it.origins, float).reshape(-1, 3))
+                h.points = np.stack([o, o + _f32(value)], 1)
+
+    def _set_vector(self, name: str, k: int, force: bool) -> None:
+        frame, arrow, label, drawn, (wxyz, lengths) = self._vectors[name]
+        length = float(lengths[k])
+        frame.wxyz = wxyz[k]
+        if force or drawn < 0 or abs(length - drawn) > VECTOR_LENGTH_TOL * max(drawn, 1e-9):
+            arrow.points = np.array([[[0, 0, 0], [0, 0, length]]], np.float32)
+            if label is not None:
+                label.position = (0.0, 0.0, 1.1 * length)
+            self._vectors[name][3] = length

@@ -29,7 +29,9 @@ from theoria.scenarios import all_scenarios, get
 
 from . import gallery
 from .controls import ParamControls
-from .scene import OVERLAYS, SceneView
+from theoria.scenarios.drawing import OVERLAYS, View
+
+from .scene import SceneView
 
 PLAY_HZ = 60.0  # playback tick for one browser (messages go out each 1/60 s)
 # Pose updates per second shared by all browsers: the server runs on one core (the GIL), and 30
@@ -154,6 +156,9 @@ class ClientSession:
         self.scenarios = {s.name: s for s in all_scenarios()}
         self.spec = get(scenario) if scenario else self.scenarios.get("free-tumble") or next(iter(self.scenarios.values()))
         self.view = SceneView(client.scene, "/world")
+        self.view_opts = View()
+        self.drawing = None
+        self.drawing_spec: str | None = None  # the scenario whose drawing is shown
         self.result = None
         self.good_values: dict[str, Any] | None = None
         self.playing = True
@@ -225,11 +230,14 @@ class ClientSession:
         self.plot = None
 
     def _follow_camera(self) -> None:
-        """Apply the scene extra's moving camera (SceneExtra.follow_camera, e.g. the Moon seen
-        from the Earth) while it returns one; give the scenario's view back when it stops."""
-        extra = self.view.extra
-        want = extra.follow_camera(self.result.trajectory, self.view.frame) \
-            if extra is not None and self.result is not None else None
+        """Apply the drawing's moving camera (e.g. the Moon seen from the Earth) while it has one;
+        give the scenario's view back when it stops."""
+        d = self.drawing
+        follow = d.follow if d is not None else None
+        want = None
+        if follow is not None:
+            want = dict(position=tuple(float(x) for x in follow.position[self.view.frame]), look_at=follow.look_at,
+                        up=follow.up, fov_deg=follow.fov_deg)
         cam = self.client.camera
         if want is None:
             if getattr(self, "_following", False):
@@ -238,7 +246,7 @@ class ClientSession:
                 self._set_camera(self.spec)
             return
         self._following = True
-        if "fov_deg" in want and abs(getattr(cam, "fov", 0.0) - np.radians(want["fov_deg"])) > 1e-6:
+        if want.get("fov_deg") is not None and abs(getattr(cam, "fov", 0.0) - np.radians(want["fov_deg"])) > 1e-6:
             cam.fov = np.radians(want["fov_deg"])
         cam.up_direction = want.get("up", (0.0, 0.0, 1.0))
         cam.position = want["position"]
@@ -314,7 +322,7 @@ class ClientSession:
             self._pguard = False
         self.info.content = info_markdown(self.spec)
         self.good_values = None
-        self.view.overlays = {}
+        self.view_opts = View()
         self.request()
 
     def _toggle_play(self) -> None:
@@ -334,9 +342,8 @@ class ClientSession:
     def _on_exaggerate(self) -> None:
         if self.result is None:
             return
-        with self._view_lock, self.client.atomic():
-            self.view.set_exaggerate(self.exag.value)
-            self.view.set_frame(self._frame_index())
+        self.view_opts.exaggerate = float(self.exag.value)
+        self._redraw()
 
     def _on_toggle(self, key: str) -> None:
         if self._guard:
@@ -452,10 +459,11 @@ class ClientSession:
         with self._view_lock, self.client.atomic():
             if self._gen != gen or spec.name != self.spec.name:
                 raise _Stale()
-            overlays = None
-            if not self.view.overlays or self.view._spec is None or self.view._spec.name != spec.name:
-                overlays = self.view.default_overlays(spec)
-                if self.view._spec is not None:
+            drawing = spec.drawing(result, self.view_opts)
+            new_scenario = self.drawing_spec != spec.name
+            if new_scenario:  # the scenario's own overlay defaults and camera
+                overlays = dict(drawing.overlays)
+                if self.drawing_spec is not None:
                     self._set_camera(spec)
                 for k, cb in self.toggles.items():
                     self._guard = True
@@ -463,7 +471,10 @@ class ClientSession:
                         cb.value = overlays.get(k, True)
                     finally:
                         self._guard = False
-            self.view.show(result, spec, overlays=overlays, exaggerate=self.exag.value)
+            else:
+                overlays = {k: bool(cb.value) for k, cb in self.toggles.items()}
+            self.view.show(drawing, overlays)
+            self.drawing, self.drawing_spec = drawing, spec.name
             self._sync_scene_options()
             self.result, self.good_values = result, values
             self.table.content = comparison_markdown(result)
@@ -475,41 +486,45 @@ class ClientSession:
             self._status(f"simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
                          f"(update #{self.updates})")
 
-    def _sync_scene_options(self) -> None:
-        """Checkboxes for the options of the scenario's scene extra (app/scene_extras)."""
-        extra = self.view.extra
-        key = type(extra).__name__ if extra is not None else None
-        if key == self._options_key:
+    def _redraw(self) -> None:
+        """The same run drawn again (a scene option or the shape exaggeration changed)."""
+        if self.result is None:
             return
-        self._options_key = key
+        with self._view_lock, self.client.atomic():
+            self.drawing = self.spec.drawing(self.result, self.view_opts)
+            self.view.show(self.drawing, {k: bool(cb.value) for k, cb in self.toggles.items()})
+            self._update_plot()
+            self.view.set_frame(self._frame_index())
+            self._follow_camera()
+
+    def _sync_scene_options(self) -> None:
+        """Checkboxes for the scenario's own options (Scenario.options)."""
+        spec = self.spec
+        if spec.name == self._options_key:
+            return
+        self._options_key = spec.name
         for h in self._option_handles:
             h.remove()
         self._option_handles = []
-        if extra is None:
-            return
         with self.options_folder:
-            for k, (label, _) in extra.options.items():
-                cb = self.client.gui.add_checkbox(label, initial_value=extra.values[k])
+            for k, opt in spec.options.items():
+                cb = self.client.gui.add_checkbox(opt.label, initial_value=self.view_opts.option(k, spec))
                 cb.on_update(lambda e, k=k, cb=cb: self._safe(self._on_option, k, cb))
                 self._option_handles.append(cb)
 
     def _on_option(self, key: str, cb) -> None:
-        with self._view_lock, self.client.atomic():
-            self.view.set_option(key, cb.value)
-            self.view.set_frame(self._frame_index())
-            self._follow_camera()
-            if self.result is not None:  # an option may choose what the plot shows
-                self._update_plot(self.result)
+        self.view_opts.options[key] = bool(cb.value)
+        self._redraw()
 
-    def _update_plot(self, result) -> None:
-        traj = result.trajectory
-        extra = self.view.extra
-        series = dict(extra.plot_series(result) if extra is not None else result.plot_series) or {"energy": traj.energy}
-        idx = np.unique(np.linspace(0, len(traj.t) - 1, min(UPLOT_POINTS, len(traj.t))).round().astype(int))
-        data = (np.asarray(traj.t)[idx],) + tuple(np.asarray(v, float)[idx] for v in series.values())
-        from .scene import palette
+    def _update_plot(self, result=None) -> None:
+        d = self.drawing
+        t = d.plot_t
+        series = dict(d.plot) or {"energy": self.result.trajectory.energy}
+        idx = np.unique(np.linspace(0, len(t) - 1, min(UPLOT_POINTS, len(t))).round().astype(int))
+        data = (np.asarray(t)[idx],) + tuple(np.asarray(v, float)[idx] for v in series.values())
+        from theoria.scenarios.drawing import palette
 
-        ser = ({"label": f"t [{traj.time_unit}]"},) + tuple(
+        ser = ({"label": f"t [{d.time_unit}]"},) + tuple(
             {"label": k, "stroke": "rgb(%d,%d,%d)" % palette(i), "width": 1.5} for i, k in enumerate(series))
         key = tuple(s["label"] for s in ser)
         axes = ({}, {"size": y_axis_px(data[1:])})  # the default 50 px cut "-" and leading digits off
@@ -522,14 +537,14 @@ class ClientSession:
             self.plot.remove()
         with self.plot_folder:
             # x is the simulation time, not a date (uPlot's default x scale is a clock)
-            self.plot = self.client.gui.add_uplot(data, ser, title=result.scenario, aspect=1.6,
+            self.plot = self.client.gui.add_uplot(data, ser, title=self.spec.name, aspect=1.6,
                                                   scales={"x": {"time": False}}, axes=axes)
 
     # ---- playback ----------------------------------------------------------------------------
     def _frame_index(self) -> int:
-        if self.result is None:
+        if self.drawing is None:
             return 0
-        t = self.result.trajectory.t
+        t = self.drawing.times
         target = t[0] + self.clock * (t[-1] - t[0])
         return int(np.clip(np.searchsorted(t, target), 0, len(t) - 1))
 
@@ -554,13 +569,13 @@ class ClientSession:
                     self._show_clock()
                     if now - last_gui > 0.25:
                         last_gui = now
-                        t = self.result.trajectory
+                        d = self.drawing
                         self._guard = True
                         try:
                             self.scrub.value = round(100 * self.clock, 1)
                         finally:
                             self._guard = False
-                        self.time_md.content = f"t = {t.t[self.view.frame]:.4g} {t.time_unit}"
+                        self.time_md.content = f"t = {d.times[self.view.frame]:.4g} {d.time_unit}"
             except Exception:
                 if self._closed:
                     return

@@ -25,7 +25,7 @@ import numpy as np
 from ..physics.errors import Diverged, ParameterError
 from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
-from .drawing import Camera
+from .drawing import Camera, Drawing, Option, View, standard
 
 
 @dataclass(frozen=True)
@@ -292,6 +292,10 @@ class Scenario:
     camera: Camera | None = None  # the curated view; None: a default for the kind of scene
     # overlays switched on/off against the default for the scene's group (drawings that say nothing here)
     overlays: Mapping[str, bool] = field(default_factory=dict)
+    # what it draws: draw(run, spec, view) -> Drawing (default: Poinsot's construction and the other
+    # bodies, `drawing.standard`), and the checkboxes of its own that change the drawing
+    draw: Callable[..., Drawing] | None = None
+    options: Mapping[str, Option] = field(default_factory=dict)
 
     def __post_init__(self):
         for p in self.params:
@@ -300,6 +304,7 @@ class Scenario:
         presets = self.presets.items() if isinstance(self.presets, Mapping) else self.presets
         object.__setattr__(self, "presets", types.MappingProxyType({n: dict(v) for n, v in presets}))
         object.__setattr__(self, "overlays", types.MappingProxyType(dict(self.overlays)))
+        object.__setattr__(self, "options", types.MappingProxyType(dict(self.options)))
         object.__setattr__(self, "simulate_fn", self._guarded(self.simulate_fn))
 
     def _guarded(self, fn):
@@ -367,6 +372,11 @@ class Scenario:
         allowed = "; ".join(f'"{n}"' for n in names) if names else "none (this scenario has no presets)"
         raise ParameterError("preset", text, ("one of " if names else "") + allowed +
                              (" (more than one matches)" if len(hits) > 1 else ""))
+
+    def drawing(self, run: Run, view: View | None = None) -> Drawing:
+        """What `run` draws (the one list the app, the recording and the HTML replay render)."""
+        view = view or View()
+        return (self.draw or standard)(run, self, view)
 
     def param(self, name: str) -> Param:
         for p in self.params:

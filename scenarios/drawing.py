@@ -1,9 +1,45 @@
-"""What a scenario draws, as plain numpy data (design.md, "One drawing path")."""
+"""What a scenario draws, as plain numpy data: one drawing list, three renderers.
+
+A scenario turns a `Run` into a `Drawing` once: bodies with their meshes, frames that move,
+paths that grow with time, points, line segments, arrows, labels, the camera and its look-at, the
+text a class reads and the series to plot. Three thin adapters render that list and nothing else:
+viser (the live app, `theoria.app.scene`), rerun (`theoria.app.record`) and a standalone HTML
+replay (`theoria.app.export_html`). None of them re-derives geometry or physics, so the app, the
+recording and the replay show the same objects, colours, scale and camera.
+
+Time. A drawing is sampled at `frames` (indices into the run's samples, at most MAX_FRAMES, first
+and last included). An attribute is either static or one value per frame: a position is (3,) or
+(F, 3), an attitude (4,) or (F, 4), segments (K, 2, 3) or (F, K, 2, 3), arrow vectors (K, 3) or
+(F, K, 3), a label's text a string or F strings, `visible` None or (F,) booleans. A `Path` is
+drawn whole, but each of its points carries the frame `at` which it appears, so it grows as the
+run plays.
+
+Names are paths: an item called "body/polhode" is drawn in the coordinates of the `Frame` called
+"body" (it turns with the body), as viser and rerun both compose transforms along entity paths.
+Every item belongs to a `group`, an overlay the user can switch on and off.
+
+Scene units: a rotation scene is scaled so that the body's largest semi-axis is 1 (the celestial
+sphere has radius 2.4); orbit scenes fit in a radius of 2. +z is up.
+"""
 from __future__ import annotations
 
-from dataclasses import dataclass
+import colorsys
+import functools
+from dataclasses import dataclass, field
+from typing import Any, Callable, ClassVar, Mapping, Sequence
+
+import numpy as np
+
+from ..physics.inertia import ellipsoid_semi_axes
 
 Vec = tuple[float, float, float]
+RGB = tuple[int, int, int]
+
+MAX_FRAMES = 3000  # playback frames of a drawing: 20 s at 60 Hz, and slow motion to speed 0.4
+ORBIT_RADIUS = 2.0
+CELESTIAL_RADIUS = 2.4
+AXIS_TRAIL_RADIUS = 1.6
+DRAW_MAX = 1e4  # scene units; beyond this a scale falls back (a spin-up from nearly at rest)
 
 
 @dataclass(frozen=True)
@@ -14,3 +50,516 @@ class Camera:
     look_at: Vec = (0.0, 0.0, 0.0)
     up: Vec = (0.0, 0.0, 1.0)
     fov_deg: float | None = None
+
+
+# ---- items ------------------------------------------------------------------------------------
+
+@dataclass(kw_only=True)
+class Item:
+    name: str
+    group: str = "scenario"
+    visible: np.ndarray | None = None  # (F,) booleans: shown at that frame; None: always
+
+    def animated(self) -> list[str]:
+        """The attributes that hold one value per frame."""
+        return [k for k, nd in self.STATIC_NDIM.items() if _ndim(getattr(self, k)) > nd] + \
+            (["visible"] if self.visible is not None else [])
+
+    STATIC_NDIM: ClassVar[dict] = {}  # attribute → ndim of its static form (more: one value per frame)
+
+
+def _ndim(v) -> int:
+    if isinstance(v, str):
+        return 0
+    if isinstance(v, (list, tuple)) and v and isinstance(v[0], str):
+        return 1
+    return np.ndim(v)
+
+
+@dataclass(kw_only=True)
+class Frame(Item):
+    """A coordinate frame: its children (items named "<name>/...") move with it."""
+
+    wxyz: np.ndarray = (1.0, 0.0, 0.0, 0.0)
+    position: np.ndarray = (0.0, 0.0, 0.0)
+    STATIC_NDIM: ClassVar[dict] = {"wxyz": 1, "position": 1}
+
+
+@dataclass(kw_only=True)
+class Mesh(Item):
+    """A triangle mesh (unit shape, scaled by `scale` on its own axes)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    color: RGB
+    opacity: float = 1.0
+    scale: Vec = (1.0, 1.0, 1.0)
+    wxyz: np.ndarray = (1.0, 0.0, 0.0, 0.0)
+    position: np.ndarray = (0.0, 0.0, 0.0)
+    double_sided: bool = False
+    STATIC_NDIM: ClassVar[dict] = {"wxyz": 1, "position": 1}
+
+
+@dataclass(kw_only=True)
+class Sphere(Item):
+    """A marker ball (a body far away, a point of interest)."""
+
+    radius: float
+    color: RGB
+    position: np.ndarray = (0.0, 0.0, 0.0)
+    STATIC_NDIM: ClassVar[dict] = {"position": 1}
+
+
+@dataclass(kw_only=True)
+class Path(Item):
+    """A curve traced during the run (polhode, trails): point i appears at frame `at[i]`
+    (None: the whole curve at once). `thickness` is its width in scene units."""
+
+    points: np.ndarray
+    color: RGB
+    thickness: float = 0.02
+    at: np.ndarray | None = None
+
+
+@dataclass(kw_only=True)
+class Points(Item):
+    """Static points: a star field, a surface of section, a phase portrait."""
+
+    points: np.ndarray
+    colors: Any  # one RGB, or (M, 3) uint8
+    size: float = 0.02
+
+
+@dataclass(kw_only=True)
+class Segments(Item):
+    """Line segments (K, 2, 3), or one set per frame (F, K, 2, 3)."""
+
+    points: np.ndarray
+    colors: Any  # one RGB, or (K, 2, 3) uint8
+    thickness: float = 0.01
+    STATIC_NDIM: ClassVar[dict] = {"points": 3}
+
+
+@dataclass(kw_only=True)
+class Arrows(Item):
+    """Arrows from `origins` (K, 3) along `vectors` (K, 3), or one set of vectors per frame."""
+
+    origins: np.ndarray
+    vectors: np.ndarray
+    colors: Any
+    shaft_radius: float = 0.02
+    head_radius: float = 0.05
+    head_length: float = 0.1
+    labels: Sequence[str] = ()  # written at the arrow tips
+    STATIC_NDIM: ClassVar[dict] = {"vectors": 2}
+
+
+@dataclass(kw_only=True)
+class Label(Item):
+    """Text at a point: fixed, or a string per frame (a read-out)."""
+
+    text: Any  # str, or F strings
+    position: np.ndarray = (0.0, 0.0, 0.0)
+    STATIC_NDIM: ClassVar[dict] = {"text": 0, "position": 1}
+
+
+@dataclass(kw_only=True)
+class Light(Item):
+    """A directional light from `position` toward the origin (the Sun on a full Moon)."""
+
+    position: np.ndarray
+    intensity: float = 2.0
+    STATIC_NDIM: ClassVar[dict] = {"position": 1}
+
+
+GEOMETRY = (Frame, Mesh, Sphere, Path, Points, Segments, Arrows, Label)  # what every renderer draws
+
+
+@dataclass(frozen=True)
+class Follow:
+    """A camera that moves with the run (the Moon seen from the Earth): per-frame position."""
+
+    position: np.ndarray  # (F, 3)
+    look_at: Vec = (0.0, 0.0, 0.0)
+    up: Vec = (0.0, 0.0, 1.0)
+    fov_deg: float | None = None
+
+
+@dataclass(frozen=True)
+class Option:
+    """A checkbox of a scenario's own (a different view: a co-rotating frame, the Earth's view)."""
+
+    label: str
+    default: bool = True
+
+
+# The overlays every scene has: key → (label, default in ch. 15, default elsewhere).
+OVERLAYS = {
+    "axes": ("principal axes A, B, C", True, True),
+    "vectors": ("ω and L arrows", True, True),
+    "axis_trail": ("trail of the rotation axis", True, True),
+    "polhode": ("polhode (on the body)", True, True),
+    "herpolhode": ("herpolhode + invariable plane", True, False),
+    "energy_ellipsoid": ("energy ellipsoid (Poinsot)", False, False),
+    "momentum_sphere": ("momentum sphere (path of L on the body)", False, False),
+    "celestial": ("celestial sphere + pole paths", False, True),
+    "bodies": ("other bodies + trails", True, True),
+    "scenario": ("this scenario's drawings", True, True),
+}
+
+
+@dataclass
+class View:
+    """What the person looking chose: the scenario's options, the shape exaggeration."""
+
+    options: dict[str, bool] = field(default_factory=dict)
+    exaggerate: float = 1.0
+
+    def option(self, key: str, spec=None) -> bool:
+        if key in self.options:
+            return bool(self.options[key])
+        opts = getattr(spec, "options", {}) if spec is not None else {}
+        return bool(opts[key].default) if key in opts else True
+
+
+@dataclass
+class Drawing:
+    """Everything one run draws (see the module docstring)."""
+
+    frames: np.ndarray  # (F,) sample indices into the run's trajectory
+    times: np.ndarray  # (F,) the run's times at the frames
+    time_unit: str
+    camera: Camera
+    title: str = ""
+    section: str = ""
+    summary: str = ""
+    formula: str = ""
+    items: list[Item] = field(default_factory=list)
+    overlays: dict[str, bool] = field(default_factory=dict)  # group → shown by default
+    follow: Follow | None = None
+    plot: dict[str, np.ndarray] = field(default_factory=dict)  # series on plot_t, for the live plot
+    plot_t: np.ndarray | None = None
+    rotation: bool = True
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.frames)
+
+    def add(self, *items: Item) -> None:
+        self.items.extend(items)
+
+    def item(self, name: str) -> Item:
+        for it in self.items:
+            if it.name == name:
+                return it
+        raise KeyError(name)
+
+    def names(self) -> list[str]:
+        return [it.name for it in self.items]
+
+    def frame_of_sample(self, idx) -> np.ndarray:
+        """The (fractional) frame at which trajectory sample `idx` is reached."""
+        return np.interp(np.asarray(idx, float), self.frames, np.arange(len(self.frames), dtype=float))
+
+    def shown(self, it: Item) -> bool:
+        return self.overlays.get(it.group, True)
+
+
+# ---- building blocks ---------------------------------------------------------------------------
+
+def frame_indices(n: int, max_frames: int = MAX_FRAMES) -> np.ndarray:
+    """At most `max_frames` sample indices out of n, first and last included."""
+    if n <= max_frames:
+        return np.arange(n)
+    return np.unique(np.linspace(0, n - 1, max_frames).round().astype(int))
+
+
+def palette(k: int) -> RGB:
+    r, g, b = colorsys.hsv_to_rgb((0.13 + 0.31 * k) % 1.0, 0.75, 0.95)
+    return int(255 * r), int(255 * g), int(255 * b)
+
+
+def unit(v) -> np.ndarray:
+    v = np.asarray(v, float)
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-300)
+
+
+def segments(path) -> np.ndarray:
+    """(N, 3) polyline → (N − 1, 2, 3) line segments."""
+    path = np.asarray(path, np.float32)
+    return np.stack([path[:-1], path[1:]], axis=1)
+
+
+def z_to_many(v) -> tuple[np.ndarray, np.ndarray]:
+    """Unit quaternions (w, x, y, z) turning +z onto each row of v (N, 3) (identity where v is zero
+    or not finite) and the lengths: (N, 4), (N,)."""
+    v = np.asarray(v, float)
+    n = np.linalg.norm(v, axis=1)
+    ok = (n > 0) & np.isfinite(n)
+    u = np.where(ok[:, None], v / np.where(ok, n, 1.0)[:, None], [0.0, 0.0, 1.0])
+    q = np.stack([1.0 + u[:, 2], -u[:, 1], u[:, 0], np.zeros(len(u))], 1)
+    down = u[:, 2] < -1 + 1e-12
+    q[down] = (0.0, 1.0, 0.0, 0.0)
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    return q, np.where(ok, n, 0.0)
+
+
+def shape_semi_axes(inertia, exaggerate: float = 1.0) -> np.ndarray:
+    """Semi-axes of the body drawn: the homogeneous ellipsoid with the moments, normalised to a
+    largest semi-axis of 1, with departures from the mean multiplied by `exaggerate`."""
+    ax = ellipsoid_semi_axes(inertia)
+    ax = ax / ax.max()
+    mean = ax.mean()
+    ax = mean + exaggerate * (ax - mean)
+    ax = ax / ax.max()
+    return np.clip(ax, 0.12, None)  # a flat body (A + B = C) keeps a visible thickness
+
+
+BAND_LIGHT, BAND_BLUE = (200, 190, 170), (120, 140, 175)
+MERIDIAN_COLOR, EQUATOR_COLOR = (60, 40, 30), (230, 80, 60)
+MERIDIAN_HALF_WIDTH, EQUATOR_HALF_WIDTH = 0.12, 0.05  # rad
+
+
+def sphere_grid(lat, lon):
+    """Vertices of a latitude/longitude grid on the unit sphere and its quads (counter-clockwise
+    seen from outside), with each quad's centre latitude and longitude."""
+    la, lo = np.meshgrid(lat, lon, indexing="ij")
+    verts = np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], -1).reshape(-1, 3)
+    nl = len(lon)
+    i, j = np.meshgrid(np.arange(len(lat) - 1), np.arange(nl - 1), indexing="ij")
+    a, b, c, d = i * nl + j, i * nl + j + 1, (i + 1) * nl + j + 1, (i + 1) * nl + j
+    quads = np.stack([a, b, c, d], -1).reshape(-1, 4)
+    lat_c = (0.5 * (lat[:-1] + lat[1:])[i]).ravel()
+    lon_c = (0.5 * (lon[:-1] + lon[1:])[j]).ravel()
+    return verts, quads, lat_c, lon_c
+
+
+def mesh_parts(verts, quads, colour_index, colours) -> list[tuple[np.ndarray, np.ndarray, RGB]]:
+    """One (vertices, faces, colour) per colour: plain meshes, not one vertex-coloured mesh (in
+    software WebGL at 1280×800 a vertex-coloured GLB body cost 9–12 ms a frame, plain meshes ~5 ms)."""
+    parts = []
+    for k, rgb in enumerate(colours):
+        q = quads[colour_index == k]
+        if len(q) == 0:
+            continue
+        tri = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
+        tri = tri[np.ptp(verts[tri], axis=1).max(axis=1) > 1e-12]  # no triangles collapsed at the poles
+        used, inv = np.unique(tri, return_inverse=True)
+        parts.append((verts[used].astype(np.float32), inv.reshape(-1, 3).astype(np.uint32), rgb))
+    return parts
+
+
+@functools.lru_cache(maxsize=4)
+def banded_sphere_parts(rows_per_band: int = 4, columns: int = 64):
+    """A unit sphere in latitude bands of π/8 about the body z (C) axis, a dark meridian in the
+    body x–z half-plane and a red equator, so that spin is visible. The grid's rings and
+    meridians fall on the band edges, so every edge is clean."""
+    lat = np.unique(np.concatenate([np.linspace(-np.pi / 2, np.pi / 2, 8 * rows_per_band + 1),
+                                    [-EQUATOR_HALF_WIDTH, EQUATOR_HALF_WIDTH]]))
+    lon = np.unique(np.concatenate([np.linspace(-np.pi, np.pi, columns + 1),
+                                    [-MERIDIAN_HALF_WIDTH, MERIDIAN_HALF_WIDTH]]))
+    verts, quads, lat_c, lon_c = sphere_grid(lat, lon)
+    band = np.floor((lat_c + np.pi / 2) / (np.pi / 8)).astype(int) % 2
+    colour = np.where(band == 1, 0, 1)
+    colour = np.where(np.abs(lon_c) < MERIDIAN_HALF_WIDTH, 2, colour)
+    colour = np.where(np.abs(lat_c) < EQUATOR_HALF_WIDTH, 3, colour)
+    return tuple(mesh_parts(verts, quads, colour, (BAND_LIGHT, BAND_BLUE, MERIDIAN_COLOR, EQUATOR_COLOR)))
+
+
+@functools.lru_cache(maxsize=2)
+def unit_sphere(n: int = 24) -> tuple[np.ndarray, np.ndarray]:
+    """A plain unit sphere (vertices, faces) for translucent shells (energy ellipsoid, momentum sphere)."""
+    verts, quads, _, _ = sphere_grid(np.linspace(-np.pi / 2, np.pi / 2, n + 1), np.linspace(-np.pi, np.pi, 2 * n + 1))
+    (v, f, _), = mesh_parts(verts, quads, np.zeros(len(quads), int), ((0, 0, 0),))
+    return v, f
+
+
+def flat_disc(radius: float, sections: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """A disc in the z = 0 plane (triangle fan): one layer, so a see-through disc is blended once
+    per pixel."""
+    th = np.linspace(0, 2 * np.pi, sections, endpoint=False)
+    v = np.vstack([[0.0, 0.0, 0.0], np.stack([radius * np.cos(th), radius * np.sin(th), 0 * th], 1)])
+    k = np.arange(sections)
+    return v.astype(np.float32), np.stack([np.zeros(sections, int), 1 + k, 1 + (k + 1) % sections], 1).astype(np.uint32)
+
+
+def wire_sphere(radius: float, n_lat: int = 5, n_lon: int = 8, n: int = 72) -> np.ndarray:
+    """Line segments of a latitude/longitude wire sphere."""
+    segs = []
+    th = np.linspace(0, 2 * np.pi, n)
+    for lat in np.linspace(-np.pi / 2, np.pi / 2, n_lat + 2)[1:-1]:
+        c = np.stack([np.cos(lat) * np.cos(th), np.cos(lat) * np.sin(th), np.full_like(th, np.sin(lat))], 1)
+        segs.append(segments(radius * c))
+    ph = np.linspace(-np.pi / 2, np.pi / 2, n // 2)
+    for lon in np.linspace(0, np.pi, n_lon, endpoint=False):
+        for s in (1, -1):
+            c = np.stack([s * np.cos(ph) * np.cos(lon), s * np.cos(ph) * np.sin(lon), np.sin(ph)], 1)
+            segs.append(segments(radius * c))
+    return np.concatenate(segs)
+
+
+def circle(radius: float, n: int = 181, z: float = 0.0) -> np.ndarray:
+    th = np.linspace(0, 2 * np.pi, n)
+    return np.stack([radius * np.cos(th), radius * np.sin(th), np.full_like(th, z)], 1)
+
+
+# ---- the drawings every scene shares ----------------------------------------------------------
+
+AXIS_COLORS = ((220, 50, 47), (60, 170, 60), (38, 110, 220))  # A red, B green, C blue
+OMEGA_COLOR = (255, 150, 0)
+L_COLOR = (170, 60, 200)
+TRAIL_COLOR = (240, 120, 30)
+POLHODE_COLOR = (250, 210, 40)
+HERPOLHODE_COLOR = (0, 190, 200)
+FIGURE_COLOR = (38, 110, 220)
+
+
+def new_drawing(run, spec, max_frames: int = MAX_FRAMES) -> Drawing:
+    """An empty drawing of `run`: frames, text, camera, default overlays, and the run's plot."""
+    tr = run.trajectory
+    frames = frame_indices(len(tr.t), max_frames)
+    ch15 = spec.group == "ch. 15"
+    overlays = {k: (v[1] if ch15 else v[2]) for k, v in OVERLAYS.items()}
+    overlays.update(spec.overlays)
+    return Drawing(frames=frames, times=np.asarray(tr.t, float)[frames], time_unit=tr.time_unit,
+                   camera=spec.camera or default_camera(spec), title=spec.title, section=spec.section,
+                   summary=spec.summary, formula=spec.euler_formula, overlays=overlays,
+                   plot=dict(run.plot_series), plot_t=np.asarray(tr.t, float), rotation=spec.kind == "rotation")
+
+
+def default_camera(spec) -> Camera:
+    """A scenario without a camera of its own: oblique for rotation scenes, from above for orbits."""
+    if spec.kind != "rotation":
+        return Camera((0.0, -2.6, 4.2))
+    if spec.group == "ch. 15":
+        return Camera((3.0, 2.3, 1.8))
+    return Camera((4.8, 3.7, 2.9))
+
+
+def omega_scale(traj) -> float:
+    """Scene length per rad/s of ω: its tip on the energy ellipsoid (largest semi-axis 1.3), whose
+    plane of contact is the invariable plane (Poinsot); a body starting at rest has its largest ω
+    drawn 1.3 long, and so does a spin-up from nearly nothing that would overflow the scene."""
+    E = float(traj.energy[0])
+    wmax = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
+    k = 1.3 / np.sqrt(2 * E / traj.inertia).max() if E > 0 else (1.3 / wmax if wmax > 0 else 1.0)
+    if not (np.isfinite(k) and k * wmax <= DRAW_MAX):
+        k = 1.3 / wmax if wmax > 0 and np.isfinite(1.3 / wmax) else 1.0
+    return float(k)
+
+
+def rigid_body(d: Drawing, run, view: View) -> np.ndarray:
+    """The body and Poinsot's construction (§805–808) in their overlay groups; returns the
+    semi-axes drawn (scene units).
+
+    - the body: the homogeneous ellipsoid of the moments in latitude bands about C with one
+      meridian, so that rotation shows ("body", a Frame turning with the attitude);
+    - principal axes A, B, C (red, green, blue) with their moments;
+    - ω and L as arrows (ω scaled so that its tip lies on the energy ellipsoid);
+    - the polhode (where the rotation axis pierces the body's surface, on the body), the
+      herpolhode (the tip of ω in space, on the invariable plane), the trail of the rotation axis;
+    - optional: the energy ellipsoid with the polhode on it, the momentum sphere with the path of
+      L on the body, a celestial sphere with the paths of the figure and rotation axes.
+    """
+    tr, f = run.trajectory, d.frames
+    at = np.arange(len(f), dtype=float)
+    semi = shape_semi_axes(tr.inertia, view.exaggerate)
+    d.add(Frame(name="body", group="body", wxyz=tr.quat_wxyz[f]))
+    for k, (v, fc, rgb) in enumerate(banded_sphere_parts()):
+        d.add(Mesh(name=f"body/mesh/{k}", group="body", vertices=v, faces=fc, color=rgb, scale=tuple(semi)))
+    ends = np.diag(semi * 1.35)
+    d.add(Arrows(name="body/axes", group="axes", origins=np.zeros((3, 3)), vectors=ends, colors=AXIS_COLORS,
+                 shaft_radius=0.018, head_radius=0.05, head_length=0.1))
+    for k, lab in enumerate("ABC"):
+        d.add(Label(name=f"body/axis_labels/{lab}", group="axes", text=f"{lab} = {tr.inertia[k]:.4g}",
+                    position=ends[k] * 1.08))
+    k_w = omega_scale(tr)
+    Lm = np.asarray(tr.momentum_norm, float)[:, None]
+    L_drawn = np.where(Lm > 0, 1.3 * tr.L_inertial / np.where(Lm > 0, Lm, 1.0), 0.0)
+    for key, vec, color, text in (("omega", k_w * tr.omega_inertial, OMEGA_COLOR, "ω"), ("L", L_drawn, L_COLOR, "L")):
+        v = np.asarray(vec, float)[f]
+        d.add(Arrows(name=key, group="vectors", origins=np.zeros((1, 3)), vectors=v[:, None, :], colors=(color,),
+                     shaft_radius=0.025, head_radius=0.06, head_length=0.12, labels=(text,)))
+    # the polhode: the rotation axis meets the body's surface (ray/ellipsoid), drawn on the body
+    w = tr.omega_body[f]
+    nw = np.linalg.norm(w, axis=1, keepdims=True)
+    ok = nw[:, 0] > 0
+    if np.count_nonzero(ok) >= 2:
+        u = w[ok] / nw[ok]
+        s = 1.0 / np.sqrt(np.sum((u / semi) ** 2, axis=1, keepdims=True))
+        d.add(Path(name="body/polhode", group="polhode", points=1.015 * s * u, color=POLHODE_COLOR, thickness=0.02,
+                   at=at[ok]))
+    E, Lmag = float(tr.energy[0]), float(tr.momentum_norm[0])
+    if E > 0:
+        e_semi = tuple(float(x) for x in np.sqrt(2 * E / tr.inertia) * k_w)
+        v, fc = unit_sphere()
+        d.add(Mesh(name="body/energy_ellipsoid", group="energy_ellipsoid", vertices=v, faces=fc, color=(120, 200, 255),
+                   opacity=0.25, scale=e_semi, double_sided=True),
+              Path(name="body/polhode_on_ellipsoid", group="energy_ellipsoid", points=k_w * w, color=POLHODE_COLOR,
+                   thickness=0.012, at=at))
+    if Lmag > 0:
+        v, fc = unit_sphere()
+        k_L = 1.3 / Lmag
+        Lmax = float(np.max(np.linalg.norm(tr.L_body, axis=1)))
+        if not (np.isfinite(k_L) and k_L * Lmax <= DRAW_MAX):  # |L| grows from nearly nothing (as ω above)
+            k_L = 1.3 / Lmax if Lmax > 0 and np.isfinite(1.3 / Lmax) else 1.0
+        d.add(Mesh(name="body/momentum_sphere", group="momentum_sphere", vertices=v, faces=fc, color=(200, 150, 255),
+                   opacity=0.2, scale=(1.3, 1.3, 1.3), double_sided=True),
+              Path(name="body/L_path", group="momentum_sphere", points=k_L * tr.L_body[f], color=L_COLOR,
+                   thickness=0.02, at=at))
+    if E > 0 and Lmag > 0:
+        # the tip of ω in space on the invariable plane ω·L̂ = 2E/|L|, a disc normal to L
+        Lhat = tr.L_inertial[0] / Lmag
+        dv, df = flat_disc(1.25)
+        d.add(Path(name="herpolhode", group="herpolhode", points=k_w * tr.omega_inertial[f], color=HERPOLHODE_COLOR,
+                   thickness=0.012, at=at),
+              Mesh(name="invariable_plane", group="herpolhode", vertices=dv, faces=df, color=(0, 160, 170),
+                   opacity=0.08, double_sided=True, wxyz=z_to_many(Lhat[None])[0][0],
+                   position=k_w * 2 * E / Lmag * Lhat))
+    d.add(Path(name="axis_trail", group="axis_trail", points=AXIS_TRAIL_RADIUS * tr.rotation_axis[f], color=TRAIL_COLOR,
+               thickness=0.012, at=at))
+    d.add(Segments(name="celestial/grid", group="celestial", points=wire_sphere(CELESTIAL_RADIUS), colors=(150, 150, 160),
+                   thickness=0.004),
+          Path(name="celestial/figure_axis", group="celestial", points=CELESTIAL_RADIUS * tr.figure_axis[f],
+               color=FIGURE_COLOR, thickness=0.03, at=at),
+          Path(name="celestial/rotation_axis", group="celestial", points=CELESTIAL_RADIUS * tr.rotation_axis[f],
+               color=TRAIL_COLOR, thickness=0.012, at=at))
+    return semi
+
+
+def other_bodies(d: Drawing, run, bodies: Mapping[str, np.ndarray] | None = None, span: float | None = None,
+                 trails: Callable[[str], bool] = lambda name: True, directions: bool | None = None) -> float:
+    """Other bodies as coloured balls with their names and trails ("bodies" group). In a rotation
+    scene a distant attractor is drawn by its direction at ORBIT_RADIUS; in an orbit scene the
+    positions are scaled so that `span` (default: the largest distance) is drawn at ORBIT_RADIUS.
+    Returns the scale used (scene units per trajectory unit; 0 for directions)."""
+    tr, f = run.trajectory, d.frames
+    bodies = tr.bodies if bodies is None else bodies
+    if not bodies:
+        return 0.0
+    directions = d.rotation if directions is None else directions
+    k = 0.0
+    if not directions:
+        allpos = np.concatenate([np.asarray(p, float) for p in bodies.values()])
+        span = span or float(np.max(np.linalg.norm(allpos, axis=1))) or 1.0
+        k = ORBIT_RADIUS / span
+    at = np.arange(len(f), dtype=float)
+    for j, (name, pos) in enumerate(bodies.items()):
+        pos = np.asarray(pos, float)[f]
+        pos = ORBIT_RADIUS * unit(pos) if directions else k * pos
+        col = palette(j)
+        d.add(Sphere(name=f"bodies/{name}", group="bodies", radius=0.12, color=col, position=pos),
+              Label(name=f"bodies/{name}/label", group="bodies", text=name, position=(0.0, 0.0, 0.2)))
+        if trails(name):
+            d.add(Path(name=f"body_trails/{name}", group="bodies", points=pos, color=col, thickness=0.02, at=at))
+    return k
+
+
+def standard(run, spec, view: View) -> Drawing:
+    """The drawing of a scenario that declares none of its own: Poinsot's construction for a
+    rotation scene, and the other bodies."""
+    d = new_drawing(run, spec)
+    if d.rotation:
+        rigid_body(d, run, view)
+    other_bodies(d, run)
+    return d

@@ -1,4 +1,4 @@
-"""The scene logic without a browser: a fake viser scene API records every call, so the rule
+"""The viser renderer without a browser: a fake viser scene API records every call, so the rule
 "send paths once, animate poses / visibility only" and the in-place updates are checked."""
 from __future__ import annotations
 
@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from theoria.app.controls import slider_range
-from theoria.app.scene import MAX_DRAW_POINTS, SceneView, densify, shape_semi_axes
+from theoria.app.scene import MAX_DRAW_POINTS, SceneView, densify
+from theoria.scenarios.drawing import Option, Sphere, View, shape_semi_axes, standard
 from theoria.physics.inertia import ellipsoid_moments
 from theoria.physics.params import Param
 from theoria.scenarios import get
@@ -52,19 +53,24 @@ def _result(name, **given):
     return spec, spec.simulate_fn(spec.resolve(given))
 
 
+def _drawing(name, **given):
+    spec, run = _result(name, **given)
+    return spec, run, spec.drawing(run)
+
+
 def test_playback_moves_poses_and_visibility_only():
     scene = FakeScene()
     view = SceneView(scene)
-    spec, res = _result("free-tumble")
-    view.show(res, spec)
+    spec, res, d = _drawing("free-tumble")
+    view.show(d)
     adds = [e for e in scene.log if e[0] == "add"]
     names = {e[2] for e in adds}
-    assert {"/world/body", "/world/body/mesh", "/world/body/axes", "/world/omega", "/world/L"} <= names
+    assert {"/world/body", "/world/body/mesh/0", "/world/body/axes", "/world/omega", "/world/L"} <= names
     assert any(n.startswith("/world/body/polhode/") for n in names)
     assert any(n.startswith("/world/axis_trail/") for n in names)
     scene.log.clear()
-    for i in range(0, len(res.trajectory.t), 7):
-        view.set_frame(i)
+    for k in range(0, d.n_frames, 7):
+        view.set_frame(k)
     assert not [e for e in scene.log if e[0] != "set"]  # nothing added or removed
     for _, kind, name, key, shape in scene.log:
         assert key in ("wxyz", "points", "position", "visible"), (name, key)
@@ -78,12 +84,12 @@ def test_playback_moves_poses_and_visibility_only():
 def test_new_parameters_update_in_place_and_overlays_build_lazily():
     scene = FakeScene()
     view = SceneView(scene)
-    spec, res = _result("middle-axis-flip")
-    view.show(res, spec)
+    spec, res, d = _drawing("middle-axis-flip")
+    view.show(d)
     assert not any(e[2].startswith("/world/body/energy_ellipsoid") for e in scene.log)  # off by default
     scene.log.clear()
-    _, res2 = _result("middle-axis-flip", perturbation="0.2")
-    view.show(res2, spec)
+    _, res2, d2 = _drawing("middle-axis-flip", perturbation="0.2")
+    view.show(d2)
     assert not [e for e in scene.log if e[0] in ("add", "remove")]  # same nodes, new data
     assert any(e[3] == "points" and e[2].startswith("/world/body/polhode/") for e in scene.log)
     scene.log.clear()
@@ -93,11 +99,11 @@ def test_new_parameters_update_in_place_and_overlays_build_lazily():
                                                            for n in added)
 
 
-def test_switching_kind_clears_and_orbit_bodies_are_drawn():
+def test_switching_kind_prunes_and_orbit_bodies_are_drawn():
     scene = FakeScene()
     view = SceneView(scene)
-    spec, res = _result("free-tumble")
-    view.show(res, spec)
+    spec, res, d = _drawing("free-tumble")
+    view.show(d)
     n = 40
     t = np.linspace(0, 1, n)
     pos = np.stack([np.cos(t), np.sin(t), 0 * t], 1) * 3.8e8  # astronomical units are rescaled
@@ -106,8 +112,8 @@ def test_switching_kind_clears_and_orbit_bodies_are_drawn():
     orbit = Scenario("demo-orbit", "demo", "§0", "three bodies", "demo", (), lambda v, progress=None: None,
                      kind="orbit")
     scene.log.clear()
-    view.show(Run("demo-orbit", {}, traj, {}), orbit)
-    assert any(e[0] == "remove" and e[2] == "/world/body/mesh" for e in scene.log)
+    view.show(orbit.drawing(Run("demo-orbit", {}, traj, {}, spec=orbit)))
+    assert any(e[0] == "remove" and e[2] == "/world/body/mesh/0" for e in scene.log)
     added = {e[2] for e in scene.log if e[0] == "add"}
     assert {"/world/bodies/earth", "/world/bodies/moon"} <= added
     view.set_frame(n - 1)
@@ -176,37 +182,34 @@ def test_every_control_starts_at_the_scenarios_defaults_and_presets_set_them_exa
             server.stop()
 
 
-def test_scene_extra_hook_builds_moves_and_prunes():
-    """A scenario's SceneExtra is built with the "scenario" overlay, moved by set_frame, asked to
-    rebuild on an option change, and its nodes disappear when another scenario is shown."""
-    from theoria.app import scene as scene_mod
+def test_a_scenarios_own_drawing_moves_redraws_on_its_option_and_is_pruned():
+    """A scenario's own `draw` adds items to the standard drawing: they are sent, moved by
+    set_frame, drawn anew when one of its options changes, and removed when another scenario is
+    shown."""
+    def draw(run, spec, view):
+        d = standard(run, spec, view)
+        k = np.arange(d.n_frames, dtype=float)
+        radius = 0.2 if view.option("big", spec) else 0.1
+        d.add(Sphere(name="marker", radius=radius, color=(255, 0, 0),
+                     position=np.stack([np.cos(k / 50), np.sin(k / 50), 0 * k], 1)))
+        return d
 
-    calls = []
+    base = get("middle-axis-flip")
+    import dataclasses
 
-    class Extra(scene_mod.SceneExtra):
-        options = {"corotating": ("co-rotating frame", False)}
-
-        def build(self, traj, result):
-            calls.append(("build", self.values["corotating"]))
-            self.node(self.name("marker"), lambda: self.scene.add_icosphere(self.name("marker"), radius=0.1))
-
-        def set_frame(self, i):
-            calls.append(("frame", i))
-
-    scene_mod.SCENE_EXTRAS["middle-axis-flip"] = Extra
-    try:
-        fake = FakeScene()
-        view = SceneView(fake)
-        spec, res = _result("middle-axis-flip")
-        view.show(res, spec)
-        assert isinstance(view.extra, Extra) and ("build", False) in calls
-        view.set_frame(5)
-        assert ("frame", 5) in calls
-        view.set_option("corotating", True)
-        assert ("build", True) in calls
-        spec2, res2 = _result("free-tumble")
-        view.show(res2, spec2)
-        assert view.extra is None
-        assert ("remove", "add_icosphere", "/world/extra/marker", None, None) in fake.log
-    finally:
-        scene_mod.SCENE_EXTRAS.pop("middle-axis-flip", None)
+    spec = dataclasses.replace(base, draw=draw, options={"big": Option("a big marker", False)})
+    run = spec.simulate(duration=5)
+    fake = FakeScene()
+    view = SceneView(fake)
+    view.show(spec.drawing(run))
+    assert ("add", "add_icosphere", "/world/marker", None, None) in fake.log
+    fake.log.clear()
+    view.set_frame(5)
+    assert ("set", "add_icosphere", "/world/marker", "position", (3,)) in fake.log
+    fake.log.clear()
+    view.show(spec.drawing(run, View(options={"big": True})))  # a new radius: the marker is made anew
+    assert ("remove", "add_icosphere", "/world/marker", None, None) in fake.log
+    assert ("add", "add_icosphere", "/world/marker", None, None) in fake.log
+    spec2, res2, d2 = _drawing("free-tumble")
+    view.show(d2)
+    assert "/world/marker" not in view._h
