@@ -296,6 +296,9 @@ class Scenario:
     # bodies, `drawing.standard`), and the checkboxes of its own that change the drawing
     draw: Callable[..., Drawing] | None = None
     options: Mapping[str, Option] = field(default_factory=dict)
+    # values that make a quick, coarser run of the same scene (shorter or with a larger step): the
+    # first picture while the full run computes, and the tests' runs; {} when the defaults are quick
+    preview: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self):
         for p in self.params:
@@ -305,6 +308,7 @@ class Scenario:
         object.__setattr__(self, "presets", types.MappingProxyType({n: dict(v) for n, v in presets}))
         object.__setattr__(self, "overlays", types.MappingProxyType(dict(self.overlays)))
         object.__setattr__(self, "options", types.MappingProxyType(dict(self.options)))
+        object.__setattr__(self, "preview", types.MappingProxyType(dict(self.preview)))
         object.__setattr__(self, "simulate_fn", self._guarded(self.simulate_fn))
 
     def _guarded(self, fn):

@@ -361,6 +361,7 @@ register(Scenario(
               exclusive_min=True),
     ),
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
+    preview={'years': 10.0, 'step_days': 1.0},
     simulate_fn=_earth,
     check=_check_earth,
     euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)\n"

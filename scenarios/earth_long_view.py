@@ -103,6 +103,7 @@ register(Scenario(
         Param("sample_years", 5.0, 0.0, 1000.0, "yr", "spacing of the stored states", exclusive_min=True),
     ),
     camera=Camera((3.6, -3.2, 4.4), (0.0, 0.0, 0.6)),  # the pole's circle near the top of the sphere
+    preview={'step_days': 5.0, 'sample_years': 50.0},
     simulate_fn=_earth_long,
     check=_check_long,
     euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)"),

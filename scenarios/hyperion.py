@@ -136,6 +136,7 @@ register(Scenario(
         Param("probe_orbits", 20.0, 1.0, 200.0, "", "orbits drawn"),
     ),
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
+    preview={'n_starts': 12, 'n_orbits': 60},
     simulate_fn=_hyperion,
     euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f)\n"
                    "θ: the body's long axis, f: the moon's direction seen from the planet, r: its distance"),

@@ -163,6 +163,7 @@ register(Scenario(
         Param("steps_per_orbit", 400, 50, 20000, "", "integrator steps per orbit", kind="int"),
     ),
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
+    preview={'orbits': 5.0},
     simulate_fn=_libration_eccentric,
     euler_formula=("ζ = A²α/(A² − 2N) · sin At + Nαβ/(4(A² − 2N)) · sin 2At (§833–835)"),
     presets=(

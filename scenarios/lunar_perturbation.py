@@ -143,6 +143,7 @@ register(Scenario(
               help="exact 1/w³, or Euler's §XXXIII expansion to second order in v/u in the element equations"),
     ),
     camera=Camera((0.9, -3.1, 2.1), (0.0, 0.0, 0.35)),  # oblique: orbit plane, node line, normal
+    preview={'duration_yr': 4.0, 'step_days': 0.05},
     simulate_fn=_lunar,
     euler_formula=("dψ = −n v³ u d∅ sin σ sin(θ − ψ)/p · (1/w³ − 1/u³) (§XXVIII)\n"
                    "dω / sin ω = dψ / tan σ, dσ = d∅ − dψ cos ω"),

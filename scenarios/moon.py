@@ -314,6 +314,7 @@ register(Scenario(
                    "rotating uniformly (a large free libration, period ~2.9 yr)"),
     ),
     camera=Camera((4.2, -3.6, 2.4), (0.0, 0.0, 0.0)),
+    preview={'years': 1.0},
     simulate_fn=_moon,
     euler_formula=("τₖ = −αₖ · 2N/(Aₖ² − 2N) · sin(Aₖt + 𝔄ₖ), 2N = 3 (B − A)/C · GM⊕/s³ (§833, §836)"),
     presets=(

@@ -212,6 +212,7 @@ register(Scenario(
         Param("steps_per_orbit", 100, 8, 1e5, "1", "integrator steps per revolution (yoshida4)", kind="int"),
     ),
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
+    preview={'orbits': 20.0},
     simulate_fn=_precession_circular,
     check=_check_circular,
     euler_formula=("ZA = n − εN sin n (ε + 2δ cos n) / (2δ(εε − 4δδ)) · cos 2φ + h sin(ε/δ · (φ + ζ)) (§844)\n"

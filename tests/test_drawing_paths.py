@@ -1,0 +1,188 @@
+"""One drawing path: for every scenario, the live app (viser), the recording (rerun) and the
+standalone replay (HTML) hold the same drawn objects, at the same places at the same times.
+
+Each output is read back from outside: the HTML file's embedded viser recording is decoded (the
+messages the browser replays), the .rrd file is read with rerun's own reader, and the live scene
+is what the viser renderer sends to a (fake) client. All three are compared with the scenario's
+`Drawing` and so with each other.
+"""
+from __future__ import annotations
+
+import base64
+import re
+import warnings
+
+import msgspec
+import numpy as np
+import pytest
+import zstandard
+from rerun.chunk import RrdReader
+
+import theoria as th
+from theoria.app.export_html import render_html
+from theoria.app.record import record_run
+from theoria.app.scene import SceneView
+from theoria.physics.quaternion import to_xyzw
+from theoria.scenarios.drawing import GEOMETRY, Frame, Label, Path, Sphere
+from tests.test_app_scene import FakeScene
+
+SLOW = {"earth-long-view"}  # its run alone takes tens of seconds
+CASES = [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in th.scenarios()]
+CREATES = ("FrameMessage", "MeshMessage", "PointCloudMessage", "LabelMessage", "ArrowMessage", "IcosphereMessage",
+           "LineSegmentsMessage", "DirectionalLightMessage")
+
+
+def html_messages(page: str) -> list:
+    """The viser messages a standalone HTML replay plays: (time, message dict)."""
+    data = base64.b64decode(re.search(r'__VISER_EMBED_DATA__="([^"]+)"', page).group(1))
+    inner = zstandard.ZstdDecompressor().decompress(data[8:], max_output_size=int.from_bytes(data[:8], "little"))
+    n = int.from_bytes(inner[:8], "little")
+    return msgspec.msgpack.decode(inner[8:8 + n])["messages"]
+
+
+def rrd_entities(path) -> dict:
+    """entity path → list of (is_static, record batch) from rerun's reader."""
+    out: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a file without its footer: rerun warns → error
+        for c in RrdReader(str(path)).stream().to_chunks():
+            out.setdefault(str(c.entity_path), []).append((c.is_static, c.to_record_batch()))
+    return out
+
+
+def expected_items(d) -> list:
+    return [it for it in d.items if isinstance(it, GEOMETRY) and d.shown(it)]
+
+
+def owner(node: str, names: set[str]) -> str | None:
+    """The item a viser node belongs to: itself, or its nearest ancestor that is an item (the
+    chunks of a path, the arrow and label of a turning arrow)."""
+    parts = node[len("/world/"):].split("/")
+    for k in range(len(parts), 0, -1):
+        cand = "/".join(parts[:k])
+        if cand in names:
+            return cand
+    return None
+
+
+@pytest.fixture(scope="module")
+def outputs(tmp_path_factory):
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            sc = th.scenario(name)
+            run = sc.simulate(**sc.preview)
+            d = sc.drawing(run)
+            rrd = tmp_path_factory.mktemp("rrd") / f"{name}.rrd"
+            record_run(run, rrd)
+            page = render_html(d, run, frames=40)
+            live = FakeScene()
+            view = SceneView(live)
+            view.show(d)
+            cache[name] = (d, rrd_entities(rrd), html_messages(page), live, view)
+        return cache[name]
+
+    return get
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_app_recording_and_replay_draw_the_same_objects(outputs, name):
+    d, rrd, msgs, live, view = outputs(name)
+    want = {it.name for it in expected_items(d)}
+    assert want, name
+    names = {it.name for it in d.items}
+    # the replay and the live app: every item has its node, and every node under /world is an item's
+    html_nodes = {m["name"] for _, m in msgs if m.get("type") in CREATES and m["name"].startswith("/world/")}
+    live_nodes = {e[2] for e in live.log if e[0] == "add" and e[2].startswith("/world/")}
+    for nodes, who in ((html_nodes, "HTML replay"), (live_nodes, "live app")):
+        owners = {owner(n, names) for n in nodes}
+        missing = want - owners
+        assert not missing, (who, name, sorted(missing))
+        # nothing drawn that the drawing does not list (groups of nodes made for children are frames)
+        strays = [n for n in nodes if owner(n, names) is None and not any(x.startswith(n + "/") for x in nodes)]
+        assert not strays, (who, name, strays)
+    # the recording: an entity for every item (lights aside: rerun lights the scene itself)
+    entities = set(rrd)
+    missing = {n for n in want if f"/world/{n}" not in entities}
+    assert not missing, ("recording", name, sorted(missing))
+    assert "/text" in entities
+
+
+def _html_value_at(msgs, node: str, kind: str, key: str, t: float):
+    """The last value of `key` set on `node` by a message of type `kind` at or before time t."""
+    val = None
+    for when, m in msgs:
+        if when > t + 1e-9:
+            break
+        if m.get("name") == node:
+            if m.get("type") == kind:
+                val = m[key]
+            elif m.get("type") in CREATES:  # a node starts at the identity pose unless told
+                val = m.get("props", {}).get(key, (1.0, 0.0, 0.0, 0.0) if key == "wxyz" else (0.0, 0.0, 0.0))
+    return None if val is None else np.asarray(val, float)
+
+
+def _rrd_value_at(batches, column: str, frame: int):
+    for static, rb in batches:
+        if not static and column in rb.schema.names and "frame" in rb.schema.names:
+            frames = np.asarray(rb.column("frame").to_pylist())
+            j = int(np.searchsorted(frames, frame, side="right")) - 1
+            if j >= 0:
+                return np.asarray(rb.column(column)[j].as_py(), float).reshape(-1)
+    for static, rb in batches:
+        if static and column in rb.schema.names:
+            return np.asarray(rb.column(column)[0].as_py(), float).reshape(-1)
+    return None
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_what_moves_is_at_the_same_place_at_the_same_time(outputs, name):
+    """Poses of moving frames and positions of moving markers and labels, at sampled frames, in the
+    drawing, in the HTML replay (its message stream at that frame's time) and in the recording."""
+    d, rrd, msgs, live, view = outputs(name)
+    F = d.n_frames
+    html_frames = np.unique(np.linspace(0, F - 1, min(40, F)).round().astype(int))
+    checked = 0
+    for it in expected_items(d):
+        anim = it.animated()
+        for attr, kind, col in (("wxyz", "SetOrientationMessage", "Transform3D:quaternion"),
+                                ("position", "SetPositionMessage", "Transform3D:translation")):
+            if attr not in anim or not isinstance(it, (Frame, Sphere, Label)):
+                continue
+            values = np.asarray(getattr(it, attr), float)
+            for j in (0, len(html_frames) // 2, len(html_frames) - 1):
+                k = int(html_frames[j])
+                want = values[k]
+                got_html = _html_value_at(msgs, f"/world/{it.name}", kind, attr, j / 30.0)
+                got_rrd = _rrd_value_at(rrd.get(f"/world/{it.name}", []), col, k)
+                if attr == "wxyz":
+                    got_rrd = None if got_rrd is None else np.r_[got_rrd[3], got_rrd[:3]]  # rerun is xyzw
+                    sign = lambda q: q * np.sign(q[np.argmax(np.abs(q))])  # noqa: E731  (q and −q: one attitude)
+                    want, got_html = sign(want), None if got_html is None else sign(got_html)
+                    got_rrd = None if got_rrd is None else sign(got_rrd)
+                assert got_html is not None and np.allclose(got_html, want, atol=2e-6), (name, it.name, attr, k)
+                assert got_rrd is not None and np.allclose(got_rrd, want, atol=2e-6), (name, it.name, attr, k)
+                checked += 1
+    # static geometry: the paths hold the same points in the recording as in the drawing
+    for it in expected_items(d):
+        if isinstance(it, Path):
+            (static, rb), = [b for b in rrd[f"/world/{it.name}"] if b[0]]
+            strip = np.asarray(rb.column("LineStrips3D:strips")[0].as_py()[0], float)
+            assert np.allclose(strip, np.asarray(it.points, np.float32), atol=1e-5), (name, it.name)
+    if d.rotation:
+        assert checked >= 3, name  # the body's attitude at least
+
+
+def test_camera_and_text_travel_with_the_replays(outputs):
+    d, rrd, msgs, live, view = outputs("middle-axis-flip")
+    pos = [m for _, m in msgs if m.get("type") == "SetCameraPositionMessage"]
+    look = [m for _, m in msgs if m.get("type") == "SetCameraLookAtMessage"]
+    assert np.allclose(pos[-1]["position"], d.camera.position) and np.allclose(look[-1]["look_at"], d.camera.look_at)
+    (static, rb), = rrd["/text"]
+    text = rb.column("TextDocument:text")[0].as_py()[0]
+    assert d.title in text and d.section in text and d.summary[:40] in text
+    # the recording's quaternions are the trajectory's at the frames, in rerun's (x, y, z, w) order
+    (static, rb), = [b for b in rrd["/world/body"] if not b[0]]
+    q = np.asarray(rb.column("Transform3D:quaternion").to_pylist(), float).reshape(-1, 4)
+    assert np.allclose(q, to_xyzw(np.asarray(d.item("body").wxyz, float)), atol=1e-6)
