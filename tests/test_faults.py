@@ -4,11 +4,8 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
 import sys
-import textwrap
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +47,7 @@ def test_replay_accepts_own_files(files, capsys):
     assert code == 0 and "ok" in out and err == ""
     code, out, err = _cli(capsys, "replay", str(html), "--check")
     assert code == 0 and out.strip().endswith(html.resolve().as_uri()) and "free-tumble" in out
-    assert check(str(rrd))["rows"] > 2000  # the whole run is read back
+    assert check(str(rrd))["rows"] > 3 * 201  # the whole run is read back: body, ω and L at each of 201 frames
 
 
 def _bad_cases(d, rrd, html):
@@ -192,40 +189,3 @@ def test_real_scenarios_default_runs_are_ok():
         assert res.status == "ok", (name, res.warnings)
 
 
-# ---- SIGINT during a recording -------------------------------------------------------------------
-
-def test_recording_complete_after_sigint(tmp_path):
-    """Ctrl-C (SIGINT) during `theoria record`: the file is complete (footer, every row) and the
-    command exits 130 with 'interrupted'."""
-    from rerun.chunk import RrdReader
-
-    out = tmp_path / "ctrl_c.rrd"
-    code = textwrap.dedent(f"""
-        import sys, time
-        import theoria.app.record as R
-        from theoria.app.cli import main
-        orig = R._write
-        def slow(rec, *a):
-            orig(rec, *a)
-            print("written", flush=True)
-            time.sleep(60)
-        R._write = slow
-        sys.exit(main(["record", "free-tumble", "--out", {str(out)!r}]))
-    """)
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    # a terminal delivers Ctrl-C to a process whose SIGINT is not ignored (a background shell
-    # would ignore it in its children): restore the default disposition like a terminal
-    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
-                         cwd=ROOT, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    assert p.stdout.readline().strip() == b"written"
-    p.send_signal(signal.SIGINT)
-    rc = p.wait()
-    err = p.stderr.read().decode()
-    p.stdout.close(), p.stderr.close()
-    assert rc == 130 and "interrupted" in err
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # a file without footer: rerun warns → error
-        chunks = RrdReader(str(out)).stream().to_chunks()
-    rows = sum(c.num_rows for c in chunks if str(c.entity_path) == "/world/body" and not c.is_static)
-    assert rows == 2001
-    assert check(str(out))["kind"] == "rrd"  # and `theoria replay` accepts it

@@ -119,21 +119,22 @@ def test_switching_through_all_scenarios_leaves_no_stale_objects():
     specs = gallery.ordered(all_scenarios())
     order = specs + specs[:1]  # end where we started: the first scenario's nodes come back
     for spec in order:
-        res = spec.simulate_fn(spec.resolve(QUICK.get(spec.name, {})))
-        view.show(res, spec, overlays=view.default_overlays(spec))
-        view.set_frame(len(res.trajectory.t) // 2)
+        res = spec.simulate_fn(spec.resolve({**spec.preview, **QUICK.get(spec.name, {})}))
+        d = spec.drawing(res)
+        view.show(d)
+        view.set_frame(d.n_frames // 2)
         fresh_scene = FakeScene()
         fresh = SceneView(fresh_scene)
-        fresh.show(res, spec, overlays=fresh.default_overlays(spec))
+        fresh.show(d)
         assert _alive(scene) == _alive(fresh_scene), spec.name
         assert set(view._h) == _alive(scene), spec.name
         for g in view._auto:  # every group node made for children still has a child
             assert any(n.startswith(g + "/") for n in view._h), (spec.name, g)
         if spec.kind == "rotation":
-            assert "/world/body/mesh" in view._h, spec.name
+            assert "/world/body/mesh/0" in view._h, spec.name
         else:
-            assert "/world/body/mesh" not in view._h, spec.name
-            assert any(n.startswith("/world/bodies/") for n in view._h) or view.extra is not None, spec.name
+            assert "/world/body/mesh/0" not in view._h, spec.name
+            assert any(n.startswith("/world/bodies/") for n in view._h), spec.name
 
 
 # ---- a session with a fake viser client ------------------------------------------------------
@@ -246,7 +247,7 @@ class FakeClient:
 
 @contextlib.contextmanager
 def _session(scenario):
-    from theoria.app.server import ClientSession
+    from theoria.app.session import ClientSession
 
     client = FakeClient()
     s = ClientSession(None, client, scenario)
@@ -288,7 +289,7 @@ def test_switching_scenario_in_the_session_updates_presets_camera_and_scene():
         target = get("collinear")
         n = s.updates
         s.dd.value = gallery.label(target)
-        _wait(lambda: s.updates > n and s.view._spec is not None and s.view._spec.name == "collinear")
+        _wait(lambda: s.updates > n and s.drawing_spec == "collinear")
         assert s.presets.value == next(iter(target.presets))
         assert "/world/body/mesh" not in s.view._h
         pos, look = gallery.camera_for(target)
@@ -299,7 +300,7 @@ def test_switching_scenario_in_the_session_updates_presets_camera_and_scene():
 
 
 def test_long_run_shows_throttled_progress_then_hides_it(monkeypatch):
-    from theoria.app import server as server_mod
+    from theoria.app import worker as server_mod
 
     steps = 40
 
@@ -329,7 +330,7 @@ def test_long_run_shows_throttled_progress_then_hides_it(monkeypatch):
 def test_long_run_without_progress_reports_still_shows_the_bar(monkeypatch):
     """A run in a phase that reports nothing (e.g. the REBOUND calibration before a long
     integration) shows the bar at 0 after PROGRESS_SHOW_AFTER and hides it at the end."""
-    from theoria.app import server as server_mod
+    from theoria.app import worker as server_mod
 
     def silent(values, progress=None):
         time.sleep(0.6)

@@ -1,26 +1,17 @@
 """Rerun recordings read back with rerun's own reader (rerun.chunk.RrdReader)."""
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
-import sys
-import textwrap
 import warnings
-from pathlib import Path
 
 import numpy as np
-import pytest
 from rerun.chunk import RrdReader
 
-from theoria.app.record import record
+from theoria.app.record import record, record_run
 from theoria.scenarios import get
-
-ROOT = Path(__file__).resolve().parent.parent
 
 
 def _read(path):
-    """entity path → (rows on the `step` timeline, static rows, timeline names, chunks)."""
+    """entity path → (rows on the time lines, static rows, timeline names, chunks)."""
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # "RRD file has no footer" is a warning: make it fail
@@ -36,19 +27,20 @@ def _read(path):
     return out
 
 
-def test_recording_holds_entities_and_every_step(tmp_path):
+def test_recording_holds_the_drawing_every_frame_and_every_sample(tmp_path):
     spec = get("middle-axis-flip")
     values = spec.resolve({"duration": "10", "step": "0.02"})
     out = tmp_path / "flip.rrd"
     info = record("middle-axis-flip", str(out), values)
-    n = 501  # 10 s / 0.02 s steps + the initial state (below MAX_SAMPLES, so stride 1)
-    assert info["steps"] == n
+    n = 501  # 10 s / 0.02 s steps + the initial state: every sample is a frame
+    assert info["steps"] == n and info["frames"] == n
     ents = _read(out)
-    for e in ("/world/body", "/world/omega", "/world/L", "/series/energy", "/series/momentum_norm",
-              "/series/omega/x", "/series/omega/y", "/series/omega/z"):
+    for e in ("/world/body", "/world/omega", "/world/L"):  # what moves: one row per frame
         assert ents[e]["rows"] == n, (e, ents[e]["rows"])
-        assert {"step", "t"} <= ents[e]["timelines"], e
-    for e in ("/world/body/ellipsoid", "/world/body/axes", "/world/body/polhode", "/world/herpolhode",
+        assert {"frame", "t"} <= ents[e]["timelines"], e
+    for e in ("/series/energy", "/series/momentum_norm"):  # the run's series: one row per sample
+        assert ents[e]["rows"] == n and {"step", "t"} <= ents[e]["timelines"], e
+    for e in ("/world/body/mesh/0", "/world/body/axes", "/world/body/polhode", "/world/herpolhode",
               "/world/axis_trail", "/text"):
         assert ents[e]["static"] >= 1, e
     for m in ("flip_interval", "flip_interval_exact", "energy_rel_drift"):
@@ -60,7 +52,7 @@ def test_recording_holds_entities_and_every_step(tmp_path):
         if c.is_static:
             continue
         rb = c.to_record_batch()
-        rows += list(zip(rb.column("step").to_pylist(), (x[0] for x in rb.column("Transform3D:quaternion").to_pylist())))
+        rows += list(zip(rb.column("frame").to_pylist(), (x[0] for x in rb.column("Transform3D:quaternion").to_pylist())))
     rows.sort()
     assert [r[0] for r in rows] == list(range(n))
     q = np.array([r[1] for r in rows])
@@ -71,10 +63,9 @@ def test_recording_holds_entities_and_every_step(tmp_path):
 
 
 def test_orbit_like_bodies_are_recorded(tmp_path):
-    """A trajectory with Trajectory.bodies (as the orbit scenarios produce) gets points per step."""
-    from theoria.app.record import record_result
-    from theoria.scenarios.base import Run, Scenario
+    """A trajectory with Trajectory.bodies (as the orbit scenarios produce) gets a position per frame."""
     from theoria.physics.trajectory import Trajectory
+    from theoria.scenarios.base import Run, Scenario
 
     n = 50
     t = np.linspace(0, 1, n)
@@ -83,32 +74,8 @@ def test_orbit_like_bodies_are_recorded(tmp_path):
                       bodies={"moon": pos, "sun": -pos})
     spec = Scenario("demo-orbit", "demo", "§0", "three bodies", "demo", (), lambda v, progress=None: None, kind="orbit")
     out = tmp_path / "orbit.rrd"
-    record_result(Run("demo-orbit", {}, traj, {"x_m": 1.0}), spec, str(out))
+    record_run(Run("demo-orbit", {}, traj, {"x_m": 1.0}, spec=spec), out)
     ents = _read(out)
     assert ents["/world/bodies/moon"]["rows"] == n and ents["/world/bodies/sun"]["rows"] == n
-    assert ents["/world/trails/moon"]["static"] == 1
+    assert ents["/world/body_trails/moon"]["static"] == 1
     assert "/world/body" not in ents
-
-
-def test_footer_written_when_interrupted(tmp_path):
-    """SIGTERM during a long recording: the file is still complete (readable, footer present)."""
-    out = tmp_path / "killed.rrd"
-    code = textwrap.dedent(f"""
-        import sys, time
-        import theoria.app.record as R
-        orig = R._write
-        def slow(rec, *a):
-            orig(rec, *a)
-            print("written", flush=True)
-            time.sleep(60)
-        R._write = slow
-        R.record("free-tumble", {str(out)!r}, None)
-    """)
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, env=env, cwd=ROOT)
-    assert p.stdout.readline().strip() == b"written"
-    p.send_signal(signal.SIGTERM)
-    p.wait()
-    p.stdout.close()
-    ents = _read(out)  # a file without footer raises (warning turned into an error)
-    assert ents["/world/body"]["rows"] == 2001
