@@ -1,0 +1,127 @@
+"""`import theoria as th`: the front door a notebook uses, held against the command line and against
+what it promises (the same numbers as `theoria run --json`, the same one-line error)."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import theoria as th
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "theoria.app.cli", *args], capture_output=True, text=True,
+                          timeout=1800, cwd=cwd)
+
+
+def test_scenarios_in_gallery_order_and_each_one_described():
+    names = th.scenarios()
+    assert len(names) == len(set(names)) >= 16
+    assert names[0] == "free-tumble" and names[-1] == "lunar-perturbation"  # ch. 15 first, the 1768 paper last
+    listed = json.loads(_cli("list", "--json").stdout)["scenarios"]
+    assert [s["name"] for s in listed] == names
+    for n in names:
+        sc = th.scenario(n)
+        assert isinstance(sc, th.Scenario) and sc.name == n
+        assert list(sc.parameters) == [p.name for p in sc.params]
+        for name, values in sc.presets.items():
+            assert set(values) <= set(sc.parameters), (n, name)
+
+
+def test_metrics_equal_the_command_lines_for_the_same_parameters():
+    sc = th.scenario("middle-axis-flip")
+    run = sc.simulate(spin=1, perturbation=0.01, duration=200)
+    p = _cli("run", "middle-axis-flip", "--set", "spin=1", "--set", "perturbation=0.01", "--set", "duration=200",
+             "--json")
+    assert p.returncode == 0, p.stderr
+    cli = json.loads(p.stdout)
+    assert cli == json.loads(json.dumps(run.to_json()))
+    assert cli["metrics"] == pytest.approx(run.metrics, rel=0, abs=0)
+    # a preset by (part of) its name, overridden by keywords, as `--preset` and `--set`
+    tiny = sc.simulate(preset="tiny nudge", duration=50)
+    p = _cli("run", "middle-axis-flip", "--preset", "tiny nudge", "--set", "duration=50", "--json")
+    assert json.loads(p.stdout)["metrics"] == json.loads(json.dumps(tiny.to_json()))["metrics"]
+    assert tiny.params["perturbation"] == 1e-6
+
+
+@pytest.mark.parametrize("kwargs, cli", [
+    ({"spin": 1e9}, ["--set", "spin=1e9"]),
+    ({"perturbation": "nan"}, ["--set", "perturbation=nan"]),
+    ({"wobble": 1}, ["--set", "wobble=1"]),
+    ({"step": 0}, ["--set", "step=0"]),
+])
+def test_a_bad_value_is_one_parameter_error_with_the_clis_line(kwargs, cli):
+    with pytest.raises(th.ParameterError) as e:
+        th.scenario("middle-axis-flip").simulate(**kwargs)
+    assert isinstance(e.value, ValueError) and e.value.name == next(iter(kwargs))
+    p = _cli("run", "middle-axis-flip", *cli)
+    assert p.returncode == 2 and p.stdout == ""
+    # one line, the same words (the value as each typed it: 1e9 on the command line, 1e+09 a float)
+    line = p.stderr.strip()
+    assert "\n" not in line and line.startswith(f"theoria: error: {e.value.name}=")
+    assert line.endswith(f": {e.value.allowed}")
+
+
+def test_unknown_scenario_and_preset_name_what_there_is():
+    with pytest.raises(th.ParameterError, match="free-tumble"):
+        th.scenario("free-tumbel")
+    with pytest.raises(th.ParameterError, match="Brick: the flip"):
+        th.scenario("middle-axis-flip").simulate(preset="no such preset")
+
+
+def test_the_run_carries_its_trajectory_and_a_table_per_sample():
+    run = th.scenario("free-tumble").simulate(duration=5)
+    tr = run.trajectory
+    n = len(tr.t)
+    assert tr.quat_wxyz.shape == (n, 4) and tr.omega_body.shape == (n, 3) and tr.L_body.shape == (n, 3)
+    assert np.allclose(np.linalg.norm(tr.quat_wxyz, axis=1), 1.0, atol=1e-12)
+    df = run.to_dataframe()
+    assert len(df) == n and np.allclose(df["t_s"], tr.t) and np.allclose(df["omega_body_y"], tr.omega_body[:, 1])
+    assert run.warnings == [] and run.status == "ok"
+    assert {c.label for c in run.comparisons} >= {"polhode period"}
+    orbit = th.scenario("collinear").simulate()
+    cols = orbit.to_dataframe().columns
+    assert "q_w" not in cols and any(c.endswith("_x") for c in cols)  # bodies, no attitude
+
+
+def test_check_rows_from_python():
+    rows = th.check("E2")
+    assert [r.id for r in rows] == ["E2"] and rows[0].passed and rows[0].rel_error <= rows[0].tolerance
+    with pytest.raises(th.ParameterError, match="E99"):
+        th.check("E99")
+
+
+def test_the_example_runs_and_writes_its_files(tmp_path):
+    """examples/first_five_minutes.py, as a student runs it, from a directory of their own."""
+    p = subprocess.run([sys.executable, str(ROOT / "examples" / "first_five_minutes.py"), str(tmp_path)],
+                       capture_output=True, text=True, timeout=1800, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "refused: spin=1e+09: allowed range [-50, 50] rad/s" in p.stdout
+    assert "interval between flips: Euler" in p.stdout
+    from theoria.app.replay import check
+
+    assert check(str(tmp_path / "flip.rrd"))["kind"] == "rrd"
+    html = check(str(tmp_path / "flip.html"))
+    assert html["scenario"] == "middle-axis-flip"
+    assert "Brick: the flip about the middle axis" in (tmp_path / "flip.html").read_text()
+
+
+def test_show_serves_the_run_in_the_app():
+    """`run.show()` in a notebook: returns at once, the app answers, every browser starts from this run."""
+    import urllib.request
+
+    from theoria.app.server import show_run
+
+    run = th.scenario("free-tumble").simulate(duration=3)
+    shown = show_run(run, port=0, block=False)
+    try:
+        with urllib.request.urlopen(shown.url, timeout=30) as r:
+            assert r.status == 200 and b"<html" in r.read(2000).lower()
+    finally:
+        shown.stop()
