@@ -263,7 +263,7 @@ ATTACHED_JS = """(name) => { let o = window.__viserMutable.nodeRefFromName[name]
 def test_switching_to_an_orbit_scenario_draws_its_bodies(browser, tumble_app):
     """The dropdown (grouped by chapter) switches this browser to an orbit scenario: the rotating
     body goes, a sphere and a trail per Trajectory.bodies entry come, the parameters follow."""
-    from theoria.app.server import scenario_label
+    from theoria.app.gallery import label as scenario_label
     from theoria.scenarios import all_scenarios
 
     orbit = next((s for s in all_scenarios() if s.kind == "orbit"), None)
@@ -280,7 +280,7 @@ def test_switching_to_an_orbit_scenario_draws_its_bodies(browser, tumble_app):
         p.page.wait_for_function("(n) => { const m = window.__viserMutable.nodeRefFromName;"
                                  " return Object.keys(m).some(k => k.startsWith('/world/bodies/') && k.split('/').length === 4); }",
                                  arg=None, timeout=WAIT_MS)
-        p.page.wait_for_function(f"(() => !({ATTACHED_JS})('/world/body/mesh'))()", timeout=WAIT_MS)
+        p.page.wait_for_function(f"(() => !({ATTACHED_JS})('/world/body/mesh/0'))()", timeout=WAIT_MS)
         names = p.nodes()
         bodies = [n for n in names if n.startswith("/world/bodies/") and n.count("/") == 3]
         trails = [n for n in names if n.startswith("/world/body_trails/") and n.endswith("/0")]
@@ -303,7 +303,7 @@ def test_exported_html_plays_from_file(browser, tmp_path):
     assert info["frames"] > 100 and out.stat().st_size == info["bytes"]
     p = Page(browser, out.as_uri())
     try:
-        p.page.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/mesh']",
+        p.page.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/mesh/0']",
                                  timeout=WAIT_MS)
         names = set(p.nodes())
         assert {"/world/body", "/world/axis_trail/0", "/world/body/polhode/0"} <= names

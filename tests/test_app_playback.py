@@ -1,13 +1,14 @@
-"""Playback cost (issue 3 frame rate): paths that retrace themselves send far fewer points with
+"""Playback cost: paths that retrace themselves send far fewer points with
 the picture unchanged, and the ω / L arrows move by pose updates, re-sending geometry rarely."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from theoria.app.scene import REPEAT_CELL, SceneView, drop_repeats, z_to_many
+from theoria.app.scene import REPEAT_CELL, SceneView, drop_repeats
 from theoria.physics.quaternion import rotate
 from theoria.scenarios import get
+from theoria.scenarios.drawing import omega_scale, z_to_many
 from tests.test_app_scene import FakeScene
 
 
@@ -61,14 +62,15 @@ def test_periodic_polhode_sends_fewer_points_and_arrows_move_by_pose():
     res = spec.simulate_fn(spec.resolve({"duration": "100", "step": "0.005"}))  # the bench run
     scene = FakeScene()
     view = SceneView(scene)
-    view.show(res, spec)
+    d = spec.drawing(res)
+    view.show(d)
     sent = {n: len(h.points) for n, h in view._h.items() if h.kind == "add_point_cloud"}
     polhode = sum(v for n, v in sent.items() if n.startswith("/world/body/polhode/"))
     assert polhode < 0.5 * 10000  # 9 flips retrace the same two loops
     assert len([n for n in sent if n.startswith("/world/body/polhode/")]) == 24
     # the ω / L arrows: direction by the frame's pose, geometry only when the length changes
     scene.log.clear()
-    n = len(res.trajectory.t)
+    n = d.n_frames
     frames = range(0, n, 10)
     for i in frames:
         view.set_frame(i)
@@ -81,6 +83,6 @@ def test_periodic_polhode_sends_fewer_points_and_arrows_move_by_pose():
     view.set_frame(i)
     fr, arrow = view._h["/world/omega"], view._h["/world/omega/arrow"]
     drawn = rotate(np.asarray(fr.wxyz), arrow.points[0, 1].astype(float))
-    want = view.k_omega * res.trajectory.omega_inertial[i]
+    want = omega_scale(res.trajectory) * res.trajectory.omega_inertial[d.frames[i]]
     assert np.allclose(drawn, want, rtol=0.03, atol=1e-3 * np.linalg.norm(want))
     assert REPEAT_CELL < 2 / np.sqrt(3)  # a dropped point lies within a drawn point's width (2 × size)
