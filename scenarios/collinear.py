@@ -11,7 +11,8 @@ import numpy as np
 from ..physics.params import Param, ParameterError
 from ..physics.three_body import collinear as col
 from ..physics.three_body.nbody import integrate_dop853
-from .drawing import Camera
+from .drawing import Camera, Drawing, Label, ORBIT_RADIUS, Segments, View, new_drawing
+from . import _three_body_drawing as tbd
 from .base import Diverged, Comparison, Run, Scenario, register
 from .checks import register_check
 from ._three_body import GROUP, orbit_trajectory
@@ -181,6 +182,78 @@ def _restricted(values, alpha):
                   plot_series={"satellite drift from the point (distances)": drift}, extras=extras)
 
 
+# ---- the scene ---------------------------------------------------------------------------------
+
+L_POINTS = ("L1", "L2", "L3", "L4", "L5")
+LEVEL_COLORS = {"L1": (230, 70, 70), "L2": (240, 160, 40), "L3": (70, 140, 240)}  # zero-velocity curves
+OPTIONS = tbd.corotating_option(False, "co-rotating frame (turning with the bodies)")
+
+
+def _lagrange_points(run) -> dict:
+    """L1–L5 in the turning frame of the primaries (units of their distance): the physics' points,
+    or where the run's L-point bodies start (the turning frame and the inertial one agree at t = 0)."""
+    pts = run.extras.get("lagrange_points")
+    if pts is None:
+        b = run.trajectory.bodies
+        pts = {k: tuple(np.asarray(b[k], float)[0, :2]) for k in L_POINTS if k in b}
+    return {k: (float(x), float(y)) for k, (x, y) in (pts or {}).items()}
+
+
+def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
+    """The line through the three bodies with a BC/AB read-out (rotating, collapse, expansion) or,
+    for the restricted problem, L1–L5 (labelled) and the zero-velocity curves through L1, L2, L3
+    (levels of 2Ω = C_J). The construction turns with the primaries in the inertial view and
+    stands still in the co-rotating one, where the bodies are drawn in co-rotating coordinates."""
+    d = new_drawing(run, spec)
+    tr, f = run.trajectory, d.frames
+    corot = tbd.corotating(run, spec, view)
+    restricted = "lagrange_points" in run.extras
+    pts = _lagrange_points(run)
+    bodies = tbd.body_positions(run, skip=L_POINTS, turn=corot)  # L-points: markers, not bodies with trails
+    span = tbd.largest_distance(bodies)
+    if pts:
+        span = max(span, 1.1 * max(np.hypot(x, y) for x, y in pts.values()))
+    # restricted: the satellite starts on its L-point's marker and the secondary sits between L1
+    # and L2, so the bodies are named by colour in a key rather than by labels on the L-points' own
+    k = tbd.draw_bodies(d, run, bodies, span, unnamed=tuple(bodies) if restricted else ())
+    tbd.turning_frame(d, run, corot)
+    R = ORBIT_RADIUS
+    t = np.asarray(tr.t, float)[f]
+    if restricted:
+        for name, (x, y) in pts.items():
+            tbd.marker(d, f"{tbd.TURNING}/L/{name}", (k * x, k * y, 0.0))
+            # below the marker
+            d.add(Label(name=f"{tbd.TURNING}/L/{name}/label", text=name, position=(0.0, -0.13, 0.0)))
+        zv = run.extras.get("zero_velocity")
+        if zv is not None:
+            for name, col in LEVEL_COLORS.items():
+                if name in zv["levels"]:
+                    segs = k * tbd.contour_segments(zv["x"], zv["y"], zv["two_omega"], zv["levels"][name])
+                    if len(segs):
+                        d.add(Segments(name=f"{tbd.TURNING}/zero_velocity/{name}", points=segs, colors=col,
+                                       thickness=0.008))
+            d.add(Label(name="zero_velocity_key", text="zero-velocity curves 2Ω = C_J: L1 red, L2 orange, L3 blue",
+                        position=(-R, -R, 0.0)))
+        tbd.body_key(d, list(bodies), (-R, 1.2 * R, 0.0))  # under the read-out
+        tbd.line(d, f"{tbd.TURNING}/axis", (-1.25 * k, 0, 0), (1.25 * k, 0, 0), thickness=0.004)
+        drift = run.plot_series.get("satellite drift from the point (distances)")
+        where = run.params.get("lagrange_point", "its point")
+        texts = [f"t = {t[j]:.3g} {tr.time_unit}" +
+                 (f"   satellite {drift[i]:.3g} from {where}" if drift is not None else "")
+                 for j, i in enumerate(f)]
+    else:
+        # the line through the three bodies: they start on x and turn with the frame
+        P = [np.asarray(tr.bodies[n], float) for n in ("A", "B", "C") if n in tr.bodies]
+        ext = 1.15 * k * max(float(np.max(np.abs(p[:, 0]))) for p in P) if P else R
+        tbd.line(d, f"{tbd.TURNING}/line", (-ext, 0, 0), (ext, 0, 0))
+        r = tr.series.get("ratio_BC_over_AB")
+        alpha = run.metrics.get("alpha")
+        texts = [(f"BC/AB = {r[i]:.6f}  (α = {alpha:.6f})  t = {t[j]:.3g}" if r is not None and alpha is not None
+                  else f"t = {t[j]:.3g}") for j, i in enumerate(f)]
+    tbd.readout(d, texts, (-R, 1.3 * R, 0.0))  # above the bodies' circle and their names
+    return d
+
+
 register(Scenario(
     name="collinear",
     title="Three bodies on a line: Euler's quintic",
@@ -210,6 +283,8 @@ register(Scenario(
     ),
     camera=Camera((0.0, -0.9, 3.4), (0.0, 0.0, 0.0)),  # from above: L1–L5, zero-velocity curves
     simulate_fn=_collinear,
+    draw=_draw,
+    options=OPTIONS,
     euler_formula=("(A+B)α⁵ + (3A+2B)α⁴ + (3A+B)α³ − (B+3C)α² − (2B+3C)α − (B+C) = 0 (§7, Eq. 33)\n"
                    "p̈ = −(D/2) p⁻², D/2 = A + B + C/(α+1)² − C/α²\n"
                    "Case II: p ∝ cos²φ, t = n³a² (φ + sin φ cos φ)"),

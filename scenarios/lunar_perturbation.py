@@ -8,7 +8,8 @@ from __future__ import annotations
 import math
 import numpy as np
 from ..physics.params import Param, ParameterError
-from .drawing import Camera
+from .drawing import Camera, Drawing, Frame, Label, Mesh, Option, Segments, Sphere, View, circle, flat_disc, new_drawing, segments
+from . import _three_body_drawing as tbd
 from .base import Comparison, Run, Scenario, register
 import functools
 from ..physics.three_body import lunar_elements as le
@@ -122,6 +123,98 @@ def _lunar(values, progress=None):
     return Run("lunar-perturbation", values, traj, metrics, comps, notes, plot_series=plot)
 
 
+# ---- the scene ---------------------------------------------------------------------------------
+
+OPTIONS = {"plot_inclination": Option("plot the inclination (else node and perigee longitudes)", False),
+           "exaggerate": Option("heights ×5 (tilt drawn as atan(5 tan i); read-out true)", False)}
+EXAGGERATION = 5.0
+TRAIL_DAYS = 27.3  # the Moon's trail: its last sidereal month
+NORMAL_LENGTH = 1.7  # lunar distances: the normal's tip traces a circle of radius 1.7 sin i
+PLANE_COLOR = (150, 110, 230)
+REFERENCE_COLOR = (120, 120, 130)
+
+
+def _plot(run: Run, inclination: bool) -> dict:
+    """One y-axis: the longitudes (hundreds of degrees over decades) or the inclination
+    (5.0°–5.3°), not both."""
+    ps = run.plot_series
+    inc = {k: v for k, v in ps.items() if k.startswith("inclination")}
+    rest = {k: v for k, v in ps.items() if not k.startswith("inclination")}
+    return dict((inc or ps) if inclination else (rest or ps))
+
+
+def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
+    """The Moon's orbit plane (a translucent disc) turning with the node and the inclination, its
+    line of nodes and its normal, the trace of the normal (the plane turns once in 18.6 yr), the
+    ecliptic and the equinox for reference, the Moon's last month as a short trail, the direction
+    of the Sun and an inclination / node read-out.
+
+    With the exaggeration option, heights above the ecliptic are multiplied by f: an affine map
+    that takes a plane of tilt i to one of tilt atan(f tan i), so Moon, trail and disc stay
+    coplanar (the read-out gives the true values)."""
+    d = new_drawing(run, spec)
+    tr, f, s = run.trajectory, d.frames, run.trajectory.series
+    fz = EXAGGERATION if view.option("exaggerate", spec) else 1.0
+    stretch = np.array([1.0, 1.0, fz])
+    d.plot = _plot(run, view.option("plot_inclination", spec))
+    moon = np.asarray(tr.bodies["moon"], float)
+    # the Moon first (the palette's pale yellow), the Earth its green; the Sun (389 lunar distances
+    # away) is drawn as a direction below; 40 years of the Moon would fill a disc: a month's trail instead
+    bodies = {"moon": moon * stretch, **{n: np.asarray(v, float) for n, v in tr.bodies.items() if n not in ("moon", "sun")}}
+    rmax = float(np.max(np.linalg.norm(moon, axis=1)))
+    k = tbd.draw_bodies(d, run, bodies, 2.0 * rmax, trails=lambda name: name != "moon")
+    R = 1.2 * k * rmax
+    # fixed references: the ecliptic and the equinox direction
+    d.add(Segments(name="ecliptic", points=segments(circle(R, 97)), colors=REFERENCE_COLOR, thickness=0.004))
+    tbd.line(d, "equinox", (0, 0, 0), (1.1 * R, 0, 0), color=REFERENCE_COLOR, thickness=0.004)
+    d.add(Label(name="equinox/label", text="♈ equinox", position=(1.15 * R, 0.0, 0.0)))
+    # the plane: a Frame turned by R_z(node)·R_x(inclination drawn); its children lie in the plane
+    inc = np.radians(np.asarray(s["inclination_deg"], float))
+    node = np.radians(np.asarray(s["node_longitude_deg"], float))
+    inc_drawn = np.arctan(fz * np.tan(inc)) if fz != 1.0 else inc
+    d.add(Frame(name="plane", wxyz=tbd.rot_zx(node[f], inc_drawn[f])))
+    dv, df = flat_disc(1.0, 72)
+    d.add(Mesh(name="plane/disc", vertices=dv, faces=df, color=PLANE_COLOR, opacity=0.22, scale=(R, R, 1.0),
+               double_sided=True))
+    # the node line runs out past the disc and is named at its end, clear of the Moon's name
+    d.add(Segments(name="plane/node_line", points=np.array([[[0, 0, 0], [1.65 * R, 0, 0]], [[0, 0, 0], [-1.15 * R, 0, 0]]],
+                                                           np.float32),
+                   colors=np.array([[[230, 60, 60]] * 2, [[110, 110, 120]] * 2], np.uint8), thickness=0.008))
+    d.add(Label(name="plane/node_label", text="☊ ascending node", position=(1.7 * R, 0.0, 0.0)))
+    L = NORMAL_LENGTH * k
+    tbd.line(d, "plane/normal", (0, 0, 0), (0, 0, L), color=PLANE_COLOR, thickness=0.008)
+    d.add(Label(name="plane/normal_label", text="orbit normal", position=(0.0, 0.0, 1.05 * L)))
+    # the trace of the normal's tip (of the drawn plane: the stretched one with the option)
+    si = np.sin(inc_drawn)
+    nrm = np.stack([si * np.sin(node), -si * np.cos(node), np.cos(inc_drawn)], 1) if fz != 1.0 else \
+        np.stack([s["orbit_normal_x"], s["orbit_normal_y"], s["orbit_normal_z"]], 1)
+    tbd.growing_path(d, "normal_trace", L * nrm[f], f, PLANE_COLOR, 0.012)
+    tbd.line(d, "pole", (0, 0, 0), (0, 0, 1.1 * L), color=REFERENCE_COLOR, thickness=0.004)
+    # the Moon's last month: nk samples (nk − 1 steps ≥ TRAIL_DAYS) ending at each frame's sample,
+    # the first sample repeated before the run has lasted a month
+    dt = float(np.median(np.diff(tr.t))) if len(tr.t) > 1 else 1.0
+    days = dt * (le.YEAR_DAYS if tr.time_unit == "yr" else 1.0)
+    nk = int(np.clip(np.ceil(TRAIL_DAYS / max(days, 1e-9)) + 1, 2, 400))
+    m = (k * moon * stretch).astype(np.float32)
+    trail = m[np.maximum(f[:, None] - np.arange(nk - 1, -1, -1)[None, :], 0)]  # (F, nk, 3)
+    d.add(Segments(name="moon_trail", points=np.stack([trail[:, :-1], trail[:, 1:]], 2), colors=(240, 240, 250),
+                   thickness=0.014))
+    # the direction of the Sun, turning once a year: named in a key under the read-out (a name
+    # beside it would pass over the equinox's and the node's every year)
+    if "sun" in tr.bodies:
+        sun = np.asarray(tr.bodies["sun"], float)[f]
+        sun_dir = (1.35 * R * sun / np.linalg.norm(sun, axis=1, keepdims=True)).astype(np.float32)
+        d.add(Segments(name="sun_line", points=np.stack([np.zeros_like(sun_dir), sun_dir], 1)[:, None],
+                       colors=tbd.SUN_LINE_COLOR, thickness=0.006),
+              Sphere(name="sun_dir", radius=0.06, color=(250, 210, 60), position=sun_dir),
+              Label(name="sun_key", text="yellow line: toward the Sun", position=(-1.6 * R, 0.0, 1.3 * R - 0.2)))
+    t = np.asarray(tr.t, float)[f]
+    ideg, ndeg = np.degrees(inc[f]), np.degrees(node[f])
+    tbd.readout(d, [f"i = {ideg[j]:.3f}°   ☊ = {ndeg[j]:.1f}°   t = {t[j]:.2f} {tr.time_unit}" for j in range(len(f))],
+                (-1.6 * R, 0.0, 1.3 * R))
+    return d
+
+
 register(Scenario(
     name="lunar-perturbation",
     title="The Moon perturbed by the Sun, by its elements",
@@ -145,6 +238,8 @@ register(Scenario(
     camera=Camera((0.9, -3.1, 2.1), (0.0, 0.0, 0.35)),  # oblique: orbit plane, node line, normal
     preview={'duration_yr': 4.0, 'step_days': 0.05},
     simulate_fn=_lunar,
+    draw=_draw,
+    options=OPTIONS,
     euler_formula=("dψ = −n v³ u d∅ sin σ sin(θ − ψ)/p · (1/w³ − 1/u³) (§XXVIII)\n"
                    "dω / sin ω = dψ / tan σ, dσ = d∅ − dψ cos ω"),
     kind="orbit",

@@ -8,7 +8,8 @@ from __future__ import annotations
 import math
 import numpy as np
 from ..physics.params import Param
-from .drawing import Camera
+from .drawing import Camera, Drawing, Label, Option, Segments, Sphere, View, circle, new_drawing, segments
+from . import _three_body_drawing as tbd
 from .base import Comparison, Run, Scenario, register
 from ..physics.three_body import syzygy as sz
 from .checks import register_check
@@ -128,6 +129,107 @@ def _syzygy_params():
     )
 
 
+# ---- the scene ---------------------------------------------------------------------------------
+
+OPTIONS = {**tbd.corotating_option(True, "co-rotating frame (Sun fixed on +x)"),
+           "inset": Option("magnified swing about the syzygy point (inset)", True),
+           "plot_per_amplitude": Option("plot in units of the amplitude A (Euler's curve visible)", True)}
+PLOT_CLIP = 4.0  # |η/A| plotted up to this (the escape is read in the scene)
+INSET_OFFSET = (0.0, 0.75, 0.0)  # scene units from the syzygy point
+INSET_AMPLITUDE = 0.18  # the first swing drawn this large (scene units)
+INSET_CLIP = 0.55  # the magnified path is drawn while within this radius
+INSET_COLOR = (190, 120, 255)
+READOUT_AT = np.array([-1.7, 2.6, 0.0])  # top left, above the Sun's circle in the inertial view
+_PLOT_KEYS = ("η simulated (deg)", "η Euler A sin αζ (deg)", "v/b simulated", "v/b Euler 1 − 0.3117 A cos αζ")
+
+
+def _plot(run: Run, per_amplitude: bool) -> dict:
+    """η/A and (v/b − 1)/A beside Euler's sin αζ and −0.3117 cos αζ (§16), clipped at ±PLOT_CLIP:
+    in degrees the escape (tens of degrees) flattens the first swings of 0.05°. Without the
+    option (or without an amplitude): the run's own series."""
+    ps = run.plot_series
+    A = float(run.params.get("amplitude_deg", 0.0))
+    if not per_amplitude or A <= 0 or not all(k in ps for k in _PLOT_KEYS):
+        return dict(ps)
+    Ar, c = np.radians(A), PLOT_CLIP
+    return {  # Euler's curve first, the simulation drawn over it
+        "η/A Euler: sin αζ": np.asarray(ps[_PLOT_KEYS[1]]) / A,
+        f"η/A simulated (clipped at ±{c:g})": np.clip(np.asarray(ps[_PLOT_KEYS[0]]) / A, -c, c),
+        "(v/b − 1)/A Euler: −0.3117 cos αζ": (np.asarray(ps[_PLOT_KEYS[3]]) - 1) / Ar,
+        f"(v/b − 1)/A simulated (clipped at ±{c:g})": np.clip((np.asarray(ps[_PLOT_KEYS[2]]) - 1) / Ar, -c, c),
+    }
+
+
+def _inset(d: Drawing, run: Run, k: float, p: np.ndarray) -> None:
+    """The Moon's offset from the syzygy point, magnified M times so that the first swing (η
+    amplitude A) is INSET_AMPLITUDE long, drawn beside the point while it stays within INSET_CLIP:
+    Euler's small oscillation (a retrograde ellipse, radial/transverse = 0.31) and its growth into
+    the escape. A dot follows the Moon's offset while it is inside the ring."""
+    s = run.trajectory.series
+    if "moon_corotating_x" not in s or "moon_corotating_y" not in s:
+        return
+    rel = np.stack([np.asarray(s["moon_corotating_x"], float) - p[0], np.asarray(s["moon_corotating_y"], float) - p[1],
+                    np.zeros(len(s["moon_corotating_x"]))], 1)
+    A = np.radians(float(run.params.get("amplitude_deg", 0.0)))
+    amp0 = abs(p[0]) * A if A > 0 else float(np.linalg.norm(rel[min(len(rel) - 1, 5)]))
+    if not amp0 > 0:
+        return
+    M = INSET_AMPLITUDE / (k * amp0)
+    centre = k * p + np.asarray(INSET_OFFSET)
+    with np.errstate(over="ignore", invalid="ignore"):
+        pts = centre + k * M * rel
+    if not np.all(np.isfinite(pts)):  # a swing too small to magnify (amplitude 1e-311°)
+        return
+    inside = np.linalg.norm(pts - centre, axis=1) <= INSET_CLIP
+    last = int(np.argmin(inside)) if not inside.all() else len(inside)  # first sample outside the ring
+    tbd.growing_path(d, "inset/path", pts[:last], np.arange(last), INSET_COLOR, 0.008)
+    r = INSET_CLIP
+    d.add(Segments(name="inset/ring", points=segments(centre + circle(r, 65)), colors=(110, 110, 125), thickness=0.003))
+    tbd.line(d, "inset/sun_line", centre - (r, 0, 0), centre + (r, 0, 0), color=tbd.SUN_LINE_COLOR, thickness=0.004)
+    d.add(Label(name="inset/label", text=f"swing about the Sun line ×{M:.0f}", position=centre + (-r, r + 0.05, 0)))
+    f = d.frames
+    if last > 0:
+        d.add(Sphere(name="inset/moon", radius=0.03, color=INSET_COLOR, position=pts[np.minimum(f, last - 1)],
+                     visible=f < last))
+
+
+def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
+    """The Sun–Earth line and the syzygy point (Sun–Earth L1 or L2); in the co-rotating frame
+    (default) the Moon swings about the line and then leaves, with a magnified inset of the swing;
+    an η and v/b read-out; the plot in units of the amplitude."""
+    d = new_drawing(run, spec)
+    tr, f = run.trajectory, d.frames
+    corot = tbd.corotating(run, spec, view)
+    d.plot = _plot(run, view.option("plot_per_amplitude", spec))
+    bodies = tbd.body_positions(run, turn=corot)
+    # inertial: the Sun goes round the whole circle, which the camera (aimed at the co-rotating
+    # picture, Sun on +x) sees whole when drawn smaller
+    k = tbd.draw_bodies(d, run, bodies, tbd.largest_distance(bodies) * (1.0 if corot else 1.3))
+    tbd.turning_frame(d, run, corot)
+    sun_d = float(np.linalg.norm(np.asarray(tr.bodies["sun"], float)[0])) if "sun" in tr.bodies else \
+        tbd.largest_distance(bodies)
+    tbd.line(d, f"{tbd.TURNING}/sun_line", (-0.5 * k * sun_d, 0, 0), (k * sun_d, 0, 0), color=tbd.SUN_LINE_COLOR)
+    p = run.extras.get("syzygy_point_lunar")
+    if p is not None:
+        p = np.asarray(p, float)
+        tbd.marker(d, f"{tbd.TURNING}/syzygy_point", k * p, radius=0.04)
+        side = "L1" if p[0] > 0 else "L2"
+        if corot:  # below and toward the Earth: the Moon's swing and its escape stay on the point's other side
+            d.add(Label(name=f"{tbd.TURNING}/syzygy_point/label", text=f"syzygy point ({side})",
+                        position=(-0.62, -0.1, 0.0)))
+            if view.option("inset", spec):
+                _inset(d, run, k, p)
+        else:  # turning with the Sun line, a name beside it would pass over the Earth's and the Moon's
+            d.add(Label(name="syzygy_point_key", text=f"white dot on the Sun line: syzygy point ({side})",
+                        position=READOUT_AT + np.array([0.0, -0.16, 0.0])))
+    t = np.asarray(tr.t, float)[f]
+    eta, v = tr.series.get("eta_deg"), tr.series.get("distance_over_b")
+    texts = [(f"η = {eta[i]:+.3g}°  v/b = {v[i]:.4f}  t = {t[j]:.3f} {tr.time_unit}"
+              if eta is not None and v is not None else f"t = {t[j]:.3g} {tr.time_unit}") for j, i in enumerate(f)]
+    tbd.readout(d, texts, READOUT_AT)
+    return d
+
+
 register(Scenario(
     name="syzygy",
     title="The Moon kept in syzygy with the Sun",
@@ -141,6 +243,8 @@ register(Scenario(
     params=_syzygy_params(),
     camera=Camera((0.4, -0.8, 3.1), (0.4, 0.0, 0.0)),  # co-rotating: Sun on +x, both syzygy points in view
     simulate_fn=_syzygy,
+    draw=_draw,
+    options=OPTIONS,
     euler_formula=("m(1 − α)² = α² − α²(1 − α)³ (§7)\n"
                    "η = A sin ω, v = b(1 − 0.3117 A cos ω), ω = αζ, α⁴ + 2α² = 27 (§16)"),
     kind="orbit",
