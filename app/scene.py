@@ -282,14 +282,14 @@ class SceneView:
         cols = _rgb(it.colors)
         return [self._node(name, lambda: self.scene.add_point_cloud(
             name, pts, cols, point_size=float(it.size), point_shape="circle", precision=prec),
-            sig=(float(it.size), prec), points=pts, colors=cols)]
+            sig=(float(it.size), prec), points=pts, colors=np.asarray(cols, np.uint8))]  # viser sets no tuple
 
     def _draw_segments(self, it: Segments, name, anim):
         pts = _f32(self._static_value(it.points, "points" in anim))
         cols = _rgb(it.colors)
         return [self._node(name, lambda: self.scene.add_line_segments(
             name, pts, cols, thickness=float(it.thickness), thickness_units="world"),
-            sig=(float(it.thickness),), points=pts, colors=cols)]
+            sig=(float(it.thickness),), points=pts, colors=np.asarray(cols, np.uint8))]  # viser sets no tuple
 
     def _draw_label(self, it: Label, name, anim):
         text = str(self._static_value(it.text, "text" in anim))
