@@ -348,7 +348,7 @@ def test_labels_do_not_sit_on_each_other(name, given, opts):
     through the run (the bodies' names move with them), and every label is on the canvas left of
     the app's control panel (400 px wide; the app shifts an orbit scene's camera right by
     PANEL_SHIFT of its distance, which moves the picture left by PANEL_SHIFT × the focal length)."""
-    from theoria.app.server import PANEL_SHIFT
+    from theoria.app.gallery import PANEL_SHIFT
 
     spec, run, d = _drawing(name, opts, **given)
     focal = 400 / np.tan(np.radians(75.0) / 2)
@@ -369,7 +369,7 @@ def test_orbit_cameras_are_shifted_clear_of_the_panel():
     """Orbit scenes: camera and look-at point moved by the same vector, to the screen's right
     (so the scene sits left of the control panel); rotation scenes keep the gallery's view."""
     from theoria.app import gallery
-    from theoria.app.server import PANEL_SHIFT, camera_view
+    from theoria.app.gallery import PANEL_SHIFT, camera_view
 
     for name in ("collinear", "syzygy", "lunar-perturbation"):
         spec = get(name)
