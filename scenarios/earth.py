@@ -19,6 +19,7 @@ from ..physics.precession import ARCSEC, euler_N, fit_pole, pole_angles
 from ..physics.three_body.lunar_elements import NODE_PERIOD_SIDEREAL_YR, NODE_PERIOD_YR
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, register
+from ._ch16_drawing import EARTH_OPTIONS, earth_scene
 from ._earth import MIN_STEPS, YR
 
 
@@ -340,6 +341,10 @@ def _check_earth(values):
                              f"{MIN_STEPS} steps of step_days = {values['step_days']:g})")
 
 
+def _draw(run, spec, view):
+    return earth_scene(run, spec, view, long_view=False)
+
+
 register(Scenario(
     name="earth",
     title="The Earth under the Sun and the Moon: precession and nutation",
@@ -363,6 +368,8 @@ register(Scenario(
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
     preview={'years': 10.0, 'step_days': 1.0},
     simulate_fn=_earth,
+    draw=_draw,
+    options=EARTH_OPTIONS,
     check=_check_earth,
     euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)\n"
                    "nutation in 2φ: εN sin n (ε + 2δ cos n) / (2δ(εε − 4δδ)) in obliquity, εN (ε cos n + 2δ) / (2δ(εε − 4δδ)) in longitude (§844)"),

@@ -13,6 +13,7 @@ from ..physics.precession import ARCSEC, pole_angles
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
+from ._ch16_drawing import EARTH_OPTIONS, earth_scene
 from ._earth import MIN_STEPS, YR
 
 
@@ -88,6 +89,10 @@ def _earth_long(values, progress=None):
                                "pole RA J2000 (deg)": ra, "pole Dec J2000 (deg)": dec})
 
 
+def _draw(run, spec, view):
+    return earth_scene(run, spec, view, long_view=True)
+
+
 register(Scenario(
     name="earth-long-view",
     title="A whole precession cycle: the pole among the stars",
@@ -105,6 +110,8 @@ register(Scenario(
     camera=Camera((3.6, -3.2, 4.4), (0.0, 0.0, 0.6)),  # the pole's circle near the top of the sphere
     preview={'step_days': 5.0, 'sample_years': 50.0},
     simulate_fn=_earth_long,
+    draw=_draw,
+    options={k: v for k, v in EARTH_OPTIONS.items() if k != "wiggle"},  # sampled every few years: no nutation
     check=_check_long,
     euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)"),
     presets=(

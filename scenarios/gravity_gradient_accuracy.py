@@ -13,6 +13,8 @@ from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
 from ..physics.gravity_gradient import (fitted_order, force_error_vs_size, torque_error_vs_size)
 from .checks import register_check
+from .drawing import Label, Option, Segments, Sphere, unit
+from ._ch16_drawing import F_COLOR, body_scene, line_from_centre, readout_position
 
 
 def _gg_accuracy(values, progress=None):
@@ -46,6 +48,33 @@ def _gg_accuracy(values, progress=None):
     return Run("gravity-gradient-accuracy", values, traj, m, comps, notes, plot_series=series)
 
 
+F_VIEW = 2.8  # scene units (the body's largest semi-axis is 1): a farther F waits here, on its direction
+
+
+def _draw(run, spec, view):
+    """The run is a sweep of F's distance s (trajectory.t = size/s), so playback brings F in from
+    far away: F at its true distance once in view (beyond F_VIEW it waits there, and says so),
+    labelled with the relative errors of Euler's torque and of the §818 force at that distance
+    (the run's plot_series)."""
+    d, _ = body_scene(run, spec, view, bodies={})  # F is drawn at its distance, not on a sphere of directions
+    tr = run.trajectory
+    if not view.option("attractor", spec) or "attractor" not in tr.bodies:
+        return d
+    f = d.frames
+    dist = 1.0 / np.asarray(tr.t, float)[f]  # in sizes (largest semi-axis) from the centre
+    pos = unit(np.asarray(tr.bodies["attractor"], float)[f]) * np.minimum(dist, F_VIEW)[:, None]
+    nan = np.full(len(tr.t), np.nan)
+    et = np.asarray(run.plot_series.get("torque_rel_error", nan), float)[f]
+    ef = np.asarray(run.plot_series.get("force_rel_error", nan), float)[f]
+    text = [f"F at s = {s:.3g} sizes{' (drawn nearer)' if s > F_VIEW else ''}: torque error {100 * a:.2g} %, "
+            f"force error {100 * b:.2g} %" for s, a, b in zip(dist, et, ef)]
+    d.add(Sphere(name="F", radius=0.1, color=F_COLOR, position=pos),
+          Label(name="F/label", text="F", position=(0.0, 0.0, 0.22)),
+          Label(name="F_readout", text=text, position=readout_position(d, down=2.0, left=1.8)),
+          Segments(name="F_direction", points=line_from_centre(pos), colors=F_COLOR, thickness=0.012))
+    return d
+
+
 def _check_ratios(v):
     if not v["min_ratio"] < v["max_ratio"]:
         raise ParameterError("min_ratio", v["min_ratio"], f"below max_ratio = {v['max_ratio']:g}")
@@ -71,6 +100,8 @@ register(Scenario(
     camera=Camera((-2.0, 3.8, 2.2), (0.0, 0.0, 0.0)),
     overlays={'celestial': False, 'axis_trail': False, 'polhode': False, 'vectors': False},
     simulate_fn=_gg_accuracy,
+    draw=_draw,
+    options={"attractor": Option("F at its distance, with the errors there")},
     euler_formula=("τ = (3GM/s³) ŝ × I ŝ + O(size²/s²) (§815–816)"),
     check=lambda v: _check_ratios(v),
     presets=(

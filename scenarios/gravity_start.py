@@ -15,6 +15,7 @@ from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
+from ._ch16_drawing import ZETA_OPTION, body_scene, centre_of_force, f_and_zeta
 
 
 def _gravity_start(values, progress=None):
@@ -69,6 +70,13 @@ def _gravity_start(values, progress=None):
     return Run("gravity-start", values, traj, m, comps, notes, plot_series=dict(series))
 
 
+def _draw(run, spec, view):
+    """The body pulled from rest, the line to F and the arc AF = ζ from the A axis (§815, §820)."""
+    d, _ = body_scene(run, spec, view, bodies={"F": centre_of_force(run)})
+    f_and_zeta(d, run, spec, view)
+    return d
+
+
 def _check_gravity_start(v):
     validate_moments(v["inertia"], "inertia")
     if not np.linalg.norm(v["direction"]) > 0:
@@ -94,6 +102,8 @@ register(Scenario(
     ),
     camera=Camera((1.2, -4.4, 2.4), (0.0, 0.0, 0.0)),  # across F (default direction (1, 0.6, 0.4)), not along it
     simulate_fn=_gravity_start,
+    draw=_draw,
+    options=ZETA_OPTION,  # F stays where it is: no orbit to draw
     euler_formula=("P = 3GM (C − B) cos η cos ϑ / s³, and the same for Q and R in turn (§815)\n"
                    "cos α : cos β : cos γ = P/A : Q/B : R/C (§820)"),
     check=lambda v: _check_gravity_start(v),

@@ -19,6 +19,9 @@ from ..physics.params import Param
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
 from ._libration import planar_moments, zeta_of
+from .drawing import Label, Option, Points, Segments
+from ._ch16_drawing import (ORBIT_OPTION, PANEL_COLOR, ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force,
+                            f_and_zeta)
 
 
 RESONANCES = (0.5, 1.0, 1.5, 2.0, 2.5)
@@ -114,6 +117,59 @@ def _hyperion(values, progress=None):
     return Run("hyperion", values, traj, m, comps, notes, plot_series=series, extras=extras)
 
 
+CHAOTIC_PER_ORBIT = 0.05  # Lyapunov exponent per orbit above which a start counts as chaotic (chaotic_fraction)
+RESONANCE_NAMES = {0.5: "1:2", 1.0: "1:1", 1.5: "3:2", 2.0: "2:1", 2.5: "5:2"}
+
+
+def _draw(run, spec, view):
+    """The probe body with F and ζ, and beside it the surface of section (θ mod π, θ̇/n at each
+    periapse) of the ensemble, chaotic starts red and regular ones blue, with the Goldreich–Peale
+    zones p ± half-width (the run's metrics gp_half_width_p) as green lines."""
+    d, _ = body_scene(run, spec, view, bodies={"F": centre_of_force(run)})
+    f_and_zeta(d, run, spec, view)
+    # the section is a point cloud, not a time series: drawn here, left out of the time plot
+    d.plot = {k: v for k, v in run.plot_series.items() if not k.startswith("section_")}
+    if view.option("section", spec) and "section_theta_mod_pi" in run.plot_series:
+        _section(d, run)
+    return d
+
+
+def _section(d, run):
+    ps = run.plot_series
+    th = np.asarray(ps["section_theta_mod_pi"], float)
+    w = np.asarray(ps["section_theta_dot"], float)
+    ly = np.asarray(ps.get("section_lyapunov_per_orbit", np.zeros_like(th)), float)
+    ok = np.isfinite(th) & np.isfinite(w)
+    th, w, ly = th[ok], w[ok], ly[ok]
+    widths = {float(k[len("gp_half_width_"):]): float(v) for k, v in run.metrics.items()
+              if k.startswith("gp_half_width_") and np.isfinite(v)}
+    y0 = min(float(np.min(w)) if len(w) else 0.0, 0.0)
+    y1 = max(float(np.max(w)) if len(w) else 3.0, max((p + h for p, h in widths.items()), default=0.0))
+    pad = 0.05 * (y1 - y0)
+    right, up, look = camera_basis(d.camera)
+    p = Panel(look - 4.5 * right + 0.1 * up, right, up, (0.0, np.pi), (y0 - pad, y1 + pad), size=3.2)
+    col = np.where((ly > CHAOTIC_PER_ORBIT)[:, None], np.array([215, 60, 40]), np.array([40, 90, 200])).astype(np.uint8)
+    d.add(Segments(name="section/frame", points=p.frame(), colors=PANEL_COLOR, thickness=0.01),
+          Points(name="section/points", points=p.map(th, w), colors=col, size=0.028))
+    lines, labels = [], []
+    for q, h in sorted(widths.items()):
+        lines += [p.hline(y) for y in (q - h, q + h) if y0 - pad <= y <= y1 + pad]
+        if y0 - pad <= q <= y1 + pad:
+            labels.append((q, h))
+    if lines:  # a little toward the camera, so the zones are drawn over the points
+        d.add(Segments(name="section/resonance_zones", points=np.concatenate(lines) + 0.03 * p.normal,
+                       colors=(20, 150, 60), thickness=0.016))
+    for q, h in labels:
+        d.add(Label(name=f"section/res_{q:g}", text=f"{RESONANCE_NAMES.get(q, f'{q:g}')} ± {h:.2f}",
+                    position=p.map(np.pi, q) + 0.25 * right))
+    # title above and axes below, from the panel's left edge (a label starts at its point)
+    d.add(Label(name="section/title", text="surface of section at periapse: red chaotic, blue regular, "
+                "green Goldreich–Peale zones", position=p.map(0.0, y1 + 2.5 * pad)),
+          Label(name="section/axes_label", text=f"across: θ mod π, 0 … π; up: θ̇/n, {y0:.1f} … {y1:.1f}",
+                position=p.map(0.0, y0 - 2.5 * pad)))
+    return p
+
+
 register(Scenario(
     name="hyperion",
     title="Hyperion: chaotic tumbling (spin–orbit surface of section)",
@@ -138,6 +194,8 @@ register(Scenario(
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
     preview={'n_starts': 12, 'n_orbits': 60},
     simulate_fn=_hyperion,
+    draw=_draw,
+    options={**ZETA_OPTION, **ORBIT_OPTION, "section": Option("surface of section + resonance zones")},
     euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f)\n"
                    "θ: the body's long axis, f: the moon's direction seen from the planet, r: its distance"),
     presets=(

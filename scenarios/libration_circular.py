@@ -18,6 +18,9 @@ from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
 from ._libration import planar_moments, stride_for, zeta_of
+from .drawing import Label, Option, Points, Segments, Sphere
+from ._ch16_drawing import (ORBIT_OPTION, PANEL_AXES_COLOR, PANEL_COLOR, POINT_COLOR, SEPARATRIX_COLOR, ZETA_COLOR,
+                            ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force, f_and_zeta, wrap)
 
 
 def circular_setup(gamma, rate, zeta0, spin_ratio):
@@ -143,6 +146,43 @@ def _libration_circular(values, progress=None):
     return Run("libration-circular", values, traj, m, comps, notes, plot_series=series, extras=extras)
 
 
+def _draw(run, spec, view):
+    """The body, F on its circle, the arc ζ from the A axis to F, and beside them the phase
+    portrait (ζ, dζ/dt) of the run with the separatrix (§825–831) and the state now as a dot."""
+    d, _ = body_scene(run, spec, view, bodies={"F": centre_of_force(run)})
+    f_and_zeta(d, run, spec, view)
+    # the separatrix and the portrait are curves, not time series: drawn here, not in the time plot
+    d.plot = {k: v for k, v in run.plot_series.items() if not k.startswith("separatrix_")}
+    s = run.trajectory.series
+    if view.option("portrait", spec) and "zeta_dot" in s:
+        _phase_portrait(d, s)
+    return d
+
+
+def _phase_portrait(d, s):
+    sz = np.asarray(s["separatrix_zeta_rad"], float)
+    lo = float(np.nanmin(sz))  # the separatrix spans one period π of the pendulum in 2ζ
+    zw = wrap(s["zeta_rad"], lo, np.pi)
+    zd = np.asarray(s["zeta_dot"], float)
+    ymax = 1.15 * max(np.nanmax(np.abs(zd)), np.nanmax(np.abs(s["separatrix_zeta_dot_plus"])), 1e-12)
+    right, up, look = camera_basis(d.camera)
+    p = Panel(look - 3.9 * right + 0.2 * up, right, up, (lo, lo + np.pi), (-ymax, ymax))
+    mid = lo + np.pi / 2
+    sep = np.concatenate([p.map(sz, s["separatrix_zeta_dot_plus"]), p.map(sz, s["separatrix_zeta_dot_minus"])])
+    d.add(Segments(name="portrait/frame", points=p.frame(), colors=PANEL_COLOR, thickness=0.01),
+          Segments(name="portrait/axes", points=np.concatenate([p.hline(0.0), p.vline(mid)]), colors=PANEL_AXES_COLOR,
+                   thickness=0.006),
+          Points(name="portrait/separatrix", points=sep[np.all(np.isfinite(sep), axis=1)], colors=SEPARATRIX_COLOR,
+                 size=0.02),
+          Points(name="portrait/trajectory", points=p.map(zw, zd), colors=POINT_COLOR, size=0.02),
+          Sphere(name="portrait/state", radius=0.06, color=ZETA_COLOR, position=p.map(zw[d.frames], zd[d.frames])),
+          # title above and axes below, from the panel's left edge (a label starts at its point)
+          Label(name="portrait/title", text="phase portrait (ζ, dζ/dt); red: separatrix", position=p.map(lo, ymax * 1.12)),
+          Label(name="portrait/axes_label", text=f"across: ζ, {np.degrees(lo):.0f}° … {np.degrees(lo + np.pi):.0f}°; "
+                f"up: dζ/dt, ±{ymax:.3g}", position=p.map(lo, -ymax * 1.14)))
+    return p
+
+
 register(Scenario(
     name="libration-circular",
     title="Libration in a circular orbit (Problem 93)",
@@ -166,6 +206,9 @@ register(Scenario(
     ),
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),  # from above F's orbit plane (body xy)
     simulate_fn=_libration_circular,
+    draw=_draw,
+    options={**ZETA_OPTION, **ORBIT_OPTION,
+             "portrait": Option("phase portrait (ζ, dζ/dt) with the separatrix")},
     euler_formula=("ζ̈ + N sin 2ζ = 0, N = 3GM (B − A) / (2C s³) (§825)\n"
                    "small swings: period T = 2π / √(2N) (§831)"),
     presets=(

@@ -18,6 +18,7 @@ from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
 from ._libration import planar_moments, stride_for, zeta_of
+from ._ch16_drawing import ORBIT_OPTION, ZETA_OPTION, body_scene, centre_of_force, f_and_zeta
 
 
 class ForcedSolution:
@@ -144,6 +145,13 @@ def _libration_eccentric(values, progress=None):
     return Run("libration-eccentric", values, traj, mt, comps, notes, plot_series=series)
 
 
+def _draw(run, spec, view):
+    """The body, F on its Kepler ellipse (true shape) and the arc ζ from the A axis to F (§833)."""
+    d, _ = body_scene(run, spec, view, bodies={"F": centre_of_force(run)})
+    f_and_zeta(d, run, spec, view)
+    return d
+
+
 register(Scenario(
     name="libration-eccentric",
     title="Forced libration in an eccentric orbit (Problem 94)",
@@ -165,6 +173,8 @@ register(Scenario(
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
     preview={'orbits': 5.0},
     simulate_fn=_libration_eccentric,
+    draw=_draw,
+    options={**ZETA_OPTION, **ORBIT_OPTION},
     euler_formula=("ζ = A²α/(A² − 2N) · sin At + Nαβ/(4(A² − 2N)) · sin 2At (§833–835)"),
     presets=(
         ("Forced swing: a nearly circular orbit", {}),

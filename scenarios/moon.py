@@ -22,6 +22,8 @@ from ..physics.integrator import PointMass, integrate
 from ..physics.params import Param
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, register
+from .drawing import Follow, Light, Mesh, Option, Segments, segments, unit
+from ._ch16_drawing import body_scene, line_from_centre, moon_surface_parts
 
 
 MOON_YEARS = 6.0
@@ -292,6 +294,54 @@ def _moon(values, progress=None):
     return Run("moon", values, traj, m, comps, notes, plot_series=series)
 
 
+EYE_RADII = 2.3  # the Earth-view camera's distance in Moon radii (drawn 1): the disc spans ~52° of the view
+EYE_FOV_DEG = 60.0
+
+
+def _draw(run, spec, view):
+    """The Moon with its near side's maria (so the wobbling face shows), the prime meridian and
+    equator on the body (their crossing, the mean sub-Earth point, wanders about the disc centre
+    by the libration), and by default the view from the Earth: a camera on the Earth's direction
+    looking at the Moon, lit from the Earth's side (a full Moon). The time plot: the face's wobble
+    in degrees (sub-Earth longitude = the scenario's ζ, latitude, Euler's ζ), or the physical
+    libration in arcseconds with Euler's formula (§833, §836)."""
+    tr = run.trajectory
+    earth = np.asarray(tr.bodies.get("earth", next(iter(tr.bodies.values()))), float)
+    from_earth = view.option("earth_view", spec)
+    # seen from the Earth, the Earth's marker would stand in front of the camera
+    d, semi = body_scene(run, spec, view, bodies={} if from_earth else {"earth": earth})
+    e = unit(earth[d.frames])
+    if view.option("maria", spec):  # the Moon's own face instead of the banded body
+        d.items = [it for it in d.items if not it.name.startswith("body/mesh/")]
+        for k, (v, fc, rgb) in enumerate(moon_surface_parts()):
+            d.add(Mesh(name=f"body/moon_surface/{k}", group="body", vertices=v, faces=fc, color=rgb,
+                       scale=tuple(1.004 * semi)))
+    if view.option("earth_line", spec):
+        th = np.linspace(-np.pi / 2, np.pi / 2, 61)
+        mer = np.stack([np.cos(th), np.zeros_like(th), np.sin(th)], 1)
+        equ = np.stack([np.cos(th), np.sin(th), np.zeros_like(th)], 1)
+        d.add(Segments(name="body/prime_meridian", points=1.01 * np.concatenate([segments(mer), segments(equ)]) * semi,
+                       colors=(230, 60, 40), thickness=0.01))
+        if not from_earth:
+            d.add(Segments(name="earth_direction", points=line_from_centre(1.9 * e), colors=(40, 120, 220),
+                           thickness=0.015))
+    if from_earth:
+        # the A axis points at the camera and ω, L along the top of the view: off by default here
+        d.overlays.update(axes=False, vectors=False)
+        d.add(Light(name="earth_light", position=5.0 * e, intensity=2.0))
+        d.follow = Follow(position=EYE_RADII * e, fov_deg=EYE_FOV_DEG)
+        d.camera = Camera(tuple(float(x) for x in EYE_RADII * e[0]), fov_deg=EYE_FOV_DEG)  # where a replay starts
+    ps = run.plot_series
+    if view.option("plot_physical", spec):
+        d.plot = {k: ps[k] for k in ("physical_libration_arcsec", "physical_libration_euler_arcsec") if k in ps}
+    else:  # (the uniform-rotation curves differ from these by < 0.04°: drawn, they would hide each other)
+        d.plot = {k: ps[k] for k in ("libration_longitude_deg", "libration_latitude_deg") if k in ps}
+        if "zeta_euler_rad" in ps:
+            d.plot["ζ, Euler §833 (deg)"] = np.degrees(ps["zeta_euler_rad"])
+    d.plot = d.plot or dict(ps)
+    return d
+
+
 register(Scenario(
     name="moon",
     title="The Moon's libration seen from the Earth",
@@ -316,6 +366,11 @@ register(Scenario(
     camera=Camera((4.2, -3.6, 2.4), (0.0, 0.0, 0.0)),
     preview={'years': 1.0},
     simulate_fn=_moon,
+    draw=_draw,
+    options={"earth_view": Option("view from the Earth (camera follows)"),
+             "maria": Option("maria on the Moon"),
+             "earth_line": Option("direction to the Earth + sub-Earth meridian"),
+             "plot_physical": Option("time plot: physical libration (″) instead of the face's wobble (°)", False)},
     euler_formula=("τₖ = −αₖ · 2N/(Aₖ² − 2N) · sin(Aₖt + 𝔄ₖ), 2N = 3 (B − A)/C · GM⊕/s³ (§833, §836)"),
     presets=(
         ("Moon: the face wobbles", {}),

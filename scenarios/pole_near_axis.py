@@ -16,6 +16,9 @@ from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
 from ._precession import MAX_SAMPLES
+from .drawing import Label, Option, Path, Segments, Sphere, segments, unit
+from ._ch16_drawing import (WIGGLE_COLOR, body_scene, centre_line, centre_of_force, magnified_about_start, nice_step,
+                            path_samples)
 
 
 def _stride(n_steps):
@@ -100,6 +103,53 @@ def _pole_near_axis(values, progress=None):
                                "spin γ' (rad/s)": np.linalg.norm(traj.omega_body, axis=1)})
 
 
+POLE_RADIUS = 1.6  # the pole's path is drawn on a body-fixed sphere beyond the A axis (semi-axis 1)
+
+
+def _draw(run, spec, view):
+    """The spinning body with the direction to F, and on the body (turning with it) the path of
+    the rotation pole O (the direction of ω in the body, beyond the A axis), its departure from
+    the start magnified by the factor in its label: in a few turns O moves by a fraction of a
+    degree (§840), at right angles to the arc AF (§841). Around the start, a body-fixed scale:
+    the directions toward B and C and rings at round true angles from the start, drawn with the
+    same magnification as the path."""
+    d, _ = body_scene(run, spec, view, bodies={"F": centre_of_force(run)})
+    if view.option("pole_path", spec):
+        tr = run.trajectory
+        u = unit(tr.omega_body)
+        path, k = magnified_about_start(u, target_deg=16.0)
+        path = POLE_RADIUS * path
+        idx, at = path_samples(d, len(path))
+        d.add(Path(name="body/pole_path", points=path[idx], color=WIGGLE_COLOR, thickness=0.02, at=at),
+              Sphere(name="body/pole_now", radius=0.04, color=WIGGLE_COLOR, position=path[d.frames]))
+        _pole_scale(d, u[0], float(np.degrees(np.max(np.arccos(np.clip(u @ u[0], -1, 1))))), k)
+    centre_line(d, run, spec, view)
+    return d
+
+
+def _pole_scale(d, c, dev_deg, k):
+    """Rings about the start c at round true angles θ, drawn where the magnified path puts a pole
+    θ from c (c + k·(u − c), normalised: at atan2(k sin θ, 1 + k(cos θ − 1))), and the arcs
+    through c toward the body's B and C axes."""
+    tb = unit(np.array([0.0, 1.0, 0.0]) - c[1] * c)
+    tb = tb if np.linalg.norm(tb) > 0.5 else unit(np.array([0.0, 0.0, 1.0]) - c[2] * c)
+    tc = np.cross(c, tb)
+    step = nice_step(max(dev_deg, 1e-12) / 2)
+    rings = step * np.arange(1, 4)
+    drawn = np.arctan2(k * np.sin(np.radians(rings)), 1 + k * (np.cos(np.radians(rings)) - 1))
+    th = np.linspace(0, 2 * np.pi, 73)[:, None]
+    segs = [segments(POLE_RADIUS * (np.cos(a) * c + np.sin(a) * (np.cos(th) * tb + np.sin(th) * tc))) for a in drawn]
+    reach = np.linspace(-drawn[-1], drawn[-1], 25)[:, None]
+    for t in (tb, tc):
+        segs.append(segments(POLE_RADIUS * (np.cos(reach) * c + np.sin(reach) * t)))
+    edge = 1.08 * POLE_RADIUS
+    d.add(Segments(name="body/pole_scale", points=np.concatenate(segs), colors=(150, 150, 160), thickness=0.004),
+          Label(name="body/pole_scale/B", text="toward B", position=edge * (np.cos(drawn[-1]) * c + np.sin(drawn[-1]) * tb)),
+          Label(name="body/pole_scale/C", text="toward C", position=edge * (np.cos(drawn[-1]) * c + np.sin(drawn[-1]) * tc)),
+          Label(name="body/pole_label", text=f"pole O, departure ×{k:g}; rings {step:g}° apart (true)",
+                position=edge * (np.cos(drawn[-1]) * c - np.sin(drawn[-1]) * tc)))
+
+
 register(Scenario(
     name="pole-near-axis",
     title="The pole of rotation near a principal axis",
@@ -126,6 +176,9 @@ register(Scenario(
     camera=Camera((4.6, 1.6, 1.4), (0.8, 0.0, 0.0)),  # nearly down the spin axis A (body x): the pole path beyond it face-on
     overlays={'celestial': False, 'axis_trail': False, 'polhode': False},
     simulate_fn=_pole_near_axis,
+    draw=_draw,
+    options={"pole_path": Option("path of the rotation pole O in the body, magnified"),
+             "centre": Option("direction to the centre of force")},
     euler_formula=("dγ' = 6gee (cc − bb) dt cos η cos ϑ / (aa s³) (§840)\n"
                    "γ' dβ = −6gee (aa − cc) dt cos ζ cos ϑ / (bb s³)\n"
                    "γ' dγ = −6gee (bb − aa) dt cos ζ cos η / (cc s³)   (6gee = 3GM)\n"

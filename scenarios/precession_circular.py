@@ -17,6 +17,8 @@ from .base import Comparison, Run, Scenario, register
 import functools
 from .checks import register_check
 from ._precession import MAX_SAMPLES
+from .drawing import Option
+from ._ch16_drawing import body_scene, centre_line, centre_of_force, pole_cone
 
 
 def spheroid_moments(flattening):
@@ -189,6 +191,16 @@ def _precession_circular(values, progress=None):
     })
 
 
+def _draw(run, spec, view):
+    """The spinning body, F on its circle, and on the celestial sphere the cone swept by the
+    figure axis about the orbit pole (precession) with its nodding magnified (nutation, §844)."""
+    d, _ = body_scene(run, spec, view, bodies={"F": centre_of_force(run)})
+    if view.option("cone", spec):
+        pole_cone(d, run, run.trajectory.figure_axis, wiggle=view.option("wiggle", spec))
+    centre_line(d, run, spec, view)
+    return d
+
+
 register(Scenario(
     name="precession-circular",
     title="Precession and nutation under a centre on a circle",
@@ -214,6 +226,10 @@ register(Scenario(
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
     preview={'orbits': 20.0},
     simulate_fn=_precession_circular,
+    draw=_draw,
+    options={"cone": Option("precession cone (figure axis on the celestial sphere)"),
+             "wiggle": Option("nutation wiggle, magnified"),
+             "centre": Option("direction to the centre of force")},
     check=_check_circular,
     euler_formula=("ZA = n − εN sin n (ε + 2δ cos n) / (2δ(εε − 4δδ)) · cos 2φ + h sin(ε/δ · (φ + ζ)) (§844)\n"
                    "XZA = m − Nt cos n + εN (ε cos n + 2δ) / (2δ(εε − 4δδ)) · sin 2φ + h/sin n · cos(ε/δ · (φ + ζ))\n"
