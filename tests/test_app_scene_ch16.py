@@ -386,3 +386,30 @@ def test_session_applies_the_moons_camera_and_gives_the_view_back():
         cb.value = False  # the checkbox's callback: option off → the scenario's camera and fov back
         assert client.camera.fov == pytest.approx(np.radians(75.0))
         assert tuple(client.camera.position) != tuple(pos)
+
+
+def test_a_new_run_updates_the_live_viser_nodes_in_place(runs):
+    """On viser's own scene API (a server, no browser): a second run of a ch. 16 scene (the app
+    after a parameter change) updates the existing nodes, one-colour segments and points included
+    (an existing handle takes colours only as an array), and an option's redraw prunes its items."""
+    import contextlib
+    import io
+
+    import viser
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        spec = get("libration-circular")
+        view = SceneView(server.scene)
+        view.show(spec.drawing(runs["libration-circular"]))
+        frame = view._h["/world/portrait/frame"]
+        view.show(spec.drawing(spec.simulate(zeta0_deg=40.0, periods=2.0)))
+        assert view._h["/world/portrait/frame"] is frame  # the same node, new data
+        assert np.array_equal(np.asarray(frame.colors).reshape(-1, 3)[0], ch16.PANEL_COLOR)
+        view.set_frame(view.n - 1)
+        view.show(spec.drawing(runs["libration-circular"], View(options={"portrait": False})))
+        assert not [n for n in view._h if n.startswith("/world/portrait")]
+    finally:
+        with contextlib.redirect_stdout(io.StringIO()):
+            server.stop()
