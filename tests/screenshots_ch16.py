@@ -3,15 +3,15 @@
     PYTHONPATH=. python tests/screenshots_ch16.py OUTDIR SPEC [SPEC ...]
 
 SPEC = scenario[:clock[:key=0|1,...[:file-stem]]]: clock is the playback position (0..1, paused
-there); key is a scene option of the scenario's extra, or ov_<overlay> for an overlay. The
-docs/screenshots of ch. 16 were made with
+there); key is one of the scenario's options (Scenario.options), or ov_<overlay> for an overlay.
+The docs/screenshots of ch. 16 were made with
 
     libration-circular:0.3  moon:0.893  hyperion:0.3  precession-circular:0.5
     earth-long-view:0.6:pole_view=1,ov_axes=0,ov_vectors=0,ov_axis_trail=0
 
 (moon at 0.893: the largest combined libration of the default run, −7.9° and +6.6°).
-The scene is sent once more before the shot: paused at once after a very fast first result,
-labels may not yet be placed (viser renders on change)."""
+The scene is sent once more before the shot and the camera nudged: viser renders on change, and
+labels are placed on render."""
 import sys, time
 from pathlib import Path
 sys.path.insert(0, "tests")
@@ -36,22 +36,26 @@ with sync_playwright() as p:
         s = next(iter(sessions.values()))
         s.playing = False
         for k, v in opts.items():
-            with s._view_lock:
-                if k.startswith("ov_"):
-                    s.toggles[k[3:]].value = v == "1"
-                    s.view.set_overlay(k[3:], v == "1")
-                else:
-                    s.view.set_option(k, v == "1")
-        with s._view_lock:  # re-send the scene once (labels of a very fast first result may not show)
-            s.view.show(s.result, s.spec)
+            if k.startswith("ov_"):
+                s.toggles[k[3:]].value = v == "1"
+            else:
+                s.view_opts.options[k] = v == "1"
+        with s._view_lock:  # the options, and the scene sent once more (labels are placed on render)
+            s.drawing = s.spec.drawing(s.result, s.view_opts)
+            s.view.clear()
+            s.view.show(s.drawing, {k: bool(cb.value) for k, cb in s.toggles.items()})
         s.clock = clock
         s._show_clock(force=True)
         time.sleep(8.0)
         pg.dismiss_software_webgl_note()
         for k in range(3):  # a few moves: the canvas renders on change, and labels are placed on render
             s.clock = clock + 0.0005 * (k + 1)
-            s._show_clock(force=True)
-            time.sleep(1.0)
+            with s._view_lock:
+                s._show_clock(force=True)
+                if s.drawing.follow is None:
+                    cam = s.client.camera
+                    cam.position = tuple(float(x) * (1.0 + 1e-4 * (-1) ** k) for x in cam.position)
+            time.sleep(1.5)
         time.sleep(1.5)
         tag = parts[3] if len(parts) > 3 else name
         pg.page.screenshot(path=str(OUT / f"{tag}.png"))
