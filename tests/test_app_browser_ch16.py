@@ -19,7 +19,7 @@ def test_moon_seen_from_the_earth_fills_the_view_with_its_face(browser):  # noqa
         p.page.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/moon_surface']",
                                  timeout=WAIT_MS)
         s = next(iter(sessions.values()))
-        e = s.result.trajectory.bodies["earth"][s.view.frame]
+        e = s.result.trajectory.bodies["earth"][s.drawing.frames[s.view.frame]]  # the frame's sample
         pos = np.asarray(s.client.camera.position, float)
         assert np.dot(pos / np.linalg.norm(pos), e / np.linalg.norm(e)) > 0.999
         time.sleep(1.5)
