@@ -311,10 +311,10 @@ def _draw(run, spec, view):
     # seen from the Earth, the Earth's marker would stand in front of the camera
     d, semi = body_scene(run, spec, view, bodies={} if from_earth else {"earth": earth})
     e = unit(earth[d.frames])
-    if view.option("maria", spec):  # the Moon's own face instead of the banded body
+    if view.option("maria", spec):  # the body drawn with the Moon's own face instead of in bands
         d.items = [it for it in d.items if not it.name.startswith("body/mesh/")]
         for k, (v, fc, rgb) in enumerate(moon_surface_parts()):
-            d.add(Mesh(name=f"body/moon_surface/{k}", group="body", vertices=v, faces=fc, color=rgb,
+            d.add(Mesh(name=f"body/mesh/{k}", group="body", vertices=v, faces=fc, color=rgb,
                        scale=tuple(1.004 * semi)))
     if view.option("earth_line", spec):
         th = np.linspace(-np.pi / 2, np.pi / 2, 61)

@@ -16,7 +16,7 @@ def test_moon_seen_from_the_earth_fills_the_view_with_its_face(browser):  # noqa
     server, sessions = _server("moon")
     try:
         p = Page(browser, f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1")
-        p.page.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/moon_surface']",
+        p.page.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/mesh/0']",
                                  timeout=WAIT_MS)
         s = next(iter(sessions.values()))
         e = s.result.trajectory.bodies["earth"][s.drawing.frames[s.view.frame]]  # the frame's sample

@@ -212,8 +212,9 @@ def test_moon_view_from_the_earth(runs):
     assert np.allclose(_unit(light.position), e)  # a full Moon: lit from the Earth's side
     # seen from the Earth the Earth's own marker would block the view: not drawn
     assert not [n for n in d.names() if n.startswith("bodies/")]
-    assert not [n for n in d.names() if n.startswith("body/mesh/")]  # the maria replace the banded body
-    assert [n for n in d.names() if n.startswith("body/moon_surface/")]
+    # the body is drawn with the Moon's face (maria), not in bands
+    meshes = [it for it in d.items if it.name.startswith("body/mesh/")]
+    assert {tuple(m.color) for m in meshes} == {ch16.MOON_HIGHLAND, ch16.MOON_MARE, ch16.MOON_CRATER}
     # the time plot: one unit at a time (degrees for the face, arcseconds for the physical libration)
     assert set(d.plot) == {"libration_longitude_deg", "libration_latitude_deg", "ζ, Euler §833 (deg)"}
     assert np.allclose(d.plot["ζ, Euler §833 (deg)"], np.degrees(run.plot_series["zeta_euler_rad"]))
@@ -222,7 +223,7 @@ def test_moon_view_from_the_earth(runs):
     assert d2.follow is None and "bodies/earth" in d2.names() and "bodies/attractor" not in d2.names()
     line = np.asarray(_own(d2)["earth_direction"].points, float)[:, 0, 1]
     assert np.allclose(_unit(line), e, atol=1e-12)
-    assert [n for n in d2.names() if n.startswith("body/mesh/")]
+    assert ch16.MOON_MARE not in {tuple(it.color) for it in d2.items if it.name.startswith("body/mesh/")}
 
 
 def test_moon_maria_on_the_near_side():
