@@ -1,11 +1,11 @@
-"""Benchmarks of the web app and the replays (issue 3), measured in headless Chromium
+"""Benchmarks of the web app and the replays, measured in headless Chromium
 (Debian's /usr/bin/chromium, software WebGL) and with rerun, each against a baseline run in the
 same process:
 
 - app-slider-latency: a parameter change sent by the page (the slider's own GuiUpdateMessage) →
   server → re-simulation (middle-axis-flip defaults, 6001 samples) → scene update → the page's
   polhode geometry changed (checked every animation frame). Median of 7. Baseline: the 100 ms
-  target of issue 3 (ratio = 0.1 s / measured; ≥ 1 meets it).
+  target for a slider to redraw (ratio = 0.1 s / measured; ≥ 1 meets it).
 - app-playback-fps: frames per second in which the page shows a new body pose during playback of
   a 20001-sample run drawn with 10⁴-point trails (polhode, herpolhode, rotation-axis trail; the
   default overlays of a ch. 15 scene). theoria sends the paths once and moves poses and chunk
@@ -149,7 +149,7 @@ def slider_latency():
     return {"theoria_s": med, "baseline_s": 0.1, "theoria_error": None, "baseline_error": None,
             "latency_ms_median": 1000 * med, "latency_ms_max": 1000 * max(lat), "samples": n,
             "server_ms_median": 1000 * statistics.median(server) if server else None,
-            "note": "baseline = 100 ms target (issue 3)"}
+            "note": "baseline = the 100 ms slider-to-redraw target"}
 
 
 def _naive_server(result, spec):

@@ -1,4 +1,4 @@
-"""A classroom on one laptop (issue 7 item 3): thirty browsers on one `theoria serve`.
+"""A classroom on one laptop: thirty browsers on one `theoria serve`.
 
 The server runs in its own process (`python -m theoria.app.cli serve`), exactly as a teacher starts
 it; its resident memory is read with psutil. The thirty clients are protocol-level viser
@@ -323,7 +323,7 @@ def classroom():
     r.pop("failure_examples", None)
     p95 = r["latency_ms_p95"] / 1000
     return {"theoria_s": p95, "baseline_s": 0.2, "theoria_error": None, "baseline_error": None, **r,
-            "note": "theoria_s = p95 slider-to-redraw over 30 protocol clients; baseline = 200 ms target (issue 7)"}
+            "note": "theoria_s = p95 slider-to-redraw over 30 protocol clients; baseline = the 200 ms target of a classroom"}
 
 
 if __name__ == "__main__":

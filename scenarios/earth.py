@@ -58,7 +58,7 @@ def e10_earth_nutation():
                      f"the ecliptic). Moon's node period {m['moon_node_period_yr']:.3f} yr from REBOUND. Tolerance 0.3% = "
                      "3× the measured gap (0.07% in Δψ, 0.10% in Δε): IAU 2000A is the non-rigid Earth (MHB2000), "
                      "whose response at 18.6 yr is close to the rigid one; the gap is that non-rigid response (not "
-                     "modelled), and the issue's 3% bound is far outside it")
+                     "modelled); a 3% bound would be far outside it")
 
 
 @register_check("E10.earth-semiannual", "Earth: semi-annual nutation vs IAU 2000A and Euler's 2φ term", "§844, modern")
@@ -72,7 +72,7 @@ def e10_earth_semiannual():
                 note=f"Δε {se:.4f}″ vs {re_:.4f}″ (Euler {m['nutation_obliquity_semiannual_euler_arcsec']:.4f}″). "
                      "A rigid Earth: IAU 2000A (the non-rigid MHB2000 Earth) is larger, measured 2.9% in Δψ and 3.4% in "
                      "Δε, by the non-rigid response (elastic mantle, fluid core, the free-core-nutation resonance) "
-                     "that the rigid model leaves out; tolerance 5% ≈ 1.5× that gap (the issue's 10% is only an outer "
+                     "that the rigid model leaves out; tolerance 5% ≈ 1.5× that gap (10% would be only an outer "
                      "bound). The rigid-Earth value itself is Euler's linear theory within 0.2%")
 
 

@@ -120,7 +120,7 @@ def e1():
     return dict(euler=float(vis_viva(w0, I)), simulated=float(E[-1]),
                 modern=float(vis_viva(w_ex[0], I)), rel_error=float(drift), tolerance=1e-12,
                 passed=bool(drift <= 1e-12 and att <= 1e-8 and dw <= 1e-8), unit="J (vis viva)",
-                note=f"over 10^6 steps (~20,000 spins): vis viva and |L| drift {drift:.2g} (tolerance 1e-12, issue 2); "
+                note=f"over 10^6 steps (~20,000 spins): vis viva and |L| drift {drift:.2g} (tolerance 1e-12); "
                      f"final ω {dw:.2g} (relative) and attitude {att:.2g} rad from the exact solution (must be "
                      "≤ 1e-8: the quadrature of ψ and round-off add ~1e-16 of phase per step)")
 

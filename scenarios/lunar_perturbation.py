@@ -270,8 +270,7 @@ def _secular_row(kind: str):
     Left out of the model, hence allowed: the Earth's J2 (computed in `oblateness_rates`: 8.5e-5
     of the node rate, 4.1e-5 of the perigee rate, both making the real periods shorter) and the
     planets (not computed here; their secular share of these rates is of the same order). The
-    tolerance is 3× the J2 share. (The issue's done-criterion — 1% and 2% — is a much looser bound
-    that this meets many times over.)"""
+    tolerance is 3× the J2 share (a bound of 1% and 2% on the periods would be much looser)."""
     na = _lunar_run()
     el, sun, mu, mus = le.initial_conditions()
     i = math.radians(le.MOON_J2000["inclination_deg"])

@@ -1,4 +1,4 @@
-"""Issue 3's measurements run in CI (README's test command): `theoria bench` for the slider-to-redraw
+"""The app's measurements run in CI (README's test command): `theoria bench` for the slider-to-redraw
 latency and the playback frame rate in headless Chromium, and the 10⁵-step recording. The numbers
 are printed by the command and checked here for what they are (finite, positive, measured on the
 run they describe), never against a wall-clock limit."""

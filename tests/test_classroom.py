@@ -1,4 +1,4 @@
-"""Many browsers (issue 7 item 3): clients that leave — even in the middle of a long
+"""Many browsers at once: clients that leave — even in the middle of a long
 simulation — leave nothing running, over repeated connect/disconnect cycles.
 
 The clients are `theoria.benchmarks.classroom.ViserProtocolClient`: viser's own websocket protocol (the

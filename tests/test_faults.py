@@ -1,4 +1,4 @@
-"""Faults (issue 7 items 4–5): foreign or damaged files given to `theoria replay`, diverging
+"""Faults: foreign or damaged files given to `theoria replay`, diverging
 simulations reported as such, recordings interrupted by SIGINT still complete."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Bad input, everywhere (issue 7 item 4): every parameter of every registered scenario fuzzed
+"""Bad input, everywhere: every parameter of every registered scenario fuzzed
 with hypothesis through `Scenario.resolve`, the validation the CLI (`--set key=value`) and the
 app (every GUI value goes through `resolve`) share.
 

@@ -1,4 +1,4 @@
-"""The gallery (issue 7, item 1) without a browser: order, labels, cameras, presets, Euler's
+"""The gallery without a browser: order, labels, cameras, presets, Euler's
 formulas as readable text, no stale scene objects after switching through every scenario, and a
 browser session (fake viser client) choosing presets, switching scenarios and showing progress."""
 from __future__ import annotations

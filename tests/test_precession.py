@@ -248,8 +248,8 @@ def test_earth_precession_matches_iau2006_psi_a_plus_geodesic(earth):
 def test_earth_nutation_18_6yr_semiannual_and_fortnightly_vs_iau2000(earth):
     """IAU 2000A is the non-rigid Earth (MHB2000); the model is rigid. Measured gaps: 18.6 yr
     0.07% (Δψ), 0.10% (Δε) -> tolerance 0.3%; semi-annual 2.9%, 3.4% and 13.66 d 3.5%, 3.9% (the
-    non-rigid response: elastic mantle, fluid core, free-core-nutation resonance) -> 5%. The
-    issue's 3% / 10% are outer bounds only. The rigid values themselves are tested against
+    non-rigid response: elastic mantle, fluid core, free-core-nutation resonance) -> 5% (3% and
+    10% would be outer bounds only). The rigid values themselves are tested against
     Euler's/the corrected linear theory in the checks (E10.earth-semiannual note: within 0.2%)."""
     m = earth.metrics
     iau = _iau2000_terms()

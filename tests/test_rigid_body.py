@@ -74,7 +74,7 @@ def _spin_period(w0):
                                   ((1.0, 1.000228, 1.000631), (0.01, 0.02, 1.0))])  # Moon-like
 @pytest.mark.parametrize("steps_per_period", [50, None])
 def test_attitude_after_100_spin_periods(I, w0, steps_per_period):
-    """Done-criterion of issue 2: within 1e-8 rad of the exact solution after 100 periods,
+    """The free body's attitude within 1e-8 rad of the exact solution after 100 periods,
     at T/50 and at the free-tumble scenario's default step (0.01 s)."""
     T = _spin_period(w0)
     h = T / steps_per_period if steps_per_period else 0.01
@@ -86,7 +86,7 @@ def test_attitude_after_100_spin_periods(I, w0, steps_per_period):
 
 
 def test_energy_and_momentum_1e6_steps_bounded():
-    """Done-criterion: |ΔE/E|, |Δ|L||/|L| ≤ 1e-12 after 10⁶ steps at T/50, no secular drift:
+    """Energy and |L| kept to |ΔE/E|, |Δ|L||/|L| ≤ 1e-12 after 10⁶ steps at T/50, no secular drift:
     the error over 10⁶ steps is no larger than √100 times the error over 10⁴ (round-off level)."""
     I, w0 = np.array([1.0, 2.0, 3.0]), np.array([0.3, 1.0, 0.2])
     h = _spin_period(w0) / 50

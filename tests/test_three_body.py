@@ -230,8 +230,8 @@ def test_node_and_apse_periods_vs_published(lunar_default):
     the model: node −1934.1362891 − 1.3968878 °/cy → 6793.48 d, perigee 4069.0137287 − 1.3968878
     °/cy → 3232.61 d (the often quoted 6798.38 d counts the node from the moving equinox).
     Left out of the model: the Earth's J2 (computed: 8.5e-5 and 4.1e-5 of the rates, periods
-    shorter) and the planets (same order): tolerance 3× the J2 share, as in check E13. (The
-    issue's done-criterion was 1% and 2%.)"""
+    shorter) and the planets (same order): tolerance 3× the J2 share, as in check E13 (far inside
+    1% and 2%)."""
     m = lunar_default.metrics
     month = le.MOON_J2000["sidereal_month_days"]
     j2 = le.oblateness_rates(month, le.MOON_J2000["eccentricity"])
