@@ -11,6 +11,8 @@ import time
 
 from theoria.physics.params import ParameterError
 
+from .format import number
+
 
 class Progress:
     """Progress on stderr for runs that take longer than a second (throttled)."""
@@ -64,16 +66,6 @@ def _scenario_values(name: str, sets: list[str] | None, duration: float | None, 
     return sc, sc.resolve(given)
 
 
-def _fmt(x) -> str:
-    if x is None:
-        return "-"
-    if isinstance(x, (tuple, list)):
-        return ",".join(_fmt(v) for v in x)
-    if isinstance(x, float):
-        return f"{x:.10g}"
-    return str(x)
-
-
 def cmd_list(args) -> int:
     from theoria.scenarios import all_scenarios
 
@@ -110,20 +102,22 @@ def cmd_run(args) -> int:
     print(f"{sc.title} ({sc.name}, {sc.section})")
     print("parameters:")
     for p in sc.params:
-        print(f"  {p.name:<24} {_fmt(values[p.name])} {p.unit}")
+        print(f"  {p.name:<24} {number(values[p.name], 10)} {p.unit}")
     print("metrics:")
     for k, v in out["metrics"].items():
-        print(f"  {k:<40} {_fmt(v)}")
+        print(f"  {k:<40} {number(v, 10)}")
     if result.comparisons:
         print("Euler / simulated / modern:")
         for c in result.comparisons:
-            print(f"  {c.label}: Euler {_fmt(c.euler)}  simulated {_fmt(c.simulated)}  modern {_fmt(c.modern)} {c.unit}"
+            print(f"  {c.label}: Euler {number(c.euler, 10)}  simulated {number(c.simulated, 10)}  "
+                  f"modern {number(c.modern, 10)} {c.unit}"
                   + (f"  ({c.note})" if c.note else ""))
     for n in result.notes:
         print("note:", n)
     if "final_state" in out:
         fs = out["final_state"]
-        print(f"final state at t={_fmt(fs['t'])}: q_wxyz={_fmt(fs['quaternion_wxyz'])} omega_body={_fmt(fs['omega_body'])}")
+        print(f"final state at t={number(fs['t'], 10)}: q_wxyz={number(fs['quaternion_wxyz'], 10)} "
+              f"omega_body={number(fs['omega_body'], 10)}")
     return 0
 
 
@@ -132,17 +126,11 @@ def check_table(rows) -> str:
     lines = [head, "-" * len(head)]
     for r in rows:
         lines.append(
-            f"{r.id:<22} {r.section:<16} {_fmt3(r.euler):>14} {_fmt3(r.simulated):>14} {_fmt3(r.modern):>14} "
-            f"{_fmt3(r.rel_error, 2):>10} {r.tolerance:>8.2g}  {'pass' if r.passed else 'FAIL'}  {r.title}"
+            f"{r.id:<22} {r.section:<16} {number(r.euler, 9):>14} {number(r.simulated, 9):>14} {number(r.modern, 9):>14} "
+            f"{number(r.rel_error, 2):>10} {r.tolerance:>8.2g}  {'pass' if r.passed else 'FAIL'}  {r.title}"
             + (f" [{r.unit}]" if r.unit else "")
         )
     return "\n".join(lines)
-
-
-def _fmt3(x, digits: int = 9) -> str:
-    if x is None:
-        return "-"
-    return f"{x:.{digits}g}"
 
 
 def cmd_check(args) -> int:

@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import math
 import pkgutil
 from typing import Callable
+
+from theoria.app.format import number
 
 BENCHES: dict[str, Callable[[], dict]] = {}
 NEEDS: dict[str, tuple[str, ...]] = {}
@@ -66,20 +67,12 @@ def run_benches(names: list[str] | None = None, progress: Callable[[str], None] 
     return out
 
 
-def _fmt(x):
-    if x is None:
-        return "-"
-    if isinstance(x, float):
-        return f"{x:.3g}" if math.isfinite(x) else str(x)
-    return str(x)
-
-
 def format_table(rows: list[dict]) -> str:
     cols = ["name", "ratio", "theoria_s", "baseline_s", "theoria_error", "baseline_error"]
     lines = ["  ".join(f"{c:>14}" if i else f"{c:<28}" for i, c in enumerate(cols))]
     for r in rows:
-        lines.append("  ".join(f"{_fmt(r.get(c)):>14}" if i else f"{r['name']:<28}" for i, c in enumerate(cols)))
+        lines.append("  ".join(f"{number(r.get(c), 3):>14}" if i else f"{r['name']:<28}" for i, c in enumerate(cols)))
         extra = {k: v for k, v in r.items() if k not in cols}
         if extra:
-            lines.append("      " + ", ".join(f"{k}={_fmt(v)}" for k, v in extra.items()))
+            lines.append("      " + ", ".join(f"{k}={number(v, 3)}" for k, v in extra.items()))
     return "\n".join(lines)
