@@ -10,14 +10,14 @@ import os
 
 import pytest
 
-from theoria.app.cli import main
+pytestmark = [pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian's chromium"),
+              pytest.mark.slow]
 
-pytestmark = pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian's chromium")
 
-
-def _bench(capsys, *names):
-    assert main(["bench", *names, "--json"]) == 0
-    rows = {r["name"]: r for r in json.loads(capsys.readouterr().out)["benchmarks"]}
+def _bench(cli, *names):
+    code, out, _ = cli("bench", *names, "--json")
+    assert code == 0
+    rows = {r["name"]: r for r in json.loads(out)["benchmarks"]}
     assert set(rows) == set(names)
     for r in rows.values():
         assert "error" not in r, r
@@ -26,8 +26,8 @@ def _bench(capsys, *names):
     return rows
 
 
-def test_app_benches_measure_what_they_say(capsys):
-    rows = _bench(capsys, "app-slider-latency", "app-playback-fps", "record-1e5-steps")
+def test_app_benches_measure_what_they_say(cli):
+    rows = _bench(cli, "app-slider-latency", "app-playback-fps", "record-1e5-steps")
     lat = rows["app-slider-latency"]
     assert lat["samples"] == 6001 and 0 < lat["server_ms_median"] <= lat["latency_ms_median"] * 1.5
     fps = rows["app-playback-fps"]

@@ -1,20 +1,11 @@
 """The command line and parameter validation: bad input exits 2 with one clear line."""
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
-from theoria.app.cli import main
 from theoria.physics.inertia import validate_moments
 from theoria.physics.params import Param, ParameterError
-
-
-def run_cli(*args):
-    # the timeout only guards CI against a hang; it is no speed requirement
-    p = subprocess.run([sys.executable, "-m", "theoria.app.cli", *args], capture_output=True, text=True, timeout=3600)
-    return p.returncode, p.stdout, p.stderr
 
 
 @pytest.mark.parametrize("moments,needle", [((-1, 2, 3), "> 0"), ((0, 2, 3), "> 0"), ((1, 2, 5), "A+B >= C"),
@@ -57,14 +48,16 @@ def test_param_parse_errors():
     (["run", "middle-axis-flip", "--preset", "no such preset"], '--preset=no such preset: one of "Brick: the flip"'),
     (["run", "middle-axis-flip", "--preset", "brick"], "more than one matches"),
 ])
-def test_bad_set_exits_2_with_one_line(args, needle, capsys):
-    assert main(args) == 2
-    err = capsys.readouterr().err.strip()
+def test_bad_set_exits_2_with_one_line(args, needle, cli):
+    code, _, err = cli(*args)
+    assert code == 2
+    err = err.strip()
     assert len(err.splitlines()) == 1 and needle in err, err
 
 
-def test_run_json_shape():
-    code, out, err = run_cli("run", "middle-axis-flip", "--json")
+@pytest.mark.slow
+def test_run_json_shape(cli_process):
+    code, out, err = cli_process("run", "middle-axis-flip", "--json")
     assert code == 0, err
     d = json.loads(out)
     assert d["scenario"] == "middle-axis-flip"
@@ -77,9 +70,10 @@ def test_run_json_shape():
     assert abs(np.linalg.norm(fs["quaternion_wxyz"]) - 1) < 1e-12
 
 
-def test_run_duration_flag_and_final_state_matches_exact():
+@pytest.mark.slow
+def test_run_duration_flag_and_final_state_matches_exact(cli_process):
     from theoria.physics.torque_free_exact import exact_free_motion
-    code, out, err = run_cli("run", "free-tumble", "--duration", "7.5", "--json")
+    code, out, err = cli_process("run", "free-tumble", "--duration", "7.5", "--json")
     assert code == 0, err
     d = json.loads(out)
     w, q = exact_free_motion((2, 3, 4), (1.0, 0.5, 1.5), [7.5])
@@ -88,31 +82,33 @@ def test_run_duration_flag_and_final_state_matches_exact():
     assert angle_between(np.array(d["final_state"]["quaternion_wxyz"]), q[0]) < 1e-10  # q and −q: one attitude
 
 
-def test_list_json_has_every_scenario():
-    code, out, _ = run_cli("list", "--json")
+def test_list_json_has_every_scenario(cli_process):
+    code, out, _ = cli_process("list", "--json")
     names = {s["name"] for s in json.loads(out)["scenarios"]}
     assert {"free-tumble", "middle-axis-flip", "initial-axis"} <= names
     flip = next(s for s in json.loads(out)["scenarios"] if s["name"] == "middle-axis-flip")
     assert "Brick: the flip" in flip["presets"]
 
 
-def test_preset_flag_gives_the_preset_values_and_set_overrides_them(capsys):
+def test_preset_flag_gives_the_preset_values_and_set_overrides_them(cli):
     from theoria.scenarios import get
 
     spec = get("free-tumble")
     want = spec.preset("Tumble: spin near the short axis, a small polhode")
-    assert main(["run", "free-tumble", "--preset", "SHORT axis", "--set", "duration=3", "--json"]) == 0
-    d = json.loads(capsys.readouterr().out)
+    code, out, _ = cli("run", "free-tumble", "--preset", "SHORT axis", "--set", "duration=3", "--json")
+    assert code == 0
+    d = json.loads(out)
     assert d["params"]["omega0"]["value"] == list(want["omega0"]) and d["params"]["duration"]["value"] == 3.0
-    assert main(["list"]) == 0
-    text = capsys.readouterr().out
+    code, text, _ = cli("list")
+    assert code == 0
     assert text.index("ch. 15") < text.index("ch. 16") < text.index("three bodies")
     assert '--preset "Brick: the flip"' in text
 
 
-def test_every_check_row_passes_and_covers_design_table():
+@pytest.mark.slow
+def test_every_check_row_passes_and_covers_design_table(cli_process):
     """`theoria check`: every row of design.md's table E1–E13 exists and passes."""
-    code, out, err = run_cli("check", "--json")
+    code, out, err = cli_process("check", "--json")
     rows = json.loads(out)["results"]
     failed = [(r["id"], r["rel_error"], r["tolerance"], r["note"]) for r in rows if not r["pass"]]
     assert not failed, failed

@@ -1,24 +1,17 @@
-"""Faults: foreign or damaged files given to `theoria replay`, diverging
-simulations reported as such, recordings interrupted by SIGINT still complete."""
+"""Faults: foreign or damaged files given to `theoria replay`, diverging simulations reported as
+such."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from theoria.app.cli import main
 from theoria.app.replay import ReplayError, check
 from theoria.physics.params import Param, ParameterError
 from theoria.scenarios import get
 from theoria.scenarios.base import Diverged, Run, Scenario
 from theoria.physics.trajectory import Trajectory
-
-ROOT = Path(__file__).resolve().parent.parent
 
 
 # ---- theoria replay ------------------------------------------------------------------------------
@@ -35,17 +28,11 @@ def files(tmp_path_factory):
     return d, rrd, html
 
 
-def _cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def test_replay_accepts_own_files(files, capsys):
+def test_replay_accepts_own_files(files, cli):
     d, rrd, html = files
-    code, out, err = _cli(capsys, "replay", str(rrd), "--check")
+    code, out, err = cli("replay", str(rrd), "--check")
     assert code == 0 and "ok" in out and err == ""
-    code, out, err = _cli(capsys, "replay", str(html), "--check")
+    code, out, err = cli("replay", str(html), "--check")
     assert code == 0 and out.strip().endswith(html.resolve().as_uri()) and "free-tumble" in out
     assert check(str(rrd))["rows"] > 3 * 201  # the whole run is read back: body, ω and L at each of 201 frames
 
@@ -81,14 +68,14 @@ def _bad_cases(d, rrd, html):
     return sorted(list(cases) + ["foreign.rrd", "impostor.rrd", "missing.rrd", "."])
 
 
-def test_replay_refuses_corrupt_truncated_foreign(files, capsys):
+def test_replay_refuses_corrupt_truncated_foreign(files, cli):
     d, rrd, html = files
     for name in _bad_cases(d, rrd, html):
         path = str(d / name)
         with pytest.raises(ReplayError) as ei:
             check(path)
         assert "\n" not in str(ei.value) and path in str(ei.value)
-        code, out, err = _cli(capsys, "replay", path, "--check")
+        code, out, err = cli("replay", path, "--check")
         assert code == 2, name
         assert out == "" and err.startswith("theoria: error: ") and err.count("\n") == 1, (name, err)
     # what the messages say
@@ -101,14 +88,13 @@ def test_replay_refuses_corrupt_truncated_foreign(files, capsys):
     assert "no theoria marker" in msg["foreign.html"]
 
 
-def test_replay_cli_subprocess_exit_code(files):
+def test_replay_cli_subprocess_exit_code(files, cli_process):
     """The installed entry point path: `python -m theoria.app.cli replay` exits 2 with one line."""
     d, rrd, _ = files
     bad = d / "half.rrd"
     bad.write_bytes(rrd.read_bytes()[:5000])
-    p = subprocess.run([sys.executable, "-m", "theoria.app.cli", "replay", str(bad), "--check"], cwd=ROOT,
-                       env=dict(os.environ, PYTHONPATH=str(ROOT)), capture_output=True, text=True)
-    assert p.returncode == 2 and p.stdout == "" and p.stderr.count("\n") == 1 and "half.rrd" in p.stderr
+    code, out, err = cli_process("replay", bad, "--check")
+    assert code == 2 and out == "" and err.count("\n") == 1 and "half.rrd" in err
 
 
 # ---- divergence ------------------------------------------------------------------------------------
@@ -170,13 +156,13 @@ def test_overflow_without_nan_is_divergence():
     assert res.status == "diverged" and len(res.trajectory.t) == 40 and "position of moon" in res.warnings[0]
 
 
-def test_cli_json_reports_divergence(capsys, monkeypatch):
+def test_cli_json_reports_divergence(cli, monkeypatch):
     """`theoria run --json` on a diverging scenario: status and warning in the JSON, exit 0."""
     from theoria.scenarios import base
 
     spec = _blowup_scenario(3.0)
     monkeypatch.setitem(base.REGISTRY, "blowup", spec)
-    code, out, err = _cli(capsys, "run", "blowup", "--json")
+    code, out, err = cli("run", "blowup", "--json")
     assert code == 0
     data = json.loads(out)
     assert data["status"] == "diverged" and data["warnings"][0].startswith("diverged at t=3")

@@ -111,6 +111,7 @@ def _alive(scene: FakeScene) -> set[str]:
     return alive
 
 
+@pytest.mark.slow
 def test_switching_through_all_scenarios_leaves_no_stale_objects():
     """After each switch (as the app does it: overlays reset to the scenario's defaults), the scene
     holds exactly the nodes a fresh scene showing only that scenario would hold."""

@@ -257,6 +257,7 @@ def test_forced_amplitude_matches_euler_for_small_e_and_free_part_separates():
     assert abs(m["forced_amplitude_rad"] / m["forced_amplitude_periodic_rad"] - 1) < 1e-3
 
 
+@pytest.mark.slow
 def test_euler_forced_amplitude_fails_as_e_squared_and_near_resonance():
     es = np.array([0.05, 0.1, 0.2])
     errs = np.array([get("libration-eccentric").simulate({"eccentricity": e, "free_zeta0_deg": 0.0, "orbits": 1})
@@ -269,6 +270,7 @@ def test_euler_forced_amplitude_fails_as_e_squared_and_near_resonance():
     assert m["forced_amplitude_euler_rad"] > 1.2 * m["forced_amplitude_rad"]
 
 
+@pytest.mark.slow
 def test_forced_solution_search_gives_up_quickly_where_there_is_none():
     """e = 0.5 with (B−A)/C = −0.45 (chaotic): a clear refusal after a bounded number of runs (the
     fixed-step search used 200 DOP853 runs, two minutes), and the progress callback is called on
@@ -436,6 +438,7 @@ def test_lunar_position_and_optical_libration_against_meeus_examples():
     assert abs(np.degrees(np.max(np.abs(bp))) - moon.OPTICAL_MAX_LAT_DEG) < 0.1
 
 
+@pytest.mark.slow
 def test_moon_physical_libration_against_dop853_euler_and_published_terms():
     from theoria.physics import moon
     from theoria.scenarios.moon import moon_runs
@@ -469,6 +472,7 @@ def test_moon_physical_libration_against_dop853_euler_and_published_terms():
     assert m["free_libration_amplitude_arcsec"] < 20  # started on Euler's forced solution
 
 
+@pytest.mark.slow
 def test_moon_free_libration_period():
     """The model's free libration, measured as the difference of two runs that differ only by a 100″
     free swing at the start (the forced terms cancel): 1058.2 d against LLR's 1056 d (Rambaux &

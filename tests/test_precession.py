@@ -73,6 +73,7 @@ def test_pole_near_axis_scenario_matches_euler_and_shows_dropped_term():
 
 # --- §844–849 --------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_splitting_matches_dop853_on_the_circular_problem():
     """The figure axis against DOP853 (rtol 1e-12): small, and falling as h⁴ (yoshida4)."""
     r, f, n = 10.0, 0.1, np.radians(N_DEG)
@@ -223,6 +224,7 @@ def _newtonian_psi_a_rate():
     return _iau2006_psi_a_rate() + GEODESIC_PRECESSION / 100
 
 
+@pytest.mark.slow
 def test_earth_precession_matches_iau2006_psi_a_plus_geodesic(earth):
     """A consistency check: H_d (MHB2000) was fitted to the observed precession. Measured gap
     1.2e-6; tolerance 1e-4 (5 mas/yr), the order of the second-order and non-rigid contributions
@@ -245,6 +247,7 @@ def test_earth_precession_matches_iau2006_psi_a_plus_geodesic(earth):
     assert m["euler_excess_measured"] > 0.005
 
 
+@pytest.mark.slow
 def test_earth_nutation_18_6yr_semiannual_and_fortnightly_vs_iau2000(earth):
     """IAU 2000A is the non-rigid Earth (MHB2000); the model is rigid. Measured gaps: 18.6 yr
     0.07% (Δψ), 0.10% (Δε) -> tolerance 0.3%; semi-annual 2.9%, 3.4% and 13.66 d 3.5%, 3.9% (the
@@ -277,6 +280,7 @@ def test_earth_nutation_18_6yr_semiannual_and_fortnightly_vs_iau2000(earth):
     assert m["moon_node_period_yr"] == pytest.approx(NODE_PERIOD_SIDEREAL_YR, rel=1e-3)
 
 
+@pytest.mark.slow
 def test_earth_trajectory_and_series(earth):
     tr = earth.trajectory
     assert set(tr.bodies) == {"sun", "moon"}
@@ -292,6 +296,7 @@ def test_earth_trajectory_and_series(earth):
 LONG_VIEW_TOL = 6e-4
 
 
+@pytest.mark.slow
 def test_long_view_pole_reaches_vega_region_and_passes_polaris():
     from theoria.app.bright_stars import load_bright_stars
     from theoria.physics.earth_precession import pole_star_passages
@@ -323,7 +328,9 @@ def _capped(name, given):
     return g
 
 
-@pytest.mark.parametrize("name", ["earth", "earth-long-view", "pole-near-axis", "precession-circular"])
+@pytest.mark.parametrize("name", [pytest.param("earth", marks=pytest.mark.slow),
+                                  pytest.param("earth-long-view", marks=pytest.mark.slow), "pole-near-axis",
+                                  "precession-circular"])
 def test_presets_give_finite_metrics_or_say_why_not(name):
     """Every preset (shortened): each metric is finite, or missing (NaN, null in JSON) with a note
     saying it is not measurable; and the Earth's are near the IAU values, never absurd."""

@@ -225,6 +225,7 @@ def lunar_default():
     return get("lunar-perturbation").simulate({})
 
 
+@pytest.mark.slow
 def test_node_and_apse_periods_vs_published(lunar_default):
     """Published mean rates (Simon et al. 1994, Meeus ch. 47), referred to the fixed stars like
     the model: node −1934.1362891 − 1.3968878 °/cy → 6793.48 d, perigee 4069.0137287 − 1.3968878
@@ -384,6 +385,7 @@ def test_small_inclination_forms_of_xxxiv():
         assert err > w**4 / 24 * 0.5
 
 
+@pytest.mark.slow
 def test_oblateness_node_share_vs_averaged_torque():
     """The J2 share of the node rate that sets the E13 tolerance, −k(1 − (3/2)sin²ε), against a
     direct integration of the orbit-averaged normal: dh/dt = −K_s(h·z)(z×h) (the Sun, node
@@ -412,6 +414,7 @@ def test_oblateness_node_share_vs_averaged_torque():
     assert share == pytest.approx(expected, rel=0.02)
 
 
+@pytest.mark.slow
 def test_collinear_run_that_dop853_cannot_finish_is_reported_not_crashed():
     """Found by tests/test_fuzz.py: masses (125846, 1e-6, 1e-6) expanding, DOP853's step underflows after
     13 of 600 samples. The run keeps that part and says so (status "diverged", a warning), and the
