@@ -10,6 +10,8 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from theoria.physics import kepler
+from theoria.physics.constants import JULIAN_YEAR_DAYS
 from theoria.physics.three_body import lunar_elements as le
 
 from . import register_bench
@@ -17,12 +19,9 @@ from . import register_bench
 
 def _rhs(t, y, mu, mus, sun):
     a_s, es, ns, M0, varpi = sun
-    M = M0 + ns * t
-    E = M
-    for _ in range(8):
-        E -= (E - es * math.sin(E) - M) / (1 - es * math.cos(E))
-    f = 2 * math.atan2(math.sqrt(1 + es) * math.sin(E / 2), math.sqrt(1 - es) * math.cos(E / 2))
-    u = a_s * (1 - es * math.cos(E))
+    E = kepler.eccentric_anomaly_ufunc(M0 + ns * t, es)
+    f = kepler.true_anomaly_ufunc(E, es)
+    u = a_s * kepler.radius_ufunc(E, es)
     R = u * np.array([math.cos(f + varpi), math.sin(f + varpi), 0.0])
     r = y[:3]
     d = R - r
@@ -42,7 +41,7 @@ def lunar_elements_2yr():
     el, sun, mu, mus = le.initial_conditions()
     r0, v0 = le.elements_to_cartesian(el, mu)
     y0 = np.concatenate([r0[0], v0[0]])
-    days = 2 * 365.25
+    days = 2 * JULIAN_YEAR_DAYS
     le.integrate_rk4("elements", el, 1.0, 0.025, 1.0, mu, mus, sun)  # compile outside the timing
     t0 = time.perf_counter()
     _, E = le.integrate_rk4("elements", el, days, 0.025, 1.0, mu, mus, sun)

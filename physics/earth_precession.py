@@ -9,19 +9,10 @@ not the general precession p_A (which adds the motion of the ecliptic).
 The regression of the Moon's node is not imposed: it comes out of the three-body integration
 (and the long run's mean-element Moon takes its rates from that integration).
 
-Constants and their sources
----------------------------
-  k = 0.01720209895 AU^{3/2}/day          Gauss's constant (IAU 1976/2012)
-  M☉/(M⊕ + M☾) = 328900.56               IAU 2009 system of constants (Luzum et al. 2011)
-  M⊕/M☾ = 81.30056907                     IAU 2009 (DE421 value)
-  H = (C − A)/C = 0.0032737949            dynamical ellipticity, IAU 2000 nutation (Mathews,
-                                           Herring & Buffett 2002, H_d)
-  ω⊕ = 7.292115e-5 rad/s                  IERS Conventions 2010 (nominal mean angular velocity)
-  ε₀ = 84381.406″ = 23.43927944°          obliquity at J2000, IAU 2006 (Capitaine et al. 2003)
-  Moon, mean elements at J2000 on the ecliptic (Simon et al. 1994, as in Meeus, Astronomical
-  Algorithms ch. 47): L = 218.3165°, ϖ = 83.3532°, Ω = 125.0446°, i = 5.145°, e = 0.0549,
-  sidereal month 27.321661 d.
-  Sun (geocentric), J2000: L = 280.4665°, ϖ = 282.9373°, e = 0.016709, a = 1.000001 AU.
+Constants: `physics.constants` (each with its source): Gauss's k, the IAU 2009 mass ratios,
+the IERS 2010 spin rate, H_d of the IAU 2000 nutation, the IAU 2006 obliquity, and the mean elements
+of the Moon and the Sun at J2000 on the ecliptic (Simon et al. 1994, as in Meeus). Here they are put
+in this module's units (AU, days, solar masses).
 """
 from __future__ import annotations
 
@@ -31,26 +22,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import constants as C
+from . import kepler
 from . import quaternion as quat
+from .constants import ARCSEC_RAD, GM_SUN_AU3_DAY2, JULIAN_YEAR_DAYS, OBLIQUITY_J2000_RAD
 from .integrator import PointMass, integrate
-from .precession import ARCSEC
 
-K_GAUSS = 0.01720209895
-GM_SUN = K_GAUSS ** 2  # AU³/day²
-SUN_OVER_EMB = 328900.5614
-EARTH_OVER_MOON = 81.30056907
-M_EMB = 1.0 / SUN_OVER_EMB
-M_EARTH = M_EMB * EARTH_OVER_MOON / (1 + EARTH_OVER_MOON)
-M_MOON = M_EMB / (1 + EARTH_OVER_MOON)
-GM_MOON = GM_SUN * M_MOON
-H_DYN = 0.0032737949
-SPIN = 7.292115e-5 * 86400.0  # rad/day
-OBLIQUITY = math.radians(84381.406 / 3600.0)
-AU_KM = 1.495978707e8
-DAYS_PER_YEAR = 365.25
-SIDEREAL_MONTH = 27.321661
-MOON_J2000 = dict(L=218.3165, varpi=83.3532, node=125.0446, inc=5.145, e=0.0549)
-SUN_J2000 = dict(L=280.4665, varpi=282.9373, e=0.016709, a=1.000001)
+# masses in solar masses (G = k²): from the ratios of the GM's
+M_EARTH = C.GM_EARTH_KM3_S2 / C.GM_SUN_KM3_S2
+M_MOON = M_EARTH * C.MOON_EARTH_MASS_RATIO
+M_EMB = M_EARTH + M_MOON
+GM_MOON_AU3_DAY2 = GM_SUN_AU3_DAY2 * M_MOON
+SPIN_RAD_DAY = C.EARTH_ROTATION_RAD_S * C.SECONDS_PER_DAY
+# mean elements at J2000 on the ecliptic (angles in degrees, a in AU)
+MOON_J2000 = dict(L=C.MOON_MEAN_LONGITUDE[0], varpi=C.MOON_PERIGEE_J2000_DEG, node=C.MOON_NODE[0],
+                  inc=C.MOON_MEAN_INCLINATION_DEG, e=C.MOON_MEAN_ECCENTRICITY)
+SUN_J2000 = dict(L=C.SUN_MEAN_LONGITUDE_J2000_DEG, varpi=C.SUN_PERIGEE_J2000_DEG, e=C.SUN_ECCENTRICITY,
+                 a=C.SUN_SEMI_MAJOR_AXIS_AU)
 
 # IAU 2000A nutation (MHB2000), luni-solar terms, coefficients of sin (Δψ) and cos (Δε) in
 # arcsec at J2000 (the table of SOFA/ERFA nut00a; Mathews, Herring & Buffett 2002, Table 6).
@@ -62,10 +50,6 @@ IAU2000_NUTATION = {
     "9.3yr": dict(argument="2Ω", dpsi=0.2074554, deps=-0.0897492),
     "annual": dict(argument="l'", dpsi=0.1475877, deps=0.0073871),
 }
-# IAU 2006 precession (Capitaine, Wallace & Chapront 2003, P03), arcsec per Julian century:
-PSI_A_RATE = 5038.481507  # luni-solar precession ψ_A: the equator on the fixed ecliptic of J2000
-P_A_RATE = 5028.796195  # general precession in longitude p_A (adds the ecliptic's motion)
-GEODESIC_PRECESSION = 1.919883  # relativistic part of ψ_A (not a torque), arcsec/cy
 
 
 # ---------------------------------------------------------------------------------------------
@@ -108,16 +92,16 @@ class Ephemeris:
         return self.t[0] <= t0 + 1e-9 and t1 <= self.t[-1] + 1e-9
 
 
-def moon_semi_major_axis(month=SIDEREAL_MONTH):
+def moon_semi_major_axis(month=C.SIDEREAL_MONTH_DAYS):
     """Keplerian a of the Earth–Moon orbit with the observed sidereal month (AU). The Sun
     lengthens the mean month slightly (by ≈ m²/2·…, m = 0.075), which `calibrated_moon_elements`
     corrects so that the integrated Moon keeps the observed month."""
     n = 2 * np.pi / month
-    return (GM_SUN * M_EMB / n ** 2) ** (1 / 3)
+    return (GM_SUN_AU3_DAY2 * M_EMB / n ** 2) ** (1 / 3)
 
 
 @functools.lru_cache(maxsize=8)
-def calibrated_moon_elements(month=SIDEREAL_MONTH, span_days=4 * 365.25, iterations=3):
+def calibrated_moon_elements(month=C.SIDEREAL_MONTH_DAYS, span_days=4 * JULIAN_YEAR_DAYS, iterations=3):
     """Osculating (a, e, i) at J2000 whose integrated Moon has the observed mean sidereal month,
     mean eccentricity and mean inclination (osculating and mean elements differ by the Sun's
     periodic perturbations, and the Sun lengthens the mean month): fixed-point iteration
@@ -142,7 +126,7 @@ def make_simulation(moon_elements=None):
     import rebound
 
     sim = rebound.Simulation()
-    sim.G = GM_SUN
+    sim.G = GM_SUN_AU3_DAY2
     sim.integrator = "ias15"
     d = math.radians
     m = MOON_J2000
@@ -210,11 +194,11 @@ class MeanElements:
 
     @property
     def node_period_yr(self):
-        return 2 * np.pi / abs(self.node_rate) / DAYS_PER_YEAR
+        return 2 * np.pi / abs(self.node_rate) / JULIAN_YEAR_DAYS
 
     @property
     def apse_period_yr(self):
-        return 2 * np.pi / abs(self.varpi_rate) / DAYS_PER_YEAR
+        return 2 * np.pi / abs(self.varpi_rate) / JULIAN_YEAR_DAYS
 
 
 def moon_mean_elements(eph: Ephemeris) -> MeanElements:
@@ -227,33 +211,17 @@ def moon_mean_elements(eph: Ephemeris) -> MeanElements:
     n, L0 = np.polyfit(t, lon, 1)
     node, inc = orbit_normal_node(x, v)
     nr, n0 = np.polyfit(t, node, 1)
-    vp, ecc = perigee_longitude(x, v, GM_SUN * M_EMB)
+    vp, ecc = perigee_longitude(x, v, GM_SUN_AU3_DAY2 * M_EMB)
     wr, w0 = np.polyfit(t, vp, 1)
     r = np.linalg.norm(x, axis=1)
     return MeanElements(float(L0), float(n), float(n0), float(nr), float(w0), float(wr),
                         float(1.0 / np.mean(1.0 / r)), float(np.mean(ecc)), float(np.mean(inc)))
 
 
-def _kepler_E(M, e):
-    E = M + e * np.sin(M)
-    for _ in range(6):
-        E = E - (E - e * np.sin(E) - M) / (1 - e * np.cos(E))
-    return E
-
-
 def kepler_position(t, a, e, inc, node, varpi, L):
-    """Position on a Keplerian ellipse with (possibly time-dependent) node, perigee and mean
-    longitude arrays (rad); a in AU. Private helper (orbits.py is another engineer's)."""
-    M = L - varpi
-    E = _kepler_E(np.remainder(M, 2 * np.pi), e)
-    xo = a * (np.cos(E) - e)
-    yo = a * np.sqrt(1 - e * e) * np.sin(E)
-    w = varpi - node
-    cw, sw, cn, sn, ci, si = np.cos(w), np.sin(w), np.cos(node), np.sin(node), np.cos(inc), np.sin(inc)
-    X = (cn * cw - sn * sw * ci) * xo + (-cn * sw - sn * cw * ci) * yo
-    Y = (sn * cw + cn * sw * ci) * xo + (-sn * sw + cn * cw * ci) * yo
-    Z = (sw * si) * xo + (cw * si) * yo
-    return np.stack([X, Y, Z], -1)
+    """Position on a Keplerian ellipse with (possibly time-dependent) node Ω, longitude of
+    perigee ϖ and mean longitude L (rad); a in AU: mean anomaly L − ϖ, argument of perigee ϖ − Ω."""
+    return kepler.position(L - varpi, a, e, inc, node, varpi - node)
 
 
 @dataclass(frozen=True)
@@ -266,7 +234,7 @@ class MeanOrbits:
     def sun(self, t):
         t = np.asarray(t, float)
         s = SUN_J2000
-        n = K_GAUSS * math.sqrt(1 + M_EMB) / s["a"] ** 1.5
+        n = C.K_GAUSS * math.sqrt(1 + M_EMB) / s["a"] ** 1.5
         return kepler_position(t, s["a"], s["e"], 0.0, 0.0, math.radians(s["varpi"]),
                                math.radians(s["L"]) + n * t)
 
@@ -281,53 +249,54 @@ class MeanOrbits:
 # The Earth
 # ---------------------------------------------------------------------------------------------
 
-def earth_inertia(H=H_DYN):
+def earth_inertia(H=C.EARTH_DYNAMICAL_ELLIPTICITY):
     """(A, A, C) with C = 1: only ratios of moments enter the motion."""
     return np.array([1 - H, 1 - H, 1.0])
 
 
-def earth_initial_attitude(obliquity=OBLIQUITY):
+def earth_initial_attitude(obliquity=OBLIQUITY_J2000_RAD):
     """The celestial pole at ecliptic longitude 90°, colatitude ε (equinox on +X)."""
     return quat.from_axis_angle([1.0, 0, 0], -obliquity)
 
 
-def run_earth(sun_fn, moon_fn, duration_days, step_days, H=H_DYN, obliquity=OBLIQUITY, spin=SPIN,
-              bodies=("sun", "moon"), scheme="strang", sample_days=1.0, t0=0.0, progress=None):
+def run_earth(sun_fn, moon_fn, duration_days, step_days, H=C.EARTH_DYNAMICAL_ELLIPTICITY, obliquity=OBLIQUITY_J2000_RAD,
+              spin=SPIN_RAD_DAY, bodies=("sun", "moon"), scheme="strang", sample_days=1.0, t0=0.0, progress=None):
     """Integrate the Earth's rotation under the Sun and/or the Moon (gravity gradient kicks,
     exact free flow). Returns (t, L_body, q, I)."""
     I = earth_inertia(H)
     masses = []
     if "sun" in bodies:
-        masses.append(PointMass(GM_SUN, sun_fn))
+        masses.append(PointMass(GM_SUN_AU3_DAY2, sun_fn))
     if "moon" in bodies:
-        masses.append(PointMass(GM_MOON, moon_fn))
+        masses.append(PointMass(GM_MOON_AU3_DAY2, moon_fn))
     stride = max(1, int(round(sample_days / step_days)))
     t, L, q = integrate(I, [0.0, 0.0, spin], duration_days, step_days, q0=earth_initial_attitude(obliquity),
                         masses=masses, scheme=scheme, stride=stride, t0=t0, progress=progress)
     return t, L, q, I
 
 
-def precession_parts_modern(moon: MeanElements | None, H=H_DYN, obliquity=OBLIQUITY, spin=SPIN):
+def precession_parts_modern(moon: MeanElements | None, H=C.EARTH_DYNAMICAL_ELLIPTICITY, obliquity=OBLIQUITY_J2000_RAD,
+                            spin=SPIN_RAD_DAY):
     """Orbit-averaged precession rates (rad/day) of the solar and lunar parts (see
     `precession.precession_rate_orbit`), and Euler's §846 values (circle in the ecliptic at the
     mean distance, A in the denominator)."""
     from .precession import euler_N, precession_rate_orbit
 
     s = SUN_J2000
-    n_sun = K_GAUSS * math.sqrt(1 + M_EMB) / s["a"] ** 1.5
+    n_sun = C.K_GAUSS * math.sqrt(1 + M_EMB) / s["a"] ** 1.5
     a_m = moon.a if moon is not None else moon_semi_major_axis()
     e_m = moon.e if moon is not None else MOON_J2000["e"]
     i_m = moon.inc if moon is not None else math.radians(MOON_J2000["inc"])
-    sun = precession_rate_orbit(GM_SUN, s["a"], s["e"], 0.0, H, spin, obliquity)
-    lun = precession_rate_orbit(GM_MOON, a_m, e_m, i_m, H, spin, obliquity)
-    A, C = 1 - H, 1.0
-    e_sun = -euler_N(GM_SUN / s["a"] ** 3, C, A, spin) * math.cos(obliquity)
-    e_lun = -euler_N(GM_MOON / a_m ** 3, C, A, spin) * math.cos(obliquity)
+    sun = precession_rate_orbit(GM_SUN_AU3_DAY2, s["a"], s["e"], 0.0, H, spin, obliquity)
+    lun = precession_rate_orbit(GM_MOON_AU3_DAY2, a_m, e_m, i_m, H, spin, obliquity)
+    A, C_ = 1 - H, 1.0  # C = 1: only ratios of moments enter
+    e_sun = -euler_N(GM_SUN_AU3_DAY2 / s["a"] ** 3, C_, A, spin) * math.cos(obliquity)
+    e_lun = -euler_N(GM_MOON_AU3_DAY2 / a_m ** 3, C_, A, spin) * math.cos(obliquity)
     return dict(sun=sun, moon=lun, euler_sun=e_sun, euler_moon=e_lun, n_sun=n_sun)
 
 
 def per_day_to_arcsec_per_yr(x):
-    return x / ARCSEC * DAYS_PER_YEAR
+    return x / ARCSEC_RAD * JULIAN_YEAR_DAYS
 
 
 # ---------------------------------------------------------------------------------------------
@@ -354,12 +323,12 @@ def nutation_arcsec(fit):
     longitude... i.e. precession and Δψ are positive westward), Δε = Δp."""
     out = {}
     for k in fit.longitude:
-        out[k] = dict(dpsi=-fit.longitude[k][0] / ARCSEC, dpsi_cos=-fit.longitude[k][1] / ARCSEC,
-                      deps=fit.obliquity[k][1] / ARCSEC, deps_sin=fit.obliquity[k][0] / ARCSEC)
+        out[k] = dict(dpsi=-fit.longitude[k][0] / ARCSEC_RAD, dpsi_cos=-fit.longitude[k][1] / ARCSEC_RAD,
+                      deps=fit.obliquity[k][1] / ARCSEC_RAD, deps_sin=fit.obliquity[k][0] / ARCSEC_RAD)
     return out
 
 
-def equatorial_to_ecliptic(ra_deg, dec_deg, obliquity=OBLIQUITY):
+def equatorial_to_ecliptic(ra_deg, dec_deg, obliquity=OBLIQUITY_J2000_RAD):
     """Unit vectors (N,3) in the J2000 ecliptic frame of stars given by J2000 RA/Dec (deg)."""
     ra, dec = np.radians(np.asarray(ra_deg, float)), np.radians(np.asarray(dec_deg, float))
     x = np.cos(dec) * np.cos(ra)
@@ -382,7 +351,7 @@ def pole_star_passages(t_yr, pole, names, ra_deg, dec_deg, within_deg=5.0):
     return sorted(out, key=lambda r: r[1])
 
 
-def figure_pole_free_of_diurnal(L_inertial, sun_pos, moon_pos, H=H_DYN):
+def figure_pole_free_of_diurnal(L_inertial, sun_pos, moon_pos, H=C.EARTH_DYNAMICAL_ELLIPTICITY):
     """The figure axis with its diurnal (free) circle removed — the pole the IAU nutation series
     refer to (the CIP of a rigid Earth) — from the angular-momentum axis and the torque:
 
@@ -398,7 +367,7 @@ def figure_pole_free_of_diurnal(L_inertial, sun_pos, moon_pos, H=H_DYN):
     a = L / Ln
     A = 1 - H
     tau = np.zeros_like(L)
-    for gm, s in ((GM_SUN, sun_pos), (GM_MOON, moon_pos)):
+    for gm, s in ((GM_SUN_AU3_DAY2, sun_pos), (GM_MOON_AU3_DAY2, moon_pos)):
         s = np.asarray(s, float)
         r = np.linalg.norm(s, axis=1, keepdims=True)
         sa = np.sum(s * a, axis=1, keepdims=True)

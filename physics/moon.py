@@ -27,22 +27,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import constants as C
 from . import quaternion as quat
 
-BETA_LLR = 631.0e-6  # (C−A)/B, Williams et al. 2014 / DE430
-GAMMA_LLR = 227.7e-6  # (B−A)/C
-I_EQUATOR_DEG = 1.54242  # mean lunar equator to ecliptic, IAU / Meeus ch. 53
-GM_EARTH_KM3_S2 = 398600.4418  # IERS 2010 conventions
-DAY_S = 86400.0
-GM_EARTH = GM_EARTH_KM3_S2 * DAY_S**2  # km³/day²
-PRECESSION_DEG_PER_CY = 5029.0966 / 3600.0  # general precession in longitude, IAU 1976 (Lieske 1977), as in Meeus
+GM_EARTH_KM3_DAY2 = C.GM_EARTH_KM3_S2 * C.SECONDS_PER_DAY**2
+# the general precession in longitude Meeus uses (IAU 1976), to refer his longitudes of date to J2000
+PRECESSION_DEG_PER_CY = C.GENERAL_PRECESSION_IAU1976_ARCSEC_PER_CY / 3600.0
 MEEUS_TAU_MPRIME_DEG = -0.00467  # physical libration in longitude, sin M′ (Meeus ch. 53, Eckhardt 1981)
 MEEUS_TAU_ANNUAL_DEG = 0.02520  # ... E sin M
 OPTICAL_MAX_LON_DEG = 7.9  # published maxima of the optical libration
 OPTICAL_MAX_LAT_DEG = 6.8
 
 
-def moments(beta=BETA_LLR, gamma=GAMMA_LLR):
+def moments(beta=C.MOON_BETA_LLR, gamma=C.MOON_GAMMA_LLR):
     """(A, B, C) with C = 1 from β = (C−A)/B and γ = (B−A)/C: A = (1 − βγ)/(1 + β), B = A + γ."""
     A = (1.0 - beta * gamma) / (1.0 + beta)
     return np.array([A, A + gamma, 1.0])
@@ -50,16 +47,15 @@ def moments(beta=BETA_LLR, gamma=GAMMA_LLR):
 
 def fundamental_arguments(t_days):
     """Meeus eq. 47.1–47.7 (degrees → radians), t in days from J2000.0 (TT): L′, D, M, M′, F, Ω, E."""
-    T = np.asarray(t_days, float) / 36525.0
-    d = np.radians
-    Lp = d(218.3164477 + 481267.88123421 * T)
-    D = d(297.8501921 + 445267.1114034 * T)
-    M = d(357.5291092 + 35999.0502909 * T)
-    Mp = d(134.9633964 + 477198.8675055 * T)
-    F = d(93.2720950 + 483202.0175233 * T)
-    Om = d(125.0445479 - 1934.1362891 * T)
-    E = 1.0 - 0.002516 * T - 0.0000074 * T * T
+    T = np.asarray(t_days, float) / C.JULIAN_CENTURY_DAYS
+    Lp, D, M, Mp, F, Om = (np.radians(a0 + rate * T) for a0, rate in _ARGUMENTS)
+    E = 1.0 - 0.002516 * T - 0.0000074 * T * T  # the Earth's eccentricity against J2000 (Meeus eq. 47.6)
     return Lp, D, M, Mp, F, Om, E
+
+
+# (value at J2000, rate) of L′, D, M, M′, F, Ω in degrees and degrees per century (Meeus eq. 47.1–47.7)
+_ARGUMENTS = (C.MOON_MEAN_LONGITUDE, C.MOON_MEAN_ELONGATION, C.SUN_MEAN_ANOMALY, C.MOON_MEAN_ANOMALY,
+              C.MOON_ARGUMENT_OF_LATITUDE, C.MOON_NODE)
 
 
 # Meeus Table 47.A (D, M, M′, F, Σl in 1e-6°, Σr in 1e-3 km): the largest terms
@@ -85,8 +81,8 @@ _B = np.array([
 ], float)
 
 # rates of D, M, M′, F in rad/day (for Euler's forced terms)
-_RATES = np.radians(np.array([445267.1114034, 35999.0502909, 477198.8675055, 483202.0175233]) / 36525.0)
-MEAN_MOTION = np.radians(481267.88123421 / 36525.0)  # dL′/dt, rad/day (of date)
+_RATES = np.radians(np.array([a[1] for a in _ARGUMENTS[1:5]]) / C.JULIAN_CENTURY_DAYS)
+MEAN_MOTION = np.radians(C.MOON_MEAN_LONGITUDE[1] / C.JULIAN_CENTURY_DAYS)  # dL′/dt, rad/day (of date)
 
 
 def _e_factor(E, m):
@@ -105,7 +101,7 @@ def moon_geocentric(t_days):
     argB = _B[:, :4] @ args
     eB = np.stack([_e_factor(E, m) for m in _B[:, 1]])
     lat = np.radians(1e-6) * np.sum(_B[:, 4:5] * eB * np.sin(argB), axis=0)
-    T = np.asarray(t_days, float) / 36525.0
+    T = np.asarray(t_days, float) / C.JULIAN_CENTURY_DAYS
     lon = lon - np.radians(PRECESSION_DEG_PER_CY) * T
     return lon, lat, dist
 
@@ -117,11 +113,11 @@ def earth_from_moon(t_days):
     return -dist[:, None] * u
 
 
-def mean_frame(t_days, incl_deg=I_EQUATOR_DEG):
+def mean_frame(t_days, incl_deg=C.MOON_EQUATOR_INCLINATION_DEG):
     """Quaternion (N,4) of the uniformly rotating Moon in the Cassini state (Meeus ch. 53):
     body → ecliptic R = Rz(Ω) Rx(−I) Rz(F + π); body x toward the mean Earth direction."""
     Lp, D, M, Mp, F, Om, E = fundamental_arguments(np.atleast_1d(t_days))
-    T = np.asarray(np.atleast_1d(t_days), float) / 36525.0
+    T = np.asarray(np.atleast_1d(t_days), float) / C.JULIAN_CENTURY_DAYS
     Om = Om - np.radians(PRECESSION_DEG_PER_CY) * T  # node on the fixed ecliptic
     z = np.array([0.0, 0.0, 1.0])
     x = np.array([1.0, 0.0, 0.0])
@@ -139,12 +135,12 @@ def sub_earth_point(q, earth_pos):
     return np.arctan2(s[:, 1], s[:, 0]), np.arcsin(s[:, 2] / r)
 
 
-def optical_libration_meeus(t_days, incl_deg=I_EQUATOR_DEG):
+def optical_libration_meeus(t_days, incl_deg=C.MOON_EQUATOR_INCLINATION_DEG):
     """Meeus eq. 53.1: l′ = A − F, b′ = asin(−sin W cos β sin I − sin β cos I), W = λ − Ω
     (no nutation; both λ and Ω on the same ecliptic). An independent closed form."""
     lon, lat, _ = moon_geocentric(t_days)
     Lp, D, M, Mp, F, Om, E = fundamental_arguments(t_days)
-    T = np.asarray(t_days, float) / 36525.0
+    T = np.asarray(t_days, float) / C.JULIAN_CENTURY_DAYS
     W = lon - (Om - np.radians(PRECESSION_DEG_PER_CY) * T)
     I = np.radians(incl_deg)
     A = np.arctan2(np.sin(W) * np.cos(lat) * np.cos(I) - np.sin(lat) * np.sin(I), np.cos(W) * np.cos(lat))
@@ -153,7 +149,7 @@ def optical_libration_meeus(t_days, incl_deg=I_EQUATOR_DEG):
     return lp, bp
 
 
-def physical_libration(q, t_days, incl_deg=I_EQUATOR_DEG):
+def physical_libration(q, t_days, incl_deg=C.MOON_EQUATOR_INCLINATION_DEG):
     """Rotation of the body relative to the uniformly rotating Cassini frame, as a rotation
     vector (N,3) in the mean body frame (rad): component z is the physical libration in
     longitude τ (the body ahead of uniform rotation: τ > 0)."""

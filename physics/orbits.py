@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .params import ParameterError
+from . import kepler
 
 
 @dataclass(frozen=True)
@@ -32,23 +32,6 @@ class CircularOrbit:
         return self.radius * np.stack([np.cos(lam), np.sin(lam), np.zeros_like(lam)], axis=-1)
 
 
-def solve_kepler(M, e, tol=1e-15, max_iter=50):
-    """Eccentric anomaly E with E − e sin E = M, vectorised (Newton from a cubic-safe start).
-    Valid for 0 ≤ e < 1; converges to round-off in a handful of iterations."""
-    M = np.asarray(M, float)
-    if not (0.0 <= e < 1.0):
-        raise ParameterError("eccentricity", e, "allowed range [0, 1)")
-    Mr = np.remainder(M + np.pi, 2.0 * np.pi) - np.pi  # reduce to [-π, π)
-    E = Mr + e * np.sin(Mr) / (1.0 - np.sin(Mr + e) + np.sin(Mr)) if e > 0.8 else Mr + e * np.sin(Mr)
-    for _ in range(max_iter):
-        f = E - e * np.sin(E) - Mr
-        dE = f / (1.0 - e * np.cos(E))
-        E = E - dE
-        if np.all(np.abs(dE) < tol):
-            break
-    return E + (M - Mr)
-
-
 @dataclass(frozen=True)
 class KeplerOrbit:
     """§833: F on a Keplerian ellipse about the body (semi-major axis a, eccentricity e, mean
@@ -68,21 +51,15 @@ class KeplerOrbit:
     argp: float = 0.0
 
     def __post_init__(self):
-        if not (0.0 <= self.e < 1.0):
-            raise ParameterError("eccentricity", self.e, "allowed range [0, 1)")
+        kepler.check_eccentricity(self.e)
 
     def mean_anomaly(self, t):
         return self.n * (np.asarray(t, float) - self.t_peri)
 
     def anomalies(self, t):
-        """(true anomaly f, distance r) at t."""
-        E = solve_kepler(self.mean_anomaly(t), self.e)
-        e = self.e
-        f = 2.0 * np.arctan2(np.sqrt(1 + e) * np.sin(E / 2), np.sqrt(1 - e) * np.cos(E / 2))
-        # keep f continuous (same number of turns as M)
-        M = self.mean_anomaly(t)
-        f = f + 2.0 * np.pi * np.round((M - f) / (2.0 * np.pi))
-        return f, self.a * (1.0 - e * np.cos(E))
+        """(true anomaly f, distance r) at t; f is continuous (it has the mean anomaly's turns)."""
+        _, f, r = kepler.anomalies(self.mean_anomaly(t), self.e)
+        return f, self.a * r
 
     def true_anomaly(self, t):
         return self.anomalies(t)[0]
@@ -95,12 +72,7 @@ class KeplerOrbit:
         return self.argp + self.true_anomaly(t)
 
     def position(self, t):
-        f, r = self.anomalies(t)
-        u = self.argp + f
-        ci, si = np.cos(self.inclination), np.sin(self.inclination)
-        cn, sn = np.cos(self.node), np.sin(self.node)
-        xo, yo = r * np.cos(u), r * np.sin(u)
-        return np.stack([cn * xo - sn * ci * yo, sn * xo + cn * ci * yo, si * yo], axis=-1)
+        return kepler.position(self.mean_anomaly(t), self.a, self.e, self.inclination, self.node, self.argp)
 
     def true_anomaly_dd(self, t):
         """d²f/dt² (the forcing of the libration, §833): ḟ = n(1+e cos f)²/(1−e²)^{3/2},

@@ -53,8 +53,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-ARCSEC = np.pi / (180.0 * 3600.0)
-
 # Where the printed text (Bruce's translation of §840–849) is wrong, for the app to show
 TYPOS_840_843 = (
     "§840: γ'dβ and γ'dγ are printed without their minus sign (dy = −γ'dβ); §841 has it right.",

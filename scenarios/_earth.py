@@ -2,10 +2,9 @@
 """
 from __future__ import annotations
 
-from ..physics import earth_precession as EP
+from ..physics.constants import JULIAN_YEAR_DAYS
 
-
-YR = EP.DAYS_PER_YEAR
+YR = JULIAN_YEAR_DAYS  # the scenarios' time unit, in days
 
 
 MIN_STEPS = 20  # integrator steps in the shortest run

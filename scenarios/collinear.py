@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import numpy as np
+from ..physics.constants import EARTH_MOON_DISTANCE_KM, MOON_EARTH_MASS_RATIO
 from ..physics.params import Param, ParameterError
 from ..physics.three_body import collinear as col
 from ..physics.three_body.nbody import integrate_dop853
@@ -277,9 +278,9 @@ register(Scenario(
         Param("phi_max_deg", 80.0, 1.0, 89.0, "deg", "collapse: stop at this φ (φ = 90° is the collision)"),
         Param("energy", 0.5, 1e-3, 100.0, "G=1 units", "expansion: energy per unit reduced mass (> 0)",
               exclusive_min=True),
-        Param("mass_ratio", col.MOON_EARTH_MASS_RATIO, 1e-9, 1.0, "1",
+        Param("mass_ratio", MOON_EARTH_MASS_RATIO, 1e-9, 1.0, "1",
               "restricted case: secondary/primary mass (Moon/Earth, IAU 2009: 0.0123000371)"),
-        Param("distance_km", col.EARTH_MOON_DISTANCE_KM, 1.0, 1e10, "km", "restricted case: primary–secondary distance"),
+        Param("distance_km", EARTH_MOON_DISTANCE_KM, 1.0, 1e10, "km", "restricted case: primary–secondary distance"),
     ),
     camera=Camera((0.0, -0.9, 3.4), (0.0, 0.0, 0.0)),  # from above: L1–L5, zero-velocity curves
     simulate_fn=_collinear,

@@ -15,7 +15,13 @@ from .checks import register_check
 import math
 from ..physics import quaternion as quat
 from ..physics.params import Param, ParameterError
-from ..physics.precession import ARCSEC, euler_N, fit_pole, pole_angles
+from ..physics.constants import (ANOMALISTIC_MONTH_DAYS, ANOMALISTIC_YEAR_DAYS, ARCSEC_RAD, AU_KM,
+                                 EARTH_DYNAMICAL_ELLIPTICITY, GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY,
+                                 GEODESIC_PRECESSION_ARCSEC_PER_CY, GM_SUN_AU3_DAY2,
+                                 LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY, MOON_MEAN_LONGITUDE, MOON_NODE,
+                                 OBLIQUITY_J2000_RAD, SIDEREAL_YEAR_DAYS, SUN_ECCENTRICITY, SUN_SEMI_MAJOR_AXIS_AU,
+                                 TROPICAL_MONTH_DAYS, period_days)
+from ..physics.precession import euler_N, fit_pole, pole_angles
 from ..physics.three_body.lunar_elements import NODE_PERIOD_SIDEREAL_YR, NODE_PERIOD_YR
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, register
@@ -33,10 +39,10 @@ def _earth_run():
 def e10_earth_precession():
     m = _earth_run().metrics
     sim, psi_a = m["precession_rate_arcsec_per_yr"], m["precession_rate_iau2006_psi_a_arcsec_per_yr"]
-    ref = psi_a + EP.GEODESIC_PRECESSION / 100
+    ref = psi_a + GEODESIC_PRECESSION_ARCSEC_PER_CY / 100
     return dict(euler=m["precession_rate_euler_arcsec_per_yr"], simulated=sim, modern=ref,
                 rel_error=abs(sim - ref) / ref, tolerance=1e-4, unit="arcsec/yr",
-                note=f"modern = IAU 2006 ψ_A {psi_a:.6f} + the geodesic precession {EP.GEODESIC_PRECESSION / 100:.6f}″/yr "
+                note=f"modern = IAU 2006 ψ_A {psi_a:.6f} + the geodesic precession {GEODESIC_PRECESSION_ARCSEC_PER_CY / 100:.6f}″/yr "
                      "(ψ_A holds it with the opposite sense, a relativistic effect no Newtonian rigid Earth has; "
                      f"Capitaine et al. 2003). Without it the gap would be {sim - psi_a:+.6f}″/yr. "
                      f"A consistency check, not a prediction: H_d (MHB2000) was fitted to the observed precession. "
@@ -56,7 +62,7 @@ def e10_earth_nutation():
     return dict(euler=None, simulated=a[0], modern=b[0], rel_error=rel, tolerance=0.003, unit="arcsec",
                 note=f"Δε {a[1]:.4f}″ vs {b[1]:.4f}″; worst of the two; Euler has no 18.6-yr term (his centre moves in "
                      f"the ecliptic). Moon's node period {m['moon_node_period_yr']:.3f} yr from REBOUND. Tolerance 0.3% = "
-                     "3× the measured gap (0.07% in Δψ, 0.10% in Δε): IAU 2000A is the non-rigid Earth (MHB2000), "
+                     "3× the measured gap (0.08% in Δψ, 0.09% in Δε): IAU 2000A is the non-rigid Earth (MHB2000), "
                      "whose response at 18.6 yr is close to the rigid one; the gap is that non-rigid response (not "
                      "modelled); a 3% bound would be far outside it")
 
@@ -94,16 +100,17 @@ def _traj(t_days, L, q, I, eph_sun, eph_moon, stride):
                               "moon": moon / np.linalg.norm(moon, axis=1, keepdims=True)})
 
 
-def euler_nutation_terms(moon: EP.MeanElements, H=EP.H_DYN, obliquity=EP.OBLIQUITY, spin=EP.SPIN):
+def euler_nutation_terms(moon: EP.MeanElements, H=EARTH_DYNAMICAL_ELLIPTICITY, obliquity=OBLIQUITY_J2000_RAD,
+                         spin=EP.SPIN_RAD_DAY):
     """Euler's §844 nutation for the Earth: the 2φ term of each body on a circle in the
     ecliptic (the Sun: semi-annual; the Moon: 13.66-day). Δψ = −a_λ, Δε = +a_p (arcsec).
     Euler has no 18.6-year term: his centre moves in the plane of the ecliptic."""
     A, C = 1 - H, 1.0
     out = {}
-    for name, gm, a, delta in (("semiannual", EP.GM_SUN, EP.SUN_J2000["a"], 2 * math.pi / 365.2564),
-                               ("13.66d", EP.GM_MOON, moon.a, moon.n)):
+    for name, gm, a, delta in (("semiannual", GM_SUN_AU3_DAY2, SUN_SEMI_MAJOR_AXIS_AU, 2 * math.pi / SIDEREAL_YEAR_DAYS),
+                               ("13.66d", EP.GM_MOON_AU3_DAY2, moon.a, moon.n)):
         lt = linear_theory(euler_N(gm / a ** 3, C, A, spin), spin, delta, obliquity)
-        out[name] = dict(dpsi=-lt.longitude_amplitude / ARCSEC, deps=lt.obliquity_amplitude / ARCSEC)
+        out[name] = dict(dpsi=-lt.longitude_amplitude / ARCSEC_RAD, deps=lt.obliquity_amplitude / ARCSEC_RAD)
     return out
 
 
@@ -182,33 +189,33 @@ def _earth(values, progress=None):
     # Sun alone has no 18.6-year term: its part needs the annual and semi-annual terms resolved
     lunar_ok = "18.6yr" in kept
     solar_ok = "semiannual" in kept and "annual" in kept
-    rate = -fit.rate_longitude / ARCSEC * YR if lunar_ok else math.nan  # arcsec/yr, positive westward
+    rate = -fit.rate_longitude / ARCSEC_RAD * YR if lunar_ok else math.nan  # arcsec/yr, positive westward
     parts = {}
     for key, ok in (("sun", solar_ok), ("moon", lunar_ok)):
         tt, LL, qq, _ = runs[key]
         f2, _ = _fit_earth(tt, quat.rotate(qq, LL), args, kept)
-        parts[key] = -f2.rate_longitude / ARCSEC * YR if ok else math.nan
+        parts[key] = -f2.rate_longitude / ARCSEC_RAD * YR if ok else math.nan
     # the node and the perigee oscillate (173 d, 1.5°; evection 31.8 d, ±12°) about their mean motion:
     # their mean periods come out of a straight-line fit only over a long enough run
     long_enough = dur >= NODE_MIN_YEARS * YR
     node_period = me.node_period_yr if long_enough else math.nan
     apse_period = me.apse_period_yr if long_enough else math.nan
     mod = EP.precession_parts_modern(me, H, obl)
-    eul = -(mod["euler_sun"] + mod["euler_moon"]) / ARCSEC * YR
+    eul = -(mod["euler_sun"] + mod["euler_moon"]) / ARCSEC_RAD * YR
     eul_nut = euler_nutation_terms(me, H, obl)
     iau = EP.IAU2000_NUTATION
     m = dict(
         precession_rate_arcsec_per_yr=rate,
         precession_rate_euler_arcsec_per_yr=eul,
-        precession_rate_modern_formula_arcsec_per_yr=-(mod["sun"] + mod["moon"]) / ARCSEC * YR,
-        precession_rate_iau2006_psi_a_arcsec_per_yr=EP.PSI_A_RATE / 100,
-        precession_rate_iau2006_p_a_arcsec_per_yr=EP.P_A_RATE / 100,
+        precession_rate_modern_formula_arcsec_per_yr=-(mod["sun"] + mod["moon"]) / ARCSEC_RAD * YR,
+        precession_rate_iau2006_psi_a_arcsec_per_yr=LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY / 100,
+        precession_rate_iau2006_p_a_arcsec_per_yr=GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100,
         precession_period_yr=360 * 3600 / rate,
         precession_solar_arcsec_per_yr=parts["sun"], precession_lunar_arcsec_per_yr=parts["moon"],
-        precession_solar_formula_arcsec_per_yr=-mod["sun"] / ARCSEC * YR,
-        precession_lunar_formula_arcsec_per_yr=-mod["moon"] / ARCSEC * YR,
+        precession_solar_formula_arcsec_per_yr=-mod["sun"] / ARCSEC_RAD * YR,
+        precession_lunar_formula_arcsec_per_yr=-mod["moon"] / ARCSEC_RAD * YR,
         moon_node_period_yr=node_period, moon_apse_period_yr=apse_period,
-        moon_inclination_deg=math.degrees(me.inc), moon_mean_distance_km=me.a * EP.AU_KM,
+        moon_inclination_deg=math.degrees(me.inc), moon_mean_distance_km=me.a * AU_KM,
         sidereal_month_days=2 * math.pi / me.n,
     )
     for key, label in (("18.6yr", "18_6yr"), ("semiannual", "semiannual"), ("13.66d", "13_66d"), ("9.3yr", "9_3yr")):
@@ -225,13 +232,13 @@ def _earth(values, progress=None):
         return float(x) if math.isfinite(x) else None
 
     comps = [
-        Comparison("luni-solar precession", eul, sim(rate), EP.PSI_A_RATE / 100, "arcsec/yr",
+        Comparison("luni-solar precession", eul, sim(rate), LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY / 100, "arcsec/yr",
                    "modern: IAU 2006 ψ_A (fixed ecliptic; includes 0.019″/yr geodesic precession). "
-                   f"General precession p_A = {EP.P_A_RATE / 100:.5f}″/yr adds the ecliptic's motion (planets, not modelled). "
+                   f"General precession p_A = {GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100:.5f}″/yr adds the ecliptic's motion (planets, not modelled). "
                    "Euler: Σ N cos n, circles in the ecliptic, A for C in N"),
-        Comparison("  solar part", -mod["euler_sun"] / ARCSEC * YR, sim(parts["sun"]), -mod["sun"] / ARCSEC * YR, "arcsec/yr",
+        Comparison("  solar part", -mod["euler_sun"] / ARCSEC_RAD * YR, sim(parts["sun"]), -mod["sun"] / ARCSEC_RAD * YR, "arcsec/yr",
                    "modern: orbit-averaged formula (e☉ = 0.0167)"),
-        Comparison("  lunar part", -mod["euler_moon"] / ARCSEC * YR, sim(parts["moon"]), -mod["moon"] / ARCSEC * YR, "arcsec/yr",
+        Comparison("  lunar part", -mod["euler_moon"] / ARCSEC_RAD * YR, sim(parts["moon"]), -mod["moon"] / ARCSEC_RAD * YR, "arcsec/yr",
                    "modern: orbit-averaged formula with the Moon's e and inclination (1 − 3/2 sin² i)"),
         Comparison("nutation in longitude, 18.6 yr (sin Ω)", None, sim(nut["18.6yr"]["dpsi"]), iau["18.6yr"]["dpsi"], "arcsec",
                    "IAU 2000A (MHB2000). Euler's centre moves in the ecliptic: no such term in §844"),
@@ -254,7 +261,7 @@ def _earth(values, progress=None):
     # why Euler's §846 sum differs: A for C in N, circles (no eccentricity), the Moon in the ecliptic
     ws = mod["sun"] / (mod["sun"] + mod["moon"])
     f_ca = 1 / (1 - H)
-    f_e = ws * (1 - EP.SUN_J2000["e"] ** 2) ** 1.5 + (1 - ws) * (1 - me.e ** 2) ** 1.5 / (1 - 1.5 * math.sin(me.inc) ** 2)
+    f_e = ws * (1 - SUN_ECCENTRICITY ** 2) ** 1.5 + (1 - ws) * (1 - me.e ** 2) ** 1.5 / (1 - 1.5 * math.sin(me.inc) ** 2)
     m["euler_excess_predicted"] = f_ca * f_e - 1
     m["euler_excess_measured"] = eul / rate - 1
     notes = [
@@ -288,8 +295,9 @@ def _earth(values, progress=None):
         notes.insert(0, f"The solar part of the precession is not measurable in a run shorter than a year ({_years(span)}).")
     # periods shown in the notes: the published ones (a short run's fitted rates are rough); the
     # node from lunar_elements, the rest from the mean rates of Simon et al. 1994 (Meeus ch. 47)
-    published = {"18.6yr": NODE_PERIOD_YR * YR, "9.3yr": NODE_PERIOD_YR * YR / 2, "semiannual": 365.2596 / 2,
-                 "annual": 365.2596, "13.66d": 27.321582 / 2, "27.55d": 27.554550, "9.13d": 13.633}
+    published = {"18.6yr": NODE_PERIOD_YR * YR, "9.3yr": NODE_PERIOD_YR * YR / 2, "semiannual": ANOMALISTIC_YEAR_DAYS / 2,
+                 "annual": ANOMALISTIC_YEAR_DAYS, "13.66d": TROPICAL_MONTH_DAYS / 2, "27.55d": ANOMALISTIC_MONTH_DAYS,
+                 "9.13d": period_days(2 * MOON_MEAN_LONGITUDE[1] - MOON_NODE[1])}
     unresolved = {k: published.get(k, P) for k, P in unresolved.items()}
     long_p = {k: P for k, P in unresolved.items() if P * RAYLEIGH_SLACK > span}
     close = [k for k in unresolved if k not in long_p]
@@ -318,11 +326,11 @@ def _earth(values, progress=None):
     deps_e = eul_nut["semiannual"]["deps"] * np.cos(args["semiannual"]) + eul_nut["13.66d"]["deps"] * np.cos(args["13.66d"])
     lam0 = lam[0]
     plot = {
-        "pole longitude − 90° (arcsec)": ((lam - math.pi / 2) / ARCSEC)[sel],
-        "pole longitude − 90°, Euler (arcsec)": (-eul * t / YR - dpsi_e + dpsi_e[0] + (lam0 - math.pi / 2) / ARCSEC)[sel],
-        "nutation in longitude Δψ (arcsec)": (-(lam - lam.mean() - lam_mean) / ARCSEC)[sel],
+        "pole longitude − 90° (arcsec)": ((lam - math.pi / 2) / ARCSEC_RAD)[sel],
+        "pole longitude − 90°, Euler (arcsec)": (-eul * t / YR - dpsi_e + dpsi_e[0] + (lam0 - math.pi / 2) / ARCSEC_RAD)[sel],
+        "nutation in longitude Δψ (arcsec)": (-(lam - lam.mean() - lam_mean) / ARCSEC_RAD)[sel],
         "nutation in longitude Δψ, Euler (arcsec)": dpsi_e[sel],
-        "obliquity − ε₀ (arcsec)": ((p - obl) / ARCSEC)[sel],
+        "obliquity − ε₀ (arcsec)": ((p - obl) / ARCSEC_RAD)[sel],
         "obliquity − ε₀, Euler (arcsec)": (deps_e - deps_e[0])[sel],
     }
     return Run("earth", values, traj, m, comps, notes, plot_series=plot)
@@ -360,9 +368,9 @@ register(Scenario(
         Param("years", 100.0, 0.0, 400.0, "yr", "length of the run from J2000", exclusive_min=True, step=1.0),
         Param("step_days", 0.5, 0.0, 3.0, "day", "integrator step (the spin is solved exactly; resolve the month)",
               exclusive_min=True, step=0.1),
-        Param("H", EP.H_DYN, 0.0, 0.05, "1", "dynamical ellipticity (C − A)/C (IAU 2000: 0.0032737949)",
+        Param("H", EARTH_DYNAMICAL_ELLIPTICITY, 0.0, 0.05, "1", "dynamical ellipticity (C − A)/C (IAU 2000: 0.0032737949)",
               exclusive_min=True),
-        Param("obliquity_deg", math.degrees(EP.OBLIQUITY), 0.0, 89.0, "deg", "obliquity at J2000 (IAU 2006: 23.4392794°)",
+        Param("obliquity_deg", math.degrees(OBLIQUITY_J2000_RAD), 0.0, 89.0, "deg", "obliquity at J2000 (IAU 2006: 23.4392794°)",
               exclusive_min=True),
     ),
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),

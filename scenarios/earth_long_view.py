@@ -9,7 +9,8 @@ import numpy as np
 from ..physics import earth_precession as EP
 from ..physics import quaternion as quat
 from ..physics.params import Param, ParameterError
-from ..physics.precession import ARCSEC, pole_angles
+from ..physics.constants import ARCSEC_RAD, LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY, OBLIQUITY_J2000_RAD
+from ..physics.precession import pole_angles
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
@@ -56,16 +57,16 @@ def _earth_long(values, progress=None):
     p, lam = pole_angles(axis)
     ty = t / YR
     c = np.polyfit(ty, lam, 1)
-    rate = -c[0] / ARCSEC
+    rate = -c[0] / ARCSEC_RAD
     mod = EP.precession_parts_modern(orb.moon)
-    eul = -(mod["euler_sun"] + mod["euler_moon"]) / ARCSEC * YR
+    eul = -(mod["euler_sun"] + mod["euler_moon"]) / ARCSEC_RAD * YR
     m = dict(precession_rate_arcsec_per_yr=rate, precession_rate_euler_arcsec_per_yr=eul,
              precession_period_yr=360 * 3600 / rate, precession_period_euler_yr=360 * 3600 / eul,
              turned_deg=float(np.degrees(lam[0] - lam[-1])),
              obliquity_min_deg=float(np.degrees(p.min())), obliquity_max_deg=float(np.degrees(p.max())),
              moon_node_period_yr=orb.moon.node_period_yr)
     # the celestial pole in J2000 equatorial RA/Dec, for the star chart
-    ce, se = math.cos(EP.OBLIQUITY), math.sin(EP.OBLIQUITY)
+    ce, se = math.cos(OBLIQUITY_J2000_RAD), math.sin(OBLIQUITY_J2000_RAD)
     ye = ce * axis[:, 1] - se * axis[:, 2]
     ze = se * axis[:, 1] + ce * axis[:, 2]
     ra = np.degrees(np.unwrap(np.arctan2(ye, axis[:, 0])))
@@ -75,10 +76,10 @@ def _earth_long(values, progress=None):
     traj = Trajectory(ty, q, L * YR, I, time_unit="yr",
                       bodies={"sun": sun / np.linalg.norm(sun, axis=1, keepdims=True),
                               "moon": moon / np.linalg.norm(moon, axis=1, keepdims=True)})
-    lam_e = lam[0] - eul * ARCSEC * ty
+    lam_e = lam[0] - eul * ARCSEC_RAD * ty
     return Run("earth-long-view", values, traj, m,
                   [Comparison("precession period", 360 * 3600 / eul, m["precession_period_yr"],
-                              360 * 3600 / (EP.PSI_A_RATE / 100), "yr",
+                              360 * 3600 / (LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY / 100), "yr",
                               "modern: IAU 2006 ψ_A rate (fixed ecliptic); with the ecliptic's motion (p_A) 25,772 yr")],
                   ["Nutation is sampled too sparsely here to be seen (samples every "
                    f"{values['sample_years']:g} yr); the pole path is the angular-momentum axis in the J2000 ecliptic.",

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 import numpy as np
+from ..physics.constants import (JULIAN_YEAR_DAYS, MOON_INCLINATION_RANGE_DEG, MOON_MEAN_ECCENTRICITY,
+                                 MOON_MEAN_INCLINATION_DEG, SUN_ECCENTRICITY)
 from ..physics.params import Param, ParameterError
 from .drawing import Camera, Drawing, Frame, Label, Mesh, Option, Segments, Sphere, View, circle, flat_disc, new_drawing, segments
 from . import _three_body_drawing as tbd
@@ -26,7 +28,7 @@ def _lunar(values, progress=None):
                                      values["eccentricity"], math.radians(values["inclination_deg"]))
     if progress:
         progress(0.1)
-    days = values["duration_yr"] * le.YEAR_DAYS
+    days = values["duration_yr"] * JULIAN_YEAR_DAYS
     h, ds = values["step_days"], values["sample_days"]
     series = values["solar_force"] == "euler-series"
     t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series)
@@ -41,8 +43,8 @@ def _lunar(values, progress=None):
     na = le.node_and_apse(t, E)
     inc = np.degrees(E[:, 4])
     fo = le.first_order_rates(sun, le.MOON_J2000["sidereal_month_days"], math.radians(values["inclination_deg"]))
-    node_fo = 2 * math.pi / abs(fo["node_rate"]) / le.YEAR_DAYS
-    apse_fo = 2 * math.pi / abs(fo["apse_rate"]) / le.YEAR_DAYS
+    node_fo = 2 * math.pi / abs(fo["node_rate"]) / JULIAN_YEAR_DAYS
+    apse_fo = 2 * math.pi / abs(fo["apse_rate"]) / JULIAN_YEAR_DAYS
     # Euler's identities (§VII–IX) on a dense 60-day piece of the Cartesian solution
     td, Cd = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), 60.0, h, h, mu, mus, sun)
     Ed = le.cartesian_to_elements(Cd[:, :3], Cd[:, 3:], mu)
@@ -74,8 +76,8 @@ def _lunar(values, progress=None):
         Comparison("advance of the apsides", apse_fo, na["apse_period_yr"], le.APSE_PERIOD_YR, "yr",
                    f"first order gives {fo['apse_rate'] / na['apse_rate']:.2f} of the motion — the historical "
                    "'half the apse motion' (Clairaut 1747); modern: 3232.6 d against the stars"),
-        Comparison("inclination min", None, float(inc.min()), le.INCLINATION_RANGE_DEG[0], "deg", "osculating, period ≈ 173 d"),
-        Comparison("inclination max", None, float(inc.max()), le.INCLINATION_RANGE_DEG[1], "deg", ""),
+        Comparison("inclination min", None, float(inc.min()), MOON_INCLINATION_RANGE_DEG[0], "deg", "osculating, period ≈ 173 d"),
+        Comparison("inclination max", None, float(inc.max()), MOON_INCLINATION_RANGE_DEG[1], "deg", ""),
         Comparison("Euler's elements vs Cartesian integration, max distance", 0.0, err, None, "lunar distance",
                    "same forces, same RK4 step: the element equations (sign of §XXVII.4 corrected) reproduce the orbit"),
         Comparison("§XXVII.4 with the printed sign: max distance after 60 d", None, err_printed, None,
@@ -107,7 +109,7 @@ def _lunar(values, progress=None):
     normal = np.stack([np.sin(om) * np.sin(psi), -np.sin(om) * np.cos(psi), np.cos(om)], axis=1)
     node_deg = np.degrees(np.unwrap(psi))
     varpi_deg = np.degrees(np.unwrap(na["varpi"][sl]))
-    years = tt / le.YEAR_DAYS
+    years = tt / JULIAN_YEAR_DAYS
     series = {"node_longitude_deg": np.degrees(np.mod(psi, 2 * np.pi)), "inclination_deg": np.degrees(om),
               "perigee_longitude_deg": np.degrees(np.mod(na["varpi"][sl], 2 * np.pi)), "eccentricity": Es[:, 1],
               "orbit_normal_x": normal[:, 0], "orbit_normal_y": normal[:, 1], "orbit_normal_z": normal[:, 2],
@@ -229,9 +231,9 @@ register(Scenario(
         Param("duration_yr", 40.0, 1.0, 200.0, "yr", "length of the run"),
         Param("step_days", 0.025, 0.005, 0.2, "d", "fixed RK4 step (the error scales as step⁴)"),
         Param("sample_days", 0.5, 0.05, 10.0, "d", "spacing of the stored states"),
-        Param("eccentricity", 0.0549, 0.005, 0.3, "1", "Moon's mean eccentricity"),
-        Param("inclination_deg", 5.145396, 0.1, 60.0, "deg", "Moon's mean inclination to the ecliptic"),
-        Param("sun_eccentricity", 0.0167086, 0.0, 0.3, "1", "eccentricity of the Sun's apparent orbit"),
+        Param("eccentricity", MOON_MEAN_ECCENTRICITY, 0.005, 0.3, "1", "Moon's mean eccentricity"),
+        Param("inclination_deg", MOON_MEAN_INCLINATION_DEG, 0.1, 60.0, "deg", "Moon's mean inclination to the ecliptic"),
+        Param("sun_eccentricity", SUN_ECCENTRICITY, 0.0, 0.3, "1", "eccentricity of the Sun's apparent orbit"),
         Param("solar_force", "exact", kind="choice", choices=("exact", "euler-series"),
               help="exact 1/w³, or Euler's §XXXIII expansion to second order in v/u in the element equations"),
     ),
@@ -259,13 +261,13 @@ def _lunar_run():
     el, sun, mu, mus = le.initial_conditions()
     el = le.calibrate_mean_elements(el, sun, mu, mus, le.MOON_J2000["sidereal_month_days"],
                                     le.MOON_J2000["eccentricity"], math.radians(le.MOON_J2000["inclination_deg"]))
-    t, E = le.integrate_rk4("elements", el, 40 * le.YEAR_DAYS, 0.025, 0.5, mu, mus, sun)
+    t, E = le.integrate_rk4("elements", el, 40 * JULIAN_YEAR_DAYS, 0.025, 0.5, mu, mus, sun)
     return le.node_and_apse(t, E)
 
 
 def _secular_row(kind: str):
     """Node (kind="node") or perigee ("apse") period of the 40-yr run of Euler's element equations
-    against the published period referred to the fixed stars (our frame; see `constants`).
+    against the published period referred to the fixed stars (our frame; see physics.constants).
 
     Left out of the model, hence allowed: the Earth's J2 (computed in `oblateness_rates`: 8.5e-5
     of the node rate, 4.1e-5 of the perigee rate, both making the real periods shorter) and the
@@ -281,9 +283,9 @@ def _secular_row(kind: str):
         pub, sim, rate = le.NODE_PERIOD_SIDEREAL_YR, na["node_period_yr"], fo["node_rate"]
     else:
         pub, sim, rate = le.APSE_PERIOD_SIDEREAL_YR, na["apse_period_yr"], fo["apse_rate"]
-    j2_share = abs(j2[kind + "_rate"]) / (2 * math.pi / (pub * le.YEAR_DAYS))
+    j2_share = abs(j2[kind + "_rate"]) / (2 * math.pi / (pub * JULIAN_YEAR_DAYS))
     rel = abs(sim / pub - 1)
-    return dict(euler=2 * math.pi / abs(rate) / le.YEAR_DAYS, simulated=sim, modern=pub, rel_error=rel,
+    return dict(euler=2 * math.pi / abs(rate) / JULIAN_YEAR_DAYS, simulated=sim, modern=pub, rel_error=rel,
                 tolerance=3 * j2_share, unit="yr"), j2_share, sim / pub - 1
 
 

@@ -16,7 +16,9 @@ import numpy as np
 from .drawing import Camera
 from .base import get
 from .checks import register_check
+from ..physics import constants as C
 from ..physics import moon
+from ..physics.constants import ARCSEC_RAD, JULIAN_YEAR_DAYS
 from ..physics import quaternion as quat
 from ..physics.integrator import PointMass, integrate
 from ..physics.params import Param
@@ -47,7 +49,7 @@ def moon_runs():
     coef_ref = physical_libration_terms(values, t, q_ref, np.array([P_free]))[0]
     keys = {"M'": "mprime", "M": "annual"}
     out = {"run": dict(r.metrics), "run_2h": dict(r2.metrics)}
-    out["dop853"] = {k: coef_ref[lab] * ARCSEC for lab, k in keys.items()}
+    out["dop853"] = {k: coef_ref[lab] / ARCSEC_RAD for lab, k in keys.items()}
     return out
 
 
@@ -86,7 +88,6 @@ def e8_moon_annual():
     return row
 
 
-ARCSEC = 180.0 / np.pi * 3600.0
 
 
 TERM_2D2M = "2D−2M'"
@@ -121,12 +122,12 @@ def initial_state(values):
     2N, q0, ω0, Earth position function of the run's time)."""
     beta, gamma = values["beta"], values["gamma"]
     I = moon.moments(beta, gamma)
-    t0 = (values["start_year"] - J2000_YEAR) * 365.25
-    duration = values["years"] * 365.25
+    t0 = (values["start_year"] - J2000_YEAR) * JULIAN_YEAR_DAYS
+    duration = values["years"] * JULIAN_YEAR_DAYS
     # 2N = 3γ·GM_E⟨1/r³⟩ over the run (Euler's n, §833, with the Moon's mean 1/s³)
     tg = t0 + np.linspace(0.0, duration, 4001)
     _, _, dist = moon.moon_geocentric(tg)
-    two_N = 3.0 * gamma * moon.GM_EARTH * float(np.mean(dist**-3.0))
+    two_N = 3.0 * gamma * moon.GM_EARTH_KM3_DAY2 * float(np.mean(dist**-3.0))
     # start: the Cassini frame, and (optionally) Euler's forced physical libration added, so the
     # free libration is small
     def frame_and_rate(tt):
@@ -156,7 +157,7 @@ def reference_dop853(values, t, rtol=1e-12, atol=1e-14):
     t0, duration, I, _, q0, w0, pos = initial_state(values)
 
     def torque(tt, q, w):
-        return torque_first_order(I, quat.rotate_inverse(q, pos(np.array([tt]))[0]), moon.GM_EARTH)
+        return torque_first_order(I, quat.rotate_inverse(q, pos(np.array([tt]))[0]), moon.GM_EARTH_KM3_DAY2)
 
     t = np.asarray(t, float)
     sol = solve_ivp(rhs_state, (0.0, float(t[-1])), np.r_[w0, q0], method="DOP853", rtol=rtol, atol=atol,
@@ -169,13 +170,13 @@ def physical_libration_terms(values, t, q, free_periods):
     """The run's analysis (t from the start, attitudes q) as in the scenario, the free term at
     `free_periods` (the scenario's measured free period): fitted physical-libration coefficients
     {label: rad}, free period, free amplitude, rms (fit_physical_libration)."""
-    t0 = (values["start_year"] - J2000_YEAR) * 365.25
+    t0 = (values["start_year"] - J2000_YEAR) * JULIAN_YEAR_DAYS
     tt = t0 + np.asarray(t, float)
     tau = moon.physical_libration(q, tt, values["equator_inclination_deg"])[:, 2]
     return fit_physical_libration(tt, tau, free_periods)
 
 
-FREE_KICK = 100.0 / ARCSEC  # rad: the extra free swing of the companion run (small: linear regime)
+FREE_KICK = 100.0 * ARCSEC_RAD  # rad: the extra free swing of the companion run (small: linear regime)
 
 
 def _integrate(values, state, kick=0.0, progress=None):
@@ -185,7 +186,7 @@ def _integrate(values, state, kick=0.0, progress=None):
     n = int(np.ceil(duration / h))
     if kick:
         q0 = quat.multiply(q0, quat.from_axis_angle([0, 0, 1], kick))
-    return integrate(I, w0, duration, h, q0=q0, masses=[PointMass(moon.GM_EARTH, pos)], scheme="yoshida4",
+    return integrate(I, w0, duration, h, q0=q0, masses=[PointMass(moon.GM_EARTH_KM3_DAY2, pos)], scheme="yoshida4",
                      stride=max(1, int(np.ceil(n / 6000))), progress=progress)
 
 
@@ -208,7 +209,7 @@ def _moon(values, progress=None):
     gamma = values["gamma"]
     state = initial_state(values)
     t0, duration, I, two_N, q0, w0, pos = state
-    short = duration < 3 * 365.25  # the free (~2.9 yr) and annual terms need ~3 yr to be told apart
+    short = duration < 3 * JULIAN_YEAR_DAYS  # the free (~2.9 yr) and annual terms need ~3 yr to be told apart
     sub = (lambda f: progress(0.5 * f)) if progress is not None and not short else progress
     t, L, q = _integrate(values, state, progress=sub)
     tt = t0 + t
@@ -234,19 +235,19 @@ def _moon(values, progress=None):
         "optical_libration_lat_max_deg": float(np.degrees(np.max(np.abs(lat)))),
         "optical_lon_max_uniform_rotation_deg": float(np.degrees(np.max(np.abs(lp)))),
         "optical_lat_max_uniform_rotation_deg": float(np.degrees(np.max(np.abs(bp)))),
-        "physical_libration_mprime_arcsec": coef["M'"] * ARCSEC,
-        "physical_libration_mprime_euler_arcsec": coef_e["M'"] * ARCSEC,
+        "physical_libration_mprime_arcsec": coef["M'"] / ARCSEC_RAD,
+        "physical_libration_mprime_euler_arcsec": coef_e["M'"] / ARCSEC_RAD,
         "physical_libration_mprime_published_arcsec": moon.MEEUS_TAU_MPRIME_DEG * 3600.0,
-        "physical_libration_annual_arcsec": coef["M"] * ARCSEC,
-        "physical_libration_annual_euler_arcsec": coef_e["M"] * ARCSEC,
+        "physical_libration_annual_arcsec": coef["M"] / ARCSEC_RAD,
+        "physical_libration_annual_euler_arcsec": coef_e["M"] / ARCSEC_RAD,
         "physical_libration_annual_published_arcsec": moon.MEEUS_TAU_ANNUAL_DEG * 3600.0,
-        "physical_libration_evection_arcsec": coef["2D−M'"] * ARCSEC,
-        "physical_libration_evection_euler_arcsec": coef_e["2D−M'"] * ARCSEC,
+        "physical_libration_evection_arcsec": coef["2D−M'"] / ARCSEC_RAD,
+        "physical_libration_evection_euler_arcsec": coef_e["2D−M'"] / ARCSEC_RAD,
         "free_libration_period_days": P_free,
         "free_libration_period_euler_days": P_euler,
-        "free_libration_amplitude_arcsec": free_amp * ARCSEC,
-        "fit_residual_rms_arcsec": rms * ARCSEC,
-        "sub_earth_vs_uniform_lon_max_arcsec": float(np.max(np.abs(np.remainder(lon - lp + np.pi, 2 * np.pi) - np.pi)) * ARCSEC),
+        "free_libration_amplitude_arcsec": free_amp / ARCSEC_RAD,
+        "fit_residual_rms_arcsec": rms / ARCSEC_RAD,
+        "sub_earth_vs_uniform_lon_max_arcsec": float(np.max(np.abs(np.remainder(lon - lp + np.pi, 2 * np.pi) - np.pi)) / ARCSEC_RAD),
     }
     comps = [
         Comparison("optical libration in longitude, max (°)", None, m["optical_libration_lon_max_deg"],
@@ -271,8 +272,8 @@ def _moon(values, progress=None):
         "The −16.8″ term is the anomalistic-month term (sin M′); the annual term is +90.7″ E sin M "
         "(Meeus ch. 53 after Eckhardt 1981).",
         f"Euler's formula (§836) is linear in each longitude term: it gets the M′, annual and evection terms to a few "
-        f"per cent. For 2D−2M′ it gives {coef_e[TERM_2D2M] * ARCSEC:.1f}″ from the 0.0588° longitude term; the run "
-        f"gives {coef[TERM_2D2M] * ARCSEC:.1f}″ (published −9.9″): the rest is second order, products of the "
+        f"per cent. For 2D−2M′ it gives {coef_e[TERM_2D2M] / ARCSEC_RAD:.1f}″ from the 0.0588° longitude term; the run "
+        f"gives {coef[TERM_2D2M] / ARCSEC_RAD:.1f}″ (published −9.9″): the rest is second order, products of the "
         "orbit's terms through the 1/s³ modulation (the kind of term of §835).",
         "plot_series: sub-Earth longitude/latitude (deg, the wobbling face), the same for uniform rotation "
         "(Meeus l′, b′), and the physical libration τ (arcsec) with Euler's Σ-term curve.",
@@ -287,7 +288,7 @@ def _moon(values, progress=None):
         "zeta_rad": lon, "zeta_euler_rad": zeta_euler,
         "libration_longitude_deg": np.degrees(lon), "libration_latitude_deg": np.degrees(lat),
         "optical_longitude_uniform_deg": np.degrees(lp), "optical_latitude_uniform_deg": np.degrees(bp),
-        "physical_libration_arcsec": tau * ARCSEC, "physical_libration_euler_arcsec": tau_euler * ARCSEC,
+        "physical_libration_arcsec": tau / ARCSEC_RAD, "physical_libration_euler_arcsec": tau_euler / ARCSEC_RAD,
     }
     traj.series.update({"libration_longitude_deg": series["libration_longitude_deg"],
                         "libration_latitude_deg": series["libration_latitude_deg"]})
@@ -356,9 +357,9 @@ register(Scenario(
         Param("years", 6.0, 0.2, 40.0, "yr", "time span"),
         Param("start_year", 2025.0, 1900.0, 2100.0, "yr", "start epoch (TT, years)"),
         Param("step_days", 0.25, 0.01, 2.0, "day", "integrator step"),
-        Param("beta", moon.BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)"),
-        Param("gamma", moon.GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (LLR: 227.7e-6)"),
-        Param("equator_inclination_deg", moon.I_EQUATOR_DEG, 0.0, 10.0, "deg", "lunar equator to ecliptic (1.54242°)"),
+        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)"),
+        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (LLR: 227.7e-6)"),
+        Param("equator_inclination_deg", C.MOON_EQUATOR_INCLINATION_DEG, 0.0, 10.0, "deg", "lunar equator to ecliptic (1.54242°)"),
         Param("start", "forced", kind="choice", choices=("forced", "uniform"),
               help="'forced': start on Euler's forced libration (small free libration); 'uniform': start "
                    "rotating uniformly (a large free libration, period ~2.9 yr)"),

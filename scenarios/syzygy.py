@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import numpy as np
+from ..physics.constants import SIDEREAL_YEAR_DAYS
 from ..physics.params import Param
 from .drawing import Camera, Drawing, Label, Option, Segments, Sphere, View, circle, new_drawing, segments
 from . import _three_body_drawing as tbd
@@ -51,7 +52,7 @@ def _syzygy(values, progress=None):
     eta_e, v_e = sz.euler_oscillation(alpha, A, t, side)
     metrics = {
         "syzygy_distance_lunar_units": b_lunar,
-        "syzygy_distance_lunar_units_euler": (EULER_N2 / 3.0) ** (1.0 / 3.0),
+        "syzygy_distance_lunar_units_euler": (sz.EULER_N_SQUARED / 3.0) ** (1.0 / 3.0),
         "alpha_sun_distance": alpha,
         "oscillation_frequency": w_meas,
         "oscillation_frequency_euler": sz.HILL_FREQUENCY,
@@ -68,7 +69,7 @@ def _syzygy(values, progress=None):
         "swings_before_escape": float(n_half_run) / 2.0,
     }
     comps = [
-        Comparison("syzygy distance (lunar distances)", (EULER_N2 / 3.0) ** (1.0 / 3.0), b_lunar, None, "c",
+        Comparison("syzygy distance (lunar distances)", (sz.EULER_N_SQUARED / 3.0) ** (1.0 / 3.0), b_lunar, None, "c",
                    "Euler: v ≈ c·(n²/3)^{1/3} with n² = 175, 'about four'; simulated: root of §7/§9 with today's n, m"),
         Comparison("α = v/a: Euler's 4-term series vs root", series_e, alpha, series_c, "",
                    "modern column: the series with the 4th coefficient corrected (4/243, not 1/81)"),
@@ -78,7 +79,7 @@ def _syzygy(values, progress=None):
                    "half the swing of v/b over the η amplitude on the first swing; modern: centre eigenvector"),
         Comparison("escape exponent (real root Euler missed)", None, lam_meas, modes["escape_exponent"], "",
                    f"Hill limit √(√28 + 1) = {sz.HILL_ESCAPE_EXPONENT:.4f}; e-folding every "
-                   f"{1 / lam_meas / (2 * math.pi) * 365.25:.1f} days"),
+                   f"{1 / lam_meas / (2 * math.pi) * SIDEREAL_YEAR_DAYS:.1f} days"),
     ]
     notes = [
         "Euler linearised about syzygy and assumed an oscillation; the same characteristic equation "
@@ -107,8 +108,6 @@ def _syzygy(values, progress=None):
         "v/b simulated": v / alpha, "v/b Euler 1 − 0.3117 A cos αζ": v_e / alpha},
         extras={"syzygy_point_lunar": (sgn * b_lunar, 0.0, 0.0)})
 
-
-EULER_N2 = 175.0
 
 
 def _syzygy_params():

@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 
+from theoria.physics.constants import (EARTH_MOON_DISTANCE_KM, JULIAN_YEAR_DAYS, MOON_EARTH_MASS_RATIO,
+                                       OBLIQUITY_J2000_RAD)
 from theoria.physics.params import ParameterError
 from theoria.scenarios.base import get
 from theoria.physics.three_body import collinear as col
@@ -47,7 +49,7 @@ def test_earth_moon_alpha_held_by_rebound():
     """Earth, Moon and a massless body at each collinear point (the translator's application of
     Eq. 33) turned rigidly: REBOUND IAS15 keeps the spacing ratio for a quarter turn (the points
     are unstable, e-folding ≈ 0.4 of a radian of turn, so short runs only)."""
-    mr = col.MOON_EARTH_MASS_RATIO
+    mr = MOON_EARTH_MASS_RATIO
     for masses, a in zip([(1.0, 0.0, mr), (1.0, mr, 0.0), (0.0, 1.0, mr)], col.lagrange_alphas(mr)):
         A, B, C = masses
         x = col.positions_on_line(A, B, C, a, 1.0)
@@ -65,8 +67,8 @@ def test_earth_moon_alpha_held_by_rebound():
 
 
 def test_lagrange_points_vs_restricted_problem_and_published():
-    L = col.lagrange_distances(col.MOON_EARTH_MASS_RATIO, col.EARTH_MOON_DISTANCE_KM)
-    Lm = col.lagrange_distances_cr3bp(col.MOON_EARTH_MASS_RATIO, col.EARTH_MOON_DISTANCE_KM)
+    L = col.lagrange_distances(MOON_EARTH_MASS_RATIO, EARTH_MOON_DISTANCE_KM)
+    Lm = col.lagrange_distances_cr3bp(MOON_EARTH_MASS_RATIO, EARTH_MOON_DISTANCE_KM)
     assert np.allclose(L, Lm, rtol=1e-12)
     # Koon, Lo, Marsden & Ross (2011), Earth–Moon μ = 0.01215: x of L1, L2, L3 from the barycentre
     # (labelled μ = 1.215e-2; the six digits are those of the JPL μ = 0.01215058561): within
@@ -236,11 +238,11 @@ def test_node_and_apse_periods_vs_published(lunar_default):
     m = lunar_default.metrics
     month = le.MOON_J2000["sidereal_month_days"]
     j2 = le.oblateness_rates(month, le.MOON_J2000["eccentricity"])
-    cy = 36525.0 / le.YEAR_DAYS
+    cy = 36525.0 / JULIAN_YEAR_DAYS
     node_pub = 360.0 / (1934.1362891 + 5028.796195 / 3600) * cy  # yr, against the stars
     apse_pub = 360.0 / (4069.0137287 - 5028.796195 / 3600) * cy
-    tol_node = 3 * abs(j2["node_rate"]) * node_pub * le.YEAR_DAYS / (2 * math.pi)
-    tol_apse = 3 * abs(j2["apse_rate"]) * apse_pub * le.YEAR_DAYS / (2 * math.pi)
+    tol_node = 3 * abs(j2["node_rate"]) * node_pub * JULIAN_YEAR_DAYS / (2 * math.pi)
+    tol_apse = 3 * abs(j2["apse_rate"]) * apse_pub * JULIAN_YEAR_DAYS / (2 * math.pi)
     assert 2e-4 < tol_node < 3e-4 and 1e-4 < tol_apse < 1.5e-4
     assert m["node_period_yr"] == pytest.approx(node_pub, rel=tol_node)
     assert m["apse_period_yr"] == pytest.approx(apse_pub, rel=tol_apse)
@@ -256,7 +258,7 @@ def test_node_and_apse_periods_vs_published(lunar_default):
     # Almanac's sidereal year (the model's Sun has the Kepler year of 1 AU: n' differs by 6e-8)
     n = 2 * math.pi / month
     ns = 2 * math.pi / 365.256363
-    node_fo = 2 * math.pi / (0.75 * ns * ns / n * math.cos(math.radians(5.145396))) / le.YEAR_DAYS
+    node_fo = 2 * math.pi / (0.75 * ns * ns / n * math.cos(math.radians(5.145396))) / JULIAN_YEAR_DAYS
     assert m["node_period_first_order_yr"] == pytest.approx(node_fo, rel=1e-6)
     assert m["elements_vs_cartesian_max_error"] < 1e-5  # lunar distances over 40 yr
     assert set(lunar_default.trajectory.bodies) == {"sun", "earth", "moon"}
@@ -268,7 +270,7 @@ def test_elements_vs_rebound_three_body():
     el, sun, mu, mus = le.initial_conditions()
     el = le.calibrate_mean_elements(el, sun, mu, mus, le.MOON_J2000["sidereal_month_days"], 0.0549,
                                     math.radians(5.145396))
-    days = 20 * le.YEAR_DAYS
+    days = 20 * JULIAN_YEAR_DAYS
     t, E = le.integrate_rk4("elements", el, days, 0.025, 0.5, mu, mus, sun)
     tr, r, v = le.rebound_three_body(el, sun, mu, mus, days, 0.5)
     Er = le.cartesian_to_elements(r, v, mu)
@@ -363,7 +365,7 @@ def test_euler_series_of_xxxiii_is_close():
     order (v/u)² ≈ 7e-6 in the solar force, so the node and apse rates move by ~1e-5, and the
     orbit drifts (slowly, in phase) from the exact-force one."""
     el, sun, mu, mus = le.initial_conditions()
-    days = 10 * le.YEAR_DAYS
+    days = 10 * JULIAN_YEAR_DAYS
     t, Ex = le.integrate_rk4("elements", el, days, 0.025, 0.5, mu, mus, sun)
     _, Es = le.integrate_rk4("elements", el, days, 0.025, 0.5, mu, mus, sun, euler_series=True)
     a, b = le.node_and_apse(t, Ex), le.node_and_apse(t, Es)
@@ -393,11 +395,10 @@ def test_oblateness_node_share_vs_averaged_torque():
     small-i limit: O(i²) = 0.8% corrections allowed (2%)."""
     from scipy.integrate import solve_ivp
 
-    from theoria.physics.three_body.constants import OBLIQUITY_RAD
 
-    eps, inc = OBLIQUITY_RAD, math.radians(5.145396)
+    eps, inc = OBLIQUITY_J2000_RAD, math.radians(5.145396)
     P, z = np.array([0.0, -math.sin(eps), math.cos(eps)]), np.array([0.0, 0.0, 1.0])
-    nu = 2 * math.pi / (le.NODE_PERIOD_SIDEREAL_YR * le.YEAR_DAYS)
+    nu = 2 * math.pi / (le.NODE_PERIOD_SIDEREAL_YR * JULIAN_YEAR_DAYS)
     Ks = nu / math.cos(inc)
     k = le.oblateness_rates(le.MOON_J2000["sidereal_month_days"], le.MOON_J2000["eccentricity"])["k"]
     k_big = 20 * k  # still ≪ ν, so the response is linear in k; clearer above the integration noise

@@ -26,20 +26,18 @@ import math
 
 import numpy as np
 
-# The translator's "Applications" table (seed 003, end of §11): d = 384400 km,
-# M_earth = 5.98e24 kg, M_moon = 7.34e22 kg.
+from ..constants import EARTH_MOON_DISTANCE_KM
+
+# The translator's "Applications" table (seed 003, end of §11): d = 384400 km (the usual mean
+# distance, as ours), M_earth = 5.98e24 kg, M_moon = 7.34e22 kg.
 TRANSLATOR_TABLE = {
-    "distance_km": 384400.0,
+    "distance_km": EARTH_MOON_DISTANCE_KM,
     "mass_earth_kg": 5.98e24,
     "mass_moon_kg": 7.34e22,
     "alpha": (0.17737, 0.167417, 1.00711),
     "L_km": (326490.0, 448755.0, 381686.0),
 }
 
-# Earth–Moon mass ratio M_moon/M_earth = 0.0123000371 (IAU 2009 system of astronomical
-# constants, Luzum et al. 2011); mean Earth–Moon distance 384400 km.
-MOON_EARTH_MASS_RATIO = 0.0123000371
-EARTH_MOON_DISTANCE_KM = 384400.0
 
 
 def quintic_coefficients(A: float, B: float, C: float) -> np.ndarray:

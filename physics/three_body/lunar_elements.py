@@ -36,48 +36,36 @@ import math
 import numpy as np
 from numba import njit
 
-from . import constants as C
+from .. import constants as C
+from .. import kepler
+from ..constants import JULIAN_YEAR_DAYS
 
-DAY = 86400.0
-KM_PER_UNIT = 384400.0  # length unit: the Moon's mean distance (km)
-GM_EARTH = 398600.4418  # km³/s² (IERS 2010)
-GM_MOON = GM_EARTH * 0.0123000371  # IAU 2009 mass ratio
-GM_SUN = 1.32712440018e11  # km³/s² (IERS 2010)
-AU_KM = 149597870.7
-YEAR_DAYS = C.JULIAN_YEAR_DAYS  # Julian year, for the periods in years
+KM_PER_UNIT = C.EARTH_MOON_DISTANCE_KM  # the length unit: the Moon's mean distance
 
 # Mean elements at J2000 (Simon et al. 1994; Meeus, Astronomical Algorithms, ch. 47 and 25),
-# referred to the ecliptic: Moon and the geocentric Sun.
-MOON_J2000 = dict(eccentricity=0.0549, inclination_deg=5.145396, node_deg=125.0445479,
-                  perigee_deg=83.3532465, mean_longitude_deg=218.3164477,
-                  sidereal_month_days=C.SIDEREAL_MONTH_DAYS)  # 27.3216615 d, see constants
-SUN_J2000 = dict(eccentricity=0.0167086, perigee_deg=282.937348, mean_longitude_deg=280.46646)
+# referred to the ecliptic: Moon and the geocentric Sun (values and sources in physics.constants).
+MOON_J2000 = dict(eccentricity=C.MOON_MEAN_ECCENTRICITY, inclination_deg=C.MOON_MEAN_INCLINATION_DEG,
+                  node_deg=C.MOON_NODE[0], perigee_deg=C.MOON_PERIGEE_J2000_DEG,
+                  mean_longitude_deg=C.MOON_MEAN_LONGITUDE[0], sidereal_month_days=C.SIDEREAL_MONTH_DAYS)
+SUN_J2000 = dict(eccentricity=C.SUN_ECCENTRICITY, perigee_deg=C.SUN_PERIGEE_J2000_DEG,
+                 mean_longitude_deg=C.SUN_MEAN_LONGITUDE_J2000_DEG)
 
-# Published mean periods from the rates of Simon et al. 1994 (Meeus ch. 47; see `constants`).
+# Published mean periods from the rates of Simon et al. 1994 (Meeus ch. 47; see physics.constants).
 # The usually quoted node period 6798.38 d = 18.613 yr is measured from the moving equinox;
 # against the stars (the frame of our model: fixed ecliptic and axes) it is 6793.48 d =
 # 18.5995 yr. The usually quoted perigee period 3232.6 d = 8.8504 yr is already the one against
 # the stars (from the equinox of date: 3231.50 d). Compare the model with the *_SIDEREAL values.
 # Inclination 4.99°–5.30° (period 173 d).
-NODE_PERIOD_YR = C.NODE_PERIOD_OF_DATE_DAYS / YEAR_DAYS  # 18.613 yr, from the equinox of date
-NODE_PERIOD_SIDEREAL_YR = C.NODE_PERIOD_SIDEREAL_DAYS / YEAR_DAYS  # 18.5995 yr
-APSE_PERIOD_YR = C.APSE_PERIOD_SIDEREAL_DAYS / YEAR_DAYS  # 8.8504 yr (= 3232.6 d, against the stars)
+NODE_PERIOD_YR = C.NODE_PERIOD_OF_DATE_DAYS / JULIAN_YEAR_DAYS  # 18.613 yr, from the equinox of date
+NODE_PERIOD_SIDEREAL_YR = C.NODE_PERIOD_SIDEREAL_DAYS / JULIAN_YEAR_DAYS  # 18.5995 yr
+APSE_PERIOD_YR = C.APSE_PERIOD_SIDEREAL_DAYS / JULIAN_YEAR_DAYS  # 8.8504 yr (= 3232.6 d, against the stars)
 APSE_PERIOD_SIDEREAL_YR = APSE_PERIOD_YR
-INCLINATION_RANGE_DEG = (4.99, 5.30)
 
 
 def units():
     """(μ_earth+moon, μ_sun) in lunar units (384400 km) and days."""
-    s = KM_PER_UNIT**3 / DAY**2
-    return (GM_EARTH + GM_MOON) / s, GM_SUN / s
-
-
-@njit(cache=True)
-def _kepler_E(M, e):
-    E = M + e * math.sin(M)
-    for _ in range(6):
-        E -= (E - e * math.sin(E) - M) / (1.0 - e * math.cos(E))
-    return E
+    s = KM_PER_UNIT**3 / C.SECONDS_PER_DAY**2
+    return (C.GM_EARTH_KM3_S2 + C.GM_MOON_KM3_S2) / s, C.GM_SUN_KM3_S2 / s
 
 
 @njit(cache=True)
@@ -85,10 +73,9 @@ def sun_state(t, sun):
     """Sun's position (x, y) and distance about the Earth at time t (days) on its fixed Kepler
     ellipse in the ecliptic. sun = (a, e, mean motion, mean anomaly at 0, longitude of perigee)."""
     a, e, nm, M0, varpi = sun[0], sun[1], sun[2], sun[3], sun[4]
-    E = _kepler_E(M0 + nm * t, e)
-    f = 2.0 * math.atan2(math.sqrt(1 + e) * math.sin(0.5 * E), math.sqrt(1 - e) * math.cos(0.5 * E))
-    u = a * (1.0 - e * math.cos(E))
-    th = f + varpi
+    E = kepler.eccentric_anomaly_ufunc(M0 + nm * t, e)
+    u = a * kepler.radius_ufunc(E, e)
+    th = kepler.true_anomaly_ufunc(E, e) + varpi
     return u * math.cos(th), u * math.sin(th), u, th
 
 
@@ -245,11 +232,6 @@ def elements_to_cartesian(el, mu):
     return r, vr[:, None] * rhat + vt[:, None] * that
 
 
-def kepler_true_anomaly(M, e):
-    E = np.array([_kepler_E(float(m), e) for m in np.atleast_1d(M)])
-    return 2 * np.arctan2(np.sqrt(1 + e) * np.sin(E / 2), np.sqrt(1 - e) * np.cos(E / 2))
-
-
 def initial_conditions(eccentricity=None, inclination_deg=None, semi_major_axis=None, sun_eccentricity=None):
     """Moon's initial elements (p, q, Υ, ψ, ω, σ) and the Sun's ellipse at J2000 (mean elements
     taken as osculating). The semi-major axis defaults to the value whose Kepler period is the
@@ -264,12 +246,12 @@ def initial_conditions(eccentricity=None, inclination_deg=None, semi_major_axis=
     node = math.radians(M_["node_deg"])
     peri = math.radians(M_["perigee_deg"])
     Mm = math.radians(M_["mean_longitude_deg"] - M_["perigee_deg"])
-    f = float(kepler_true_anomaly(Mm, e)[0])
+    f = float(kepler.true_anomaly(Mm, e))
     g = peri - node  # argument of perigee (dog-leg longitude of perigee − node)
     el = np.array([a * (1 - e * e), e, f, node, inc, g + f])
     S = SUN_J2000
     es = S["eccentricity"] if sun_eccentricity is None else sun_eccentricity
-    a_s = AU_KM / KM_PER_UNIT
+    a_s = C.AU_KM / KM_PER_UNIT
     n_s = math.sqrt((mus + mu) / a_s**3)
     sun = (a_s, es, n_s, math.radians(S["mean_longitude_deg"] - S["perigee_deg"]), math.radians(S["perigee_deg"]))
     return el, sun, mu, mus
@@ -314,7 +296,8 @@ def node_and_apse(t_days, el):
     rn = linear_rate(t_days, psi)
     ra = linear_rate(t_days, varpi)
     return {"node_rate": rn, "apse_rate": ra,
-            "node_period_yr": 2 * math.pi / abs(rn) / YEAR_DAYS, "apse_period_yr": 2 * math.pi / abs(ra) / YEAR_DAYS,
+            "node_period_yr": 2 * math.pi / abs(rn) / JULIAN_YEAR_DAYS,
+            "apse_period_yr": 2 * math.pi / abs(ra) / JULIAN_YEAR_DAYS,
             "psi": psi, "varpi": varpi}
 
 
@@ -328,7 +311,7 @@ def first_order_rates(sun, month_days: float, inclination_rad: float):
     return {"node_rate": -base * math.cos(inclination_rad), "apse_rate": base}
 
 
-def oblateness_rates(month_days: float, eccentricity: float, obliquity: float = C.OBLIQUITY_RAD,
+def oblateness_rates(month_days: float, eccentricity: float, obliquity: float = C.OBLIQUITY_J2000_RAD,
                      j2: float = C.EARTH_J2, radius_km: float = C.EARTH_RADIUS_KM) -> dict:
     """Secular node and perigee rates (rad/day) that the Earth's J2 would add to the Moon's orbit
     near the ecliptic; NOT in Euler's model (nor ours) — this sizes what the comparison with the
@@ -382,9 +365,8 @@ def rebound_three_body(el0, sun, mu, mus, duration_days: float, sample_days: flo
     r, v = r[0], v[0]
     a_s, es, ns, M0, varpi = sun
     # the Sun's geocentric state at t = 0 (Kepler ellipse in the ecliptic)
-    E = _kepler_E(M0, es)
-    f = 2 * math.atan2(math.sqrt(1 + es) * math.sin(E / 2), math.sqrt(1 - es) * math.cos(E / 2))
-    u = a_s * (1 - es * math.cos(E))
+    _, f, u = (float(x) for x in kepler.anomalies(M0, es))
+    u *= a_s
     th = f + varpi
     mu_s = mus + mu
     h = math.sqrt(mu_s * a_s * (1 - es * es))
@@ -392,7 +374,7 @@ def rebound_three_body(el0, sun, mu, mus, duration_days: float, sample_days: flo
     vt = h / u
     R = np.array([u * math.cos(th), u * math.sin(th), 0.0])
     V = np.array([vr * math.cos(th) - vt * math.sin(th), vr * math.sin(th) + vt * math.cos(th), 0.0])
-    m_e = GM_EARTH / (GM_EARTH + GM_MOON) * mu
+    m_e = mu / (1.0 + C.MOON_EARTH_MASS_RATIO)
     m_m = mu - m_e
     bary = m_m / mu * r
     vbary = m_m / mu * v

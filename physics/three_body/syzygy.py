@@ -37,7 +37,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from . import constants as C
+from .. import constants as C
 
 # Euler's numbers (1766 §8, §16)
 EULER_N_SQUARED = 175.0  # "n² = 175": (lunar revolutions per year)²
@@ -45,9 +45,9 @@ HILL_FREQUENCY = math.sqrt(math.sqrt(28.0) - 1.0)  # α of §16, 2.0715939...
 HILL_ESCAPE_EXPONENT = math.sqrt(math.sqrt(28.0) + 1.0)  # the real root Euler missed, 2.5083...
 AMPLITUDE_COEFFICIENT = (HILL_FREQUENCY**2 - 3.0) / (2.0 * HILL_FREQUENCY)  # 0.311717 (§16)
 
-# Earth/Sun mass ratio GM_earth/GM_sun = 398600.4418 / 1.32712440018e11 (IAU 2009 / IERS 2010)
-EARTH_SUN_MASS_RATIO = 398600.4418 / 1.32712440018e11
-# sidereal year 365.256363 d / sidereal month 27.3216615 d (sources in `constants`)
+# Earth/Sun mass ratio GM⊕/GM☉ (3.0034896e-6; sources in physics.constants)
+EARTH_SUN_MASS_RATIO = C.GM_EARTH_KM3_S2 / C.GM_SUN_KM3_S2
+# sidereal year 365.256363 d / sidereal month 27.3216615 d (sources in physics.constants)
 MOON_REVOLUTIONS_PER_YEAR = C.SIDEREAL_YEAR_DAYS / C.SIDEREAL_MONTH_DAYS
 
 
