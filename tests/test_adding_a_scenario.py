@@ -6,14 +6,13 @@ from __future__ import annotations
 import importlib.util
 import re
 import sys
-from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
 import theoria as th
 from theoria.scenarios import base
 
-ROOT = Path(__file__).resolve().parent.parent
 PAGE = ROOT / "docs" / "adding-a-scenario.md"
 
 

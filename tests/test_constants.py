@@ -6,13 +6,12 @@ import ast
 import io
 import math
 import tokenize
-from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
 from theoria.physics import constants as C
 
-ROOT = Path(__file__).resolve().parent.parent
 CONSTANTS = ROOT / "physics" / "constants.py"
 # the numerical code; app/ draws with these numbers but its drawing modules are being rewritten
 SCANNED = ("physics", "scenarios", "benchmarks", "theoria")

@@ -5,21 +5,16 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT
+from conftest import run_theoria as _cli
 
 import theoria as th
 
-ROOT = Path(__file__).resolve().parent.parent
 
-
-def _cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "theoria.app.cli", *args], capture_output=True, text=True,
-                          timeout=1800, cwd=cwd)
-
-
+@pytest.mark.slow
 def test_scenarios_in_gallery_order_and_each_one_described():
     names = th.scenarios()
     assert len(names) == len(set(names)) >= 16
@@ -34,6 +29,7 @@ def test_scenarios_in_gallery_order_and_each_one_described():
             assert set(values) <= set(sc.parameters), (n, name)
 
 
+@pytest.mark.slow
 def test_metrics_equal_the_command_lines_for_the_same_parameters():
     sc = th.scenario("middle-axis-flip")
     run = sc.simulate(spin=1, perturbation=0.01, duration=200)
@@ -50,6 +46,7 @@ def test_metrics_equal_the_command_lines_for_the_same_parameters():
     assert tiny.params["perturbation"] == 1e-6
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kwargs, cli", [
     ({"spin": 1e9}, ["--set", "spin=1e9"]),
     ({"perturbation": "nan"}, ["--set", "perturbation=nan"]),
@@ -97,6 +94,7 @@ def test_check_rows_from_python():
         th.check("E99")
 
 
+@pytest.mark.slow
 def test_the_example_runs_and_writes_its_files(tmp_path):
     """examples/first_five_minutes.py, as a student runs it, from a directory of their own."""
     p = subprocess.run([sys.executable, str(ROOT / "examples" / "first_five_minutes.py"), str(tmp_path)],

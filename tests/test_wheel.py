@@ -10,8 +10,8 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 pytestmark = pytest.mark.slow  # builds a wheel and installs it with its dependencies (minutes)
 
 EVERY_SCENARIO = textwrap.dedent("""
