@@ -195,7 +195,7 @@ def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
     # the Moon's last month: nk samples (nk − 1 steps ≥ TRAIL_DAYS) ending at each frame's sample,
     # the first sample repeated before the run has lasted a month
     dt = float(np.median(np.diff(tr.t))) if len(tr.t) > 1 else 1.0
-    days = dt * (le.YEAR_DAYS if tr.time_unit == "yr" else 1.0)
+    days = dt * (JULIAN_YEAR_DAYS if tr.time_unit == "yr" else 1.0)
     nk = int(np.clip(np.ceil(TRAIL_DAYS / max(days, 1e-9)) + 1, 2, 400))
     m = (k * moon * stretch).astype(np.float32)
     trail = m[np.maximum(f[:, None] - np.arange(nk - 1, -1, -1)[None, :], 0)]  # (F, nk, 3)
