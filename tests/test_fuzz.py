@@ -218,9 +218,10 @@ def scene_numbers_finite(spec, result):
     from theoria.app.scene import SceneView
 
     scene = RecordingScene()
-    view = SceneView(scene, "/world")
-    view.show(result, spec, overlays={k: True for k in view.default_overlays(spec)})
-    n = len(result.trajectory.t)
+    view = SceneView(scene)
+    drawing = spec.drawing(result)
+    view.show(drawing, overlays={k: True for k in drawing.overlays})  # every group drawn, also those off by default
+    n = drawing.n_frames
     for i in sorted({0, n // 3, n // 2, n - 1}):
         view.set_frame(i)
     bad = [(w, a) for w, a in scene.numbers if a.size and not np.all(np.isfinite(a))]
