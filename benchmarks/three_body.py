@@ -19,9 +19,9 @@ from . import register_bench
 
 def _rhs(t, y, mu, mus, sun):
     a_s, es, ns, M0, varpi = sun
-    E = kepler.eccentric_anomaly_ufunc(M0 + ns * t, es)
-    f = kepler.true_anomaly_ufunc(E, es)
-    u = a_s * kepler.radius_ufunc(E, es)
+    E = kepler.eccentric_anomaly_scalar(M0 + ns * t, es)
+    f = kepler.true_anomaly_scalar(E, es)
+    u = a_s * kepler.radius_scalar(E, es)
     R = u * np.array([math.cos(f + varpi), math.sin(f + varpi), 0.0])
     r = y[:3]
     d = R - r

@@ -110,5 +110,16 @@ def test_bad_eccentricity_is_a_parameter_error_and_bad_angles_give_nan():
     with np.errstate(invalid="ignore"):  # numpy's warning for sin(inf) and the like
         E = kepler.eccentric_anomaly(np.array([math.nan, math.inf, 1.0]), 0.5)
     assert np.isnan(E[0]) and np.isnan(E[1]) and np.isfinite(E[2])
-    # the compiled ufunc itself answers NaN instead of raising (for use inside numba code)
-    assert math.isnan(kepler.eccentric_anomaly_ufunc(1.0, 1.0))
+    # the compiled scalar function answers NaN instead of raising (for use inside numba code)
+    assert math.isnan(kepler.eccentric_anomaly_scalar(1.0, 1.0))
+    assert math.isnan(kepler.eccentric_anomaly_scalar(math.inf, 0.5))
+
+
+def test_scalar_functions_are_the_array_ones():
+    """The scalar entries (for numba code and single angles) give the array entries' numbers."""
+    M = np.linspace(-7.0, 7.0, 29)
+    for e in (0.0, 0.3, 0.99):
+        E, f, r = kepler.anomalies(M, e)
+        assert np.array_equal([kepler.eccentric_anomaly_scalar(m, e) for m in M], E)
+        assert np.array_equal([kepler.true_anomaly_scalar(x, e) for x in E], f)
+        assert np.array_equal([kepler.radius_scalar(x, e) for x in E], r)

@@ -73,9 +73,9 @@ def sun_state(t, sun):
     """Sun's position (x, y) and distance about the Earth at time t (days) on its fixed Kepler
     ellipse in the ecliptic. sun = (a, e, mean motion, mean anomaly at 0, longitude of perigee)."""
     a, e, nm, M0, varpi = sun[0], sun[1], sun[2], sun[3], sun[4]
-    E = kepler.eccentric_anomaly_ufunc(M0 + nm * t, e)
-    u = a * kepler.radius_ufunc(E, e)
-    th = kepler.true_anomaly_ufunc(E, e) + varpi
+    E = kepler.eccentric_anomaly_scalar(M0 + nm * t, e)
+    u = a * kepler.radius_scalar(E, e)
+    th = kepler.true_anomaly_scalar(E, e) + varpi
     return u * math.cos(th), u * math.sin(th), u, th
 
 
@@ -365,8 +365,9 @@ def rebound_three_body(el0, sun, mu, mus, duration_days: float, sample_days: flo
     r, v = r[0], v[0]
     a_s, es, ns, M0, varpi = sun
     # the Sun's geocentric state at t = 0 (Kepler ellipse in the ecliptic)
-    _, f, u = (float(x) for x in kepler.anomalies(M0, es))
-    u *= a_s
+    E = kepler.eccentric_anomaly_scalar(M0, es)
+    f = kepler.true_anomaly_scalar(E, es)
+    u = a_s * kepler.radius_scalar(E, es)
     th = f + varpi
     mu_s = mus + mu
     h = math.sqrt(mu_s * a_s * (1 - es * es))
