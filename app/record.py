@@ -27,13 +27,15 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from theoria.physics.constants import JULIAN_YEAR_DAYS, SECONDS_PER_DAY
 from theoria.physics.quaternion import to_xyzw
 from theoria.scenarios.drawing import Arrows, Frame, Label, Light, Mesh, Path, Points, Segments, Sphere
 
 from .format import comparison_rows
 
-SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0, "day": 86400.0, "days": 86400.0, "d": 86400.0,
-           "yr": 365.25 * 86400.0, "year": 365.25 * 86400.0, "years": 365.25 * 86400.0}
+_YEAR_S = JULIAN_YEAR_DAYS * SECONDS_PER_DAY
+SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0, "day": SECONDS_PER_DAY, "days": SECONDS_PER_DAY, "d": SECONDS_PER_DAY,
+           "yr": _YEAR_S, "year": _YEAR_S, "years": _YEAR_S}  # seconds in each time unit a run may carry
 APPLICATION_ID = "theoria"
 
 
