@@ -91,20 +91,38 @@ def flip_interval_808(inertia, omega0):
     component of ω on the axis L circulates about and y, z from the integrals of §808:
         y² ∝ (x² − x_min²),  z² ∝ (x_max² − x²).
     x swings from x_max to x_min and back between two flips of the middle axis, so the interval
-    is 2∫ dx/|ẋ| over [x_min, x_max]; the end singularities are integrable (weight 'alg').
-    This is Euler's reduction evaluated by quadrature, independent of elliptic functions.
+    is 2∫ dx/|ẋ| over [x_min, x_max]. This is Euler's reduction evaluated by quadrature,
+    independent of elliptic functions.
+
+    Near the separatrix x_min is tiny (∝ the nudge off the middle axis) and ẋ varies on that
+    scale next to it: x_min² is formed without cancellation, x_min² = (|L|² − 2EJ₂)/(J₃(J₃ − J₂))
+    with |L|² − 2EJ₂ = Σ Jᵢ(Jᵢ − J₂)ωᵢ² (the middle-axis term drops out exactly), and the lower
+    half of the range is integrated in s with x = x_min cosh s (dx/√(x² − x_min²) = ds), where
+    the integrand is smooth; the upper half keeps the end singularity as an 'alg' weight.
     """
     fm = free_motion(inertia, omega0)
     J1, J2, J3 = fm.J
     w = np.asarray(omega0, float)
-    L = np.asarray(inertia, float) * w
+    I = np.asarray(inertia, float)
+    L = I * w
     G = float(L @ L)
     E2 = float(L @ w)  # 2E
-    xmin2 = max((G - E2 * J2) / (J3 * (J3 - J2)), 0.0)
+    mid = fm.axes[1]
+    D2 = float(np.sum([I[i] * (I[i] - I[mid]) * w[i] ** 2 for i in range(3) if i != mid]))  # |L|² − 2EJ₂
+    xmin2 = max(D2 / (J3 * (J3 - J2)), 0.0)
     xmax2 = (G - E2 * J1) / (J3 * (J3 - J1))
     xmin, xmax = np.sqrt(xmin2), np.sqrt(xmax2)
     K = J3 * J3 * (J3 - J2) * (J3 - J1) / (J1 * J2 * (J2 - J1) ** 2)
-    # |ẋ| = |J₁ − J₂|/J₃ · √(y²z²), y²z² = K (x − x_min)(x + x_min)(x_max − x)(x_max + x)
-    f = lambda x: J3 / abs(J1 - J2) / np.sqrt(K * (x + xmin) * (xmax + x))  # noqa: E731
-    half, _ = quad(f, xmin, xmax, weight="alg", wvar=(-0.5, -0.5), epsabs=0, epsrel=1e-13, limit=200)
-    return 2.0 * half
+    c = J3 / abs(J1 - J2) / np.sqrt(K)
+    # |ẋ| = |J₁ − J₂|/J₃ · √(y²z²), y²z² = K (x² − x_min²)(x_max² − x²)
+    if xmin == 0.0:
+        return float("inf")  # on the separatrix: the body never gets past its middle axis
+    xmid = 0.5 * (xmin + xmax)
+    s_mid = float(np.arccosh(xmid / xmin))
+    # lower part: x = x_min cosh s; 1/√(x_max² − x²) with the difference as a product
+    g = lambda s: 1.0 / np.sqrt((xmax - xmin * np.cosh(s)) * (xmax + xmin * np.cosh(s)))  # noqa: E731
+    low, _ = quad(g, 0.0, s_mid, epsabs=0, epsrel=1e-13, limit=200)
+    # upper part: weight (x_max − x)^(−1/2)
+    f = lambda x: 1.0 / np.sqrt((x - xmin) * (x + xmin) * (xmax + x))  # noqa: E731
+    high, _ = quad(f, xmid, xmax, weight="alg", wvar=(0.0, -0.5), epsabs=0, epsrel=1e-13, limit=200)
+    return 2.0 * c * (low + high)

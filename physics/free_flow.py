@@ -34,19 +34,19 @@ MAX_NSUB = 20000
 
 
 @nb.njit(cache=True, nogil=True)
-def ellipj(u, m):
-    """Jacobi sn, cn, dn (u real, any sign; dn > 0) of argument u and parameter m = k² ∈ [0, 1].
-
-    Arithmetic–geometric mean and descending Landen transformation (Abramowitz & Stegun
-    16.4; the algorithm of Cephes `ellpj`), with its series for m near 0 and near 1.
-    """
+def _ellipj_core(u, m, m1):
+    """sn, cn, dn by the arithmetic–geometric mean and descending Landen transformation
+    (Abramowitz & Stegun 16.4; the algorithm of Cephes `ellpj`), with its series for m near 0
+    and near 1; b₀ = √m1 from the complementary parameter itself."""
     if m < 1e-9:
         t = math.sin(u)
         b = math.cos(u)
         ai = 0.25 * m * (u - t * b)
         return t - ai * b, b + ai * t, 1.0 - 0.5 * m * t * t
-    if m >= 0.9999999999:
-        ai = 0.25 * (1.0 - m)
+    if m1 <= 1e-10 and m1 * math.cosh(min(abs(u), 300.0)) ** 2 <= 1e-10:
+        # A&S 16.15: sn, cn, dn to first order in m1; the first-order terms grow like m1·cosh²u,
+        # so the series is used only while that is ≤ 1e-10 (the neglected second order ≤ 1e-20)
+        ai = 0.25 * m1
         b = math.cosh(u)
         t = math.tanh(u)
         phi = 1.0 / b
@@ -56,15 +56,15 @@ def ellipj(u, m):
         cn = phi - ai * (twon - u)
         dn = phi + ai * (twon + u)
         return sn, cn, dn
-    a = np.empty(10)
-    c = np.empty(10)
+    a = np.empty(16)
+    c = np.empty(16)
     a[0] = 1.0
-    b = math.sqrt(1.0 - m)
+    b = math.sqrt(m1)
     c[0] = math.sqrt(m)
     twon = 1.0
     i = 0
     while abs(c[i] / a[i]) > _MACHEP:
-        if i > 8:
+        if i > 14:  # b = √m1 ≥ 1e-154 needs at most ~12 steps
             break
         ai = a[i]
         i += 1
@@ -82,9 +82,56 @@ def ellipj(u, m):
         i -= 1
     sn = math.sin(phi)
     cn = math.cos(phi)
-    # dn² = 1 − m sn² = (1 − m) + m cn²: a sum of positive terms, accurate where Cephes'
+    # dn² = 1 − m sn² = m1 + m cn²: a sum of positive terms, accurate where Cephes'
     # cn/cos(φ − b) divides two small numbers
-    return sn, cn, math.sqrt((1.0 - m) + m * cn * cn)
+    return sn, cn, math.sqrt(m1 + m * cn * cn)
+
+
+@nb.njit(cache=True, nogil=True)
+def ellipk_m1(m1):
+    """K from the complementary parameter m1 = 1 − k²: π/(2·AGM(1, √m1)) (A&S 17.6)."""
+    a = 1.0
+    b = math.sqrt(m1)
+    for _ in range(40):
+        if abs(a - b) <= 4.0 * _MACHEP * a:
+            break
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+    return 0.5 * math.pi / a
+
+
+@nb.njit(cache=True, nogil=True)
+def ellipj(u, m, m1=-1.0):
+    """Jacobi sn, cn, dn (u real, any sign; dn > 0) of argument u and parameter m = k² ∈ [0, 1].
+
+    `m1` = 1 − m, the complementary parameter, when the caller has it more precisely than
+    1 − m can be formed (near the separatrix 1 − m is below the rounding of m: a body nudged by
+    1e-9 off its middle axis has 1 − m ~ 1e-18, and m itself rounds to 1); negative: 1 − m.
+
+    Near the separatrix (m1 < 1e-3) the argument is first reduced by quarter periods to
+    |w| ≤ K/2 (A&S 16.8: sn(K − w) = cd w, cn(K − w) = k′ sd w, dn(K − w) = k′ nd w; sn, cn,
+    dn of 2K − w are sn w, −cn w, dn w), so cn and dn keep their relative precision where they
+    are as small as k′ (the body passing its unstable axis): the Landen algorithm alone gives
+    them as cos φ with φ next to π/2, i.e. with an absolute, not relative, error of 1e-16.
+    """
+    if m1 < 0.0:
+        m1 = 1.0 - m
+    if m1 < 1e-3 and m >= 1e-9:
+        K = ellipk_m1(m1)
+        kp = math.sqrt(m1)
+        x = u - 4.0 * K * math.floor(u / (4.0 * K) + 0.5)  # in [−2K, 2K)
+        sg = 1.0
+        if x < 0.0:
+            x = -x
+            sg = -1.0
+        if x > 1.5 * K:
+            sw, cw, dw = _ellipj_core(2.0 * K - x, m, m1)
+            return sg * sw, -cw, dw
+        if x > 0.5 * K:
+            sw, cw, dw = _ellipj_core(K - x, m, m1)
+            return sg * cw / dw, kp * sw / dw, kp / dw
+        sw, cw, dw = _ellipj_core(x, m, m1)
+        return sg * sw, cw, dw
+    return _ellipj_core(u, m, m1)
 
 
 @nb.njit(cache=True, nogil=True)
@@ -193,11 +240,15 @@ def prepare(L, I, h):
     The amplitudes come from 2EJ₃ − |L|² and |L|² − 2EJ₁ written as sums of terms of one sign
     (no cancellation for a spin close to a principal axis), and stay fixed while the body is
     free, so round-off cannot make E or |L| drift from step to step.
+    The complementary parameter 1 − k² = (J₃ − J₁)(|L|² − 2EJ₂)/((J₃ − J₂)(|L|² − 2EJ₁)) is
+    formed from |L|² − 2EJ₂ = J₁(J₁ − J₂)ω₁² + J₃(J₃ − J₂)ω₃² (the middle-axis term cancels
+    exactly), not as 1 − k²: near the separatrix (a spin nudged 1e-9 off the middle axis gives
+    1 − k² ~ 1e-18) k² rounds to 1 and the motion would be taken for the separatrix itself.
     Returns (ip, c, tab): ip = [i1, i2, i3, sig, kind, nsub]; c = [J1, J2, J3, a1, a2, a3, λ,
-    m, |L|, p, r]; tab = sn, cn, dn at λh and at the quadrature nodes of [0, λh].
+    m, |L|, p, r, m1]; tab = sn, cn, dn at λh and at the quadrature nodes of [0, λh].
     """
     ip = np.zeros(6, np.int64)
-    c = np.zeros(11)
+    c = np.zeros(12)
     G = L[0] * L[0] + L[1] * L[1] + L[2] * L[2]
     order = np.argsort(I)
     lo, mid, hi = order[0], order[1], order[2]
@@ -229,9 +280,11 @@ def prepare(L, I, h):
     a3 = math.sqrt(D1 / (J3 * (J3 - J1)))
     lam = math.sqrt((J3 - J2) * D1 / (J1 * J2 * J3))
     m = min(max((J2 - J1) * D3 / ((J3 - J2) * D1), 0.0), 1.0)
+    D2 = W1 * W1 * J1 * (J1 - J2) + W3 * W3 * J3 * (J3 - J2)  # |L|² − 2EJ₂, same sign as J₃ − J₂
+    m1 = min(max((J3 - J1) * D2 / ((J3 - J2) * D1), 0.0), 1.0)
     p = J1 * a1 * a1
     r = J2 * a2 * a2
-    c[3], c[4], c[5], c[6], c[7], c[9], c[10] = a1, a2, a3, lam, m, p, r
+    c[3], c[4], c[5], c[6], c[7], c[9], c[10], c[11] = a1, a2, a3, lam, m, p, r, m1
     # quadrature of ψ̇: 10 Gauss–Legendre nodes per piece of at most ½√ρ in u, ρ = J₁p/(J₂r) ≤ 1
     # being how sharp the integrand gets near sn = 0
     v = lam * h
@@ -242,11 +295,11 @@ def prepare(L, I, h):
     ip[5] = nsub
     n = GL_X.shape[0]
     tab = np.empty((1 + nsub * n, 3))
-    tab[0, 0], tab[0, 1], tab[0, 2] = ellipj(v, m)
+    tab[0, 0], tab[0, 1], tab[0, 2] = ellipj(v, m, m1)
     dv = v / nsub
     for j in range(nsub):
         for k in range(n):
-            tab[1 + j * n + k, 0], tab[1 + j * n + k, 1], tab[1 + j * n + k, 2] = ellipj((j + GL_X[k]) * dv, m)
+            tab[1 + j * n + k, 0], tab[1 + j * n + k, 1], tab[1 + j * n + k, 2] = ellipj((j + GL_X[k]) * dv, m, m1)
     return ip, c, tab
 
 
@@ -285,7 +338,7 @@ def drift(L, q, I, h, ip, c, tab):
         Wn[0], Wn[1], Wn[2] = W1, W2, W3
         dqp = _axis_angle_quat(W1, W2, W3, math.sqrt(W1 * W1 + W2 * W2 + W3 * W3) * h)
     else:
-        a1, a2, a3, lam, m, p, r = c[3], c[4], c[5], c[6], c[7], c[9], c[10]
+        a1, a2, a3, lam, m, p, r, m1 = c[3], c[4], c[5], c[6], c[7], c[9], c[10], c[11]
         s3 = 1.0 if W3 >= 0.0 else -1.0
         sg2 = s3 if J3 > J1 else -s3
         # phase u₀ of the current state, put back on sn² + cn² = 1, dn² + m sn² = 1
@@ -294,13 +347,16 @@ def drift(L, q, I, h, ip, c, tab):
         nr = math.sqrt(sn0 * sn0 + cn0 * cn0)
         sn0 /= nr
         cn0 /= nr
-        dn0 = abs(W3) / a3
-        dn0 /= math.sqrt(dn0 * dn0 + m * sn0 * sn0)
+        # dn from the orbit's constants, dn² = m1 + m·cn²: where the body passes its unstable axis
+        # cn and dn are both ~k′ and their difference, which decides how long it lingers there,
+        # is the separatrix gap m1 itself; taken from ω₃ it would be lost in ω₃'s rounding
+        # accumulated where ω₁ and ω₃ are large (the flip)
+        dn0 = math.sqrt(m1 + m * cn0 * cn0)
         sn1, cn1, dn1 = _add(sn0, cn0, dn0, tab[0, 0], tab[0, 1], tab[0, 2], m)
         nr = math.sqrt(sn1 * sn1 + cn1 * cn1)
         sn1 /= nr
         cn1 /= nr
-        dn1 /= math.sqrt(dn1 * dn1 + m * sn1 * sn1)
+        dn1 = math.sqrt(m1 + m * cn1 * cn1)
         Wn[0] = a1 * cn1
         Wn[1] = sg2 * a2 * sn1
         Wn[2] = s3 * a3 * dn1

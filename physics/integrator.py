@@ -65,13 +65,15 @@ def _torque(L, q, I, tq, pos, gm):
 
 
 @nb.njit(cache=True, nogil=True)
-def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, out_L, out_q):
+def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, out_L, out_q, ip, c, tab):
     """n_steps steps of the splitting; every `stride` steps the state goes to out_L, out_q
-    (row 0 is the initial state). pos: (n_steps, n_stages, n_masses, 3)."""
+    (row 0 is the initial state). pos: (n_steps, n_stages, n_masses, 3). (ip, c, tab): the
+    free flow's constants, `prepare(L0, I, h)` of the run's first state (used when no torque
+    acts: the orbit's invariants, k² and 1 − k², are then those of the start for the whole
+    run, not recomputed from states where rounding has touched them)."""
     out_L[0] = L
     out_q[0] = q
     free = (not has_tq) and gm.shape[0] == 0
-    ip, c, tab = prepare(L, I, h)
     row = 1
     for k in range(n_steps):
         if free:
@@ -129,6 +131,7 @@ def integrate(
     L_out = [L[None]]
     q_out = [q[None]]
     done = 0
+    consts = None
     while done < n_steps:
         n = min(chunk_steps - chunk_steps % stride or stride, n_steps - done)
         if masses:
@@ -140,7 +143,9 @@ def integrate(
         oL = np.empty((rows + 1, 3))
         oq = np.empty((rows + 1, 4))
         try:
-            L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, oL, oq)
+            if consts is None:
+                consts = prepare(L, I, h)  # the free orbit's constants, from the first state, once
+            L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, oL, oq, *consts)
         except ZeroDivisionError:  # found by tests/test_fuzz.py: spin 1e-155 with moments ~1e-6 underflows
             raise ParameterError("parameters", "these values", "rates so small that their squares underflow "
                                  "(|ω| below ~1e-150): practically at rest; use larger rates or torques") from None

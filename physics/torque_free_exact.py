@@ -23,7 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ellipj, ellipk, ellipkinc, elliprf, elliprj
+from scipy.special import ellipj, ellipk, ellipkinc, ellipkm1, elliprf, elliprj
 from scipy.spatial.transform import Rotation
 
 from . import quaternion as quat
@@ -46,16 +46,22 @@ class FreeMotion:
     u0: float
     L_norm: float
     energy: float
+    m1: float = float("nan")  # 1 − k², formed without cancellation (see `free_motion`)
+
+    @property
+    def K(self) -> float:
+        """Complete elliptic integral K(k), from 1 − k² when k² is near 1 (scipy's ellipkm1)."""
+        return float(ellipkm1(self.m1)) if self.m > 0.5 and np.isfinite(self.m1) else float(ellipk(self.m))
 
     @property
     def polhode_period(self) -> float:
         """Period of ω in the body frame: 4K(k)/λ."""
-        return 4.0 * ellipk(self.m) / self.lam
+        return 4.0 * self.K / self.lam
 
     @property
     def flip_interval(self) -> float:
         """Time between sign changes of the middle-axis component: 2K(k)/λ."""
-        return 2.0 * ellipk(self.m) / self.lam
+        return 2.0 * self.K / self.lam
 
     @property
     def circulation_axis(self) -> int:
@@ -98,11 +104,17 @@ def free_motion(inertia, omega0) -> FreeMotion:
     a = np.sqrt([D3 / (J1 * (J3 - J1)), D3 / (J2 * (J3 - J2)), D1 / (J3 * (J3 - J1))])
     lam = float(np.sqrt((J3 - J2) * D1 / (J1 * J2 * J3)))
     m = float(np.clip((J2 - J1) * D3 / ((J3 - J2) * D1), 0.0, 1.0))
+    # 1 − k² = (J₃ − J₁)(|L|² − 2EJ₂)/((J₃ − J₂)(|L|² − 2EJ₁)), with |L|² − 2EJ₂ =
+    # J₁(J₁ − J₂)ω₁² + J₃(J₃ − J₂)ω₃² (the middle-axis term cancels exactly): near the separatrix
+    # 1 − k² is far below the rounding of k² (a nudge ε off the middle axis gives 1 − k² ∝ ε²),
+    # and 1 − k computed as such would be 0 (K infinite) or noise
+    D2 = W[0] ** 2 * J1 * (J1 - J2) + W[2] ** 2 * J3 * (J3 - J2)
+    m1 = float(np.clip((J3 - J1) * D2 / ((J3 - J2) * D1), 0.0, 1.0))
     s3 = 1.0 if W[2] >= 0 else -1.0
     sg2 = s3 if J3 > J1 else -s3
     phi0 = np.arctan2(W[1] / (sg2 * a[1]), W[0] / a[0])
     u0 = float(ellipkinc(phi0, m))
-    return FreeMotion(axes, sign, J, a, lam, m, s3, sg2, u0, float(np.sqrt(G)), float(0.5 * L @ w))
+    return FreeMotion(axes, sign, J, a, lam, m, s3, sg2, u0, float(np.sqrt(G)), float(0.5 * L @ w), m1)
 
 
 def _pi_incomplete(n, phi, m):
@@ -125,7 +137,11 @@ def _nutation_rotation(l):
 
 
 def exact_free_motion(inertia, omega0, t, q0=quat.IDENTITY):
-    """Body angular velocity (N,3) and attitude quaternions (N,4, w first) at times t."""
+    """Body angular velocity (N,3) and attitude quaternions (N,4, w first) at times t.
+
+    scipy's ellipj takes k², not 1 − k²: within ~1e-8 of the separatrix (1 − k² below that) its
+    sn, cn, dn are those of a neighbouring orbit and this reference loses digits over a flip;
+    `free_flow` carries 1 − k² itself and is the one to trust there."""
     I = validate_moments(inertia)
     fm = free_motion(I, omega0)
     t = np.atleast_1d(np.asarray(t, float))

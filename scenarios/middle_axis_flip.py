@@ -67,7 +67,7 @@ register(Scenario(
     params=(
         Param("inertia", (1.0, 2.0, 3.0), **INERTIA_PARAM),
         Param("spin", 6.0, -50.0, 50.0, "rad/s", "initial rate about the middle axis", step=0.1),
-        Param("perturbation", 0.01, 1e-9, 0.5, "1",
+        Param("perturbation", 0.01, 1e-15, 0.5, "1",
               "rates about the other two axes, as a fraction of the spin", step=0.001),
         Param("duration", 30.0, 0.0, 1e6, "s", "length of the run", exclusive_min=True, step=1.0),
         Param("step", 0.005, 0.0, 10.0, "s", "integrator step", exclusive_min=True, step=0.001),
