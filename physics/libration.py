@@ -24,6 +24,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
+from . import hansen
 from .params import ParameterError
 
 CASES = ("locked", "librating", "separatrix", "circulating")
@@ -246,22 +247,17 @@ def harmonics(t, x, omega, k_max=3):
 # ---------------------------------------------------------------- spin–orbit chaos (Hyperion)
 
 def goldreich_peale_H(p, e):
-    """Goldreich & Peale (1966) coefficients H(p, e) for the spin–orbit resonance θ̇ = p·n
-    (expansion in e; Wisdom, Peale & Mignard 1984, eq. 4)."""
-    table = {
-        0.5: -e / 2 + e**3 / 16,
-        1.0: 1 - 5 * e**2 / 2 + 13 * e**4 / 16,
-        1.5: 7 * e / 2 - 123 * e**3 / 16,
-        2.0: 17 * e**2 / 2 - 115 * e**4 / 6,
-        2.5: 845 * e**3 / 48 - 32525 * e**5 / 768,
-    }
-    return table[float(p)]
+    """Goldreich & Peale's (1966) coefficient H(p, e) of the spin–orbit resonance θ̇ = p·n,
+    exact: the Hansen coefficient X^{−3,2}_{2p}(e) by quadrature over one orbit
+    (`physics.hansen`), for any half-integer p and e < 1. Their truncated series in e is
+    `hansen.goldreich_peale_series` (at e = 0.5 it puts the 5/2 width 11 % low)."""
+    return hansen.hansen_H(p, e)
 
 
 def resonance_half_width(p, e, omega0):
     """Half-width in θ̇/n of the p resonance: ω₀√|H(p,e)|, ω₀² = 3(B−A)/C (the averaged
-    pendulum γ̈ = −(ω₀²/2)H sin 2γ, γ = θ − pM, has separatrix |γ̇| ≤ ω₀√|H|)."""
-    return omega0 * np.sqrt(abs(goldreich_peale_H(p, e)))
+    pendulum γ̈ = −(ω₀²/2)H sin 2γ, γ = θ − pM, has separatrix |γ̇| ≤ ω₀√|H|), H exact."""
+    return hansen.resonance_half_width(p, e, omega0)
 
 
 def resonance_centre_angle(p, e):
