@@ -1,7 +1,10 @@
-"""The Moon kept in syzygy with the Sun (Euler 1766, §5–§16): the distance from Euler's equation,
-the oscillation about the Sun–Earth line and its escape.
+"""The Moon kept in syzygy with the Sun (Euler 1766, §5–§16), as the circular restricted
+three-body problem at any mass ratio: the distance from the collinear quintic (Euler's §7
+equation beside it), the oscillation about the Sun–Earth line from the linearisation (Euler's
+α⁴ + 2α² = 27 beside it) and the escape.
 
-Check rows E12 (the frequency), E12.distance and E12.escape.
+Check rows E12 (the frequency), E12.mass_ratio (the frequency at m = 0.01, both sides),
+E12.richardson (a published value), E12.distance and E12.escape.
 """
 from __future__ import annotations
 
@@ -22,12 +25,15 @@ def _syzygy(values, progress=None):
 
     m, n = values["mass_ratio"], values["moon_revolutions_per_year"]
     side, A = values["side"], math.radians(values["amplitude_deg"])
+    mu = sz.reduced_mass(m)  # = Euler's m = n²c³/a³ (§7)
     if side == "conjunction":
         alpha = sz.equilibrium_conjunction(m)
-        series_e, series_c = sz.euler_series_conjunction(m), sz.series_conjunction(m)
+        alpha_e = sz.euler_equilibrium_conjunction(mu)
+        series_e, series_c = sz.euler_series_conjunction(mu), sz.series_conjunction(mu)
     else:
         alpha = sz.equilibrium_opposition(m)
-        series_e, series_c = sz.euler_series_opposition(m), sz.series_opposition(m)
+        alpha_e = sz.euler_equilibrium_opposition(mu)
+        series_e, series_c = sz.euler_series_opposition(mu), sz.series_opposition(mu)
     scale = sz.lunar_units_per_sun_distance(m, n)  # a/c: lunar distances per Sun distance
     modes = sz.linear_modes(m, side)
     # the displayed run: Euler's start (or the exact linear mode) + optional seed of the escape
@@ -41,10 +47,11 @@ def _syzygy(values, progress=None):
     tm, Sm, _ = sz.integrate(m, sz.initial_state(m, A_meas, side, "linear-mode", 1e-9), 2 * math.pi * 2.0,
                              n_samples=8000)
     etam, _ = sz.eta_and_distance(Sm, side)
-    w_meas, lam_meas, fit_res = sz.fit_swing_and_escape(tm, etam, A_meas)
+    w_meas, lam_meas, fit_res = sz.fit_swing_and_escape(tm, etam, A_meas,
+                                                         guess=(modes["frequency"], modes["escape_exponent"]))
     w_run, n_half_run = sz.measured_frequency(t, eta, 1.5 * A)
     # amplitude relation of §16 on the displayed run's first swing
-    first = t <= (2 * math.pi / sz.HILL_FREQUENCY)
+    first = t <= (2 * math.pi / modes["frequency"])
     ratio = float((v[first].max() - v[first].min()) / (2 * alpha * max(np.abs(eta[first]).max(), 1e-300)))
     Vo = modes["osc_vector"]
     ratio_linear = float(abs(Vo[0]) / abs(Vo[1]))
@@ -54,6 +61,8 @@ def _syzygy(values, progress=None):
         "syzygy_distance_lunar_units": b_lunar,
         "syzygy_distance_lunar_units_euler": (sz.EULER_N_SQUARED / 3.0) ** (1.0 / 3.0),
         "alpha_sun_distance": alpha,
+        "alpha_euler_sun_distance": alpha_e,
+        "reduced_mass": mu,
         "oscillation_frequency": w_meas,
         "oscillation_frequency_euler": sz.HILL_FREQUENCY,
         "oscillation_frequency_linear": modes["frequency"],
@@ -71,10 +80,14 @@ def _syzygy(values, progress=None):
     comps = [
         Comparison("syzygy distance (lunar distances)", (sz.EULER_N_SQUARED / 3.0) ** (1.0 / 3.0), b_lunar, None, "c",
                    "Euler: v ≈ c·(n²/3)^{1/3} with n² = 175, 'about four'; simulated: root of §7/§9 with today's n, m"),
-        Comparison("α = v/a: Euler's 4-term series vs root", series_e, alpha, series_c, "",
-                   "modern column: the series with the 4th coefficient corrected (4/243, not 1/81)"),
+        Comparison("α = v/a: Euler's §7 equation vs the restricted problem's quintic", alpha_e, alpha, None, "",
+                   "Euler pulls the Moon toward the Sun with a³ = G(M_sun + M_earth) where the Sun alone gives "
+                   "a³(1 − μ); simulated: the collinear point (quintic) the run sits at"),
+        Comparison("α = v/a: Euler's 4-term series vs the root of his §7 equation", series_e, alpha_e, series_c, "",
+                   "his m = n²c³/a³ = μ; modern column: the series with the 4th coefficient corrected (4/243, not 1/81)"),
         Comparison("oscillation frequency (Sun's mean motion = 1)", sz.HILL_FREQUENCY, w_meas, modes["frequency"], "",
-                   "Euler/Hill √(√28 − 1); simulated: fit of η on the full equations; modern: linearised full problem"),
+                   "Euler/Hill √(√28 − 1) (α⁴ + 2α² = 27); simulated: fit of η on the restricted problem; "
+                   "modern: its linearisation, ω² = (2 − c₂ + √(9c₂² − 8c₂))/2"),
         Comparison("v = b(1 − k·A cos ω): k", sz.AMPLITUDE_COEFFICIENT, ratio, ratio_linear, "",
                    "half the swing of v/b over the η amplitude on the first swing; modern: centre eigenvector"),
         Comparison("escape exponent (real root Euler missed)", None, lam_meas, modes["escape_exponent"], "",
@@ -86,7 +99,7 @@ def _syzygy(values, progress=None):
         "λ⁴ − 2λ² − 27 = 0 has the real root λ² = 1 + √28: the Moon leaves after a few swings.",
         "§7's substitution '2 − α = x' should read x = 1 − α; §9 prints (1−α)³ for (1+α)³; the 4th term of "
         "the series (§8, §9) should be 4mε/243, not mε/81.",
-        "Sun drawn at 3 syzygy distances along its true direction (true distance "
+        f"Sun drawn at {min(3.0, scale / b_lunar):.3g} syzygy distances along its true direction (true distance "
         f"{scale:.0f} lunar distances).",
     ]
     if values["start"] == "euler":
@@ -98,12 +111,20 @@ def _syzygy(values, progress=None):
     c, s = np.cos(t), np.sin(t)
     xr, yr = S[:, 0] * scale, S[:, 1] * scale
     moon = np.stack([c * xr - s * yr, s * xr + c * yr, np.zeros_like(t)], axis=1)
-    sun = 3.0 * b_lunar * np.stack([c, s, np.zeros_like(t)], axis=1)
+    sun = min(3.0 * b_lunar, scale) * np.stack([c, s, np.zeros_like(t)], axis=1)
     traj = orbit_trajectory(t / (2 * math.pi), {"sun": sun, "earth": np.zeros_like(moon), "moon": moon}, "yr",
                             series={"moon_corotating_x": xr, "moon_corotating_y": yr,
                                     "eta_deg": np.degrees(eta), "distance_over_b": v / alpha,
                                     "frame_angle_rad": t})  # the Sun's direction turns at rate 1
-    return Run("syzygy", values, traj, metrics, comps, notes, plot_series={
+    warnings = []
+    if left:
+        warnings.append(
+            f"The Moon left the syzygy at t = {t[-1] / (2 * math.pi):.3g} yr, "
+            + (f"after {n_half_run / 2:g} swings" if n_half_run >= 2 else "within its first swing") + ": the "
+            f"line-up is unstable (the real root λ = {modes['escape_exponent']:.4f} of the linearised equations, "
+            "the one Euler's assumed oscillation misses), so his η = A sin αζ and v = b(1 − kA cos αζ) describe "
+            "only the part of the run before it.")
+    return Run("syzygy", values, traj, metrics, comps, notes, warnings=warnings, plot_series={
         "η simulated (deg)": np.degrees(eta), "η Euler A sin αζ (deg)": np.degrees(eta_e),
         "v/b simulated": v / alpha, "v/b Euler 1 − 0.3117 A cos αζ": v_e / alpha},
         extras={"syzygy_point_lunar": (sgn * b_lunar, 0.0, 0.0)})
@@ -120,9 +141,9 @@ def _syzygy_params():
         Param("start", "linear-mode", kind="choice", choices=("euler", "linear-mode"),
               help="Euler's first-order solution at ω = 0, or the exact linear centre mode"),
         Param("escape_seed", 0.0, 0.0, 0.1, "b", "extra displacement along the unstable direction"),
-        Param("duration_yr", 3.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)"),
-        Param("mass_ratio", sz.EARTH_SUN_MASS_RATIO, 1e-9, 1e-2, "1",
-              "m = n²c³/a³ = M_earth/M_sun (IAU 2009: 3.0035e-6)"),
+        Param("duration_yr", 1.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)"),
+        Param("mass_ratio", sz.EARTH_SUN_MASS_RATIO, 1e-9, 1.0, "1",
+              "m = M_earth/M_sun (IAU 2009: 3.0035e-6); Euler's n²c³/a³ is m/(1 + m)"),
         Param("moon_revolutions_per_year", sz.MOON_REVOLUTIONS_PER_YEAR, 1.0, 100.0, "1/yr",
               "n: sidereal months per sidereal year (13.369; Euler: √175 = 13.23); sets the lunar unit"),
     )
@@ -249,7 +270,7 @@ register(Scenario(
     kind="orbit",
     presets=(
         ("Syzygy: the small swing (Hill)", {}),
-        ("Syzygy: Euler's own start", {"start": "euler"}),
+        ("Syzygy: Euler's own start, and the Moon leaves", {"start": "euler"}),
         ("Syzygy: beyond the Earth (opposition)", {"side": "opposition"}),
         ("Syzygy: the Moon leaves", {"escape_seed": 0.01, "duration_yr": 6.0}),
     ),
@@ -269,7 +290,7 @@ def e12():
     # (a) simulated vs the modern linearised frequency: the fit runs on the nonlinear equations
     # while |η| ≤ window·A; the nonlinear terms are of relative size |η| (order-one coefficient;
     # measured: the offset scales with A, 1.26e-6 / 1.26e-5 / 1.26e-4 at A = 1e-7 / 1e-6 / 1e-5),
-    # the integration (rtol 1e-12) and the Jacobian's differences (1e-10) are far smaller.
+    # the integration (rtol 1e-12) is far smaller; the linearisation is in closed form.
     rel_sim = abs(w / modern - 1)
     tol_sim = 2 * window * A  # 4e-5
     # (b) Euler vs modern: Euler's u ≫ v drops the O(α) parts of the stiffnesses (Kxx = 9 + 12α,
@@ -288,7 +309,7 @@ def e12():
                      f"(Hill limit {sz.HILL_ESCAPE_EXPONENT:.4f}) — the real root Euler did not see")
 
 
-@register_check("E12.distance", "syzygy distance: root of m(1−α)² = α² − α²(1−α)³ vs Euler's 'about four'", "Euler 1766 §7–§8")
+@register_check("E12.distance", "syzygy distance: the restricted problem's collinear point (quintic) vs Euler's 'about four'", "Euler 1766 §7–§8")
 def e12_distance():
     m = sz.EARTH_SUN_MASS_RATIO
     b = sz.equilibrium_conjunction(m) * sz.lunar_units_per_sun_distance(m, sz.MOON_REVOLUTIONS_PER_YEAR)
@@ -310,3 +331,43 @@ def e12_escape():
     return dict(euler=sz.HILL_ESCAPE_EXPONENT, simulated=lam, modern=lin, rel_error=rel, tolerance=1e-3,
                 unit="× Sun's mean motion",
                 note="growth of a displacement from 1e-7 to 1e-3 b; Euler's own equation has this root, he took only λ = iα")
+
+
+@register_check("E12.mass_ratio", "syzygy at m = 0.01: frequencies of the restricted problem (1 + m in the mean "
+                "motion), both sides, Euler's √(√28 − 1) beside", "Euler 1766 §12–§16, modern")
+def e12_mass_ratio():
+    """The frequency measured on the restricted problem at a mass ratio where Euler's frame (the
+    Sun's pull a³ on the Moon, or a frame turning at rate 1 with G·M_sun = 1) is visibly off:
+    2.3157 (conjunction) and 1.8755 (opposition), where the rate-1 model gave 2.3248 and 1.8814."""
+    m, A = 0.01, 1e-6
+    out, worst = [], 0.0
+    for side in ("conjunction", "opposition"):
+        modes = sz.linear_modes(m, side)
+        t, S, _ = sz.integrate(m, sz.initial_state(m, A, side, "linear-mode", 1e-9), 4 * math.pi, n_samples=8000)
+        eta, _ = sz.eta_and_distance(S, side)
+        w, _, _ = sz.fit_swing_and_escape(t, eta, A, guess=(modes["frequency"], modes["escape_exponent"]))
+        worst = max(worst, abs(w / modes["frequency"] - 1))
+        out.append((side, w, modes["frequency"]))
+    (_, wc, lc), (_, wo, lo) = out
+    return dict(euler=sz.HILL_FREQUENCY, simulated=wc, modern=lc, rel_error=worst, tolerance=4e-5,
+                unit="× Sun's mean motion",
+                note=f"conjunction {wc:.5f} (linearised {lc:.5f}), opposition {wo:.5f} (linearised {lo:.5f}); "
+                     "rel_error: the larger of |fit/linearised − 1| on the two sides (fit while |η| ≤ 20A, A = 1e-6: "
+                     "tolerance 2·20A, the nonlinear terms). Euler/Hill: 2.07159 on both sides (m → 0)")
+
+
+@register_check("E12.richardson", "Sun–Earth L1: distance and in-plane frequency vs Richardson (1980)", "modern")
+def e12_richardson():
+    """Richardson 1980 (Celest. Mech. 22, 241), Sun–(Earth + Moon), μ = 3.040357143e-6:
+    γ₁ = 0.01001090475 (distance of L1 from the Earth in AU), c₂ = 4.061073566, in-plane
+    frequency ω_p = 2.086453455 (units of the mean motion)."""
+    mu = 3.040357143e-6
+    m = mu / (1.0 - mu)  # the mass ratio whose μ = m/(1 + m) is Richardson's
+    g = sz.equilibrium_conjunction(m)
+    c2 = sz.stiffness_c2(m)
+    w = sz.linear_modes(m)["frequency"]
+    rel = max(abs(g / 0.01001090475 - 1), abs(c2 / 4.061073566 - 1), abs(w / 2.086453455 - 1))
+    return dict(euler=sz.HILL_FREQUENCY, simulated=w, modern=2.086453455, rel_error=rel, tolerance=1e-9,
+                unit="× mean motion",
+                note=f"γ₁ = {g:.11f} (published 0.01001090475), c₂ = {c2:.10f} (4.061073566); rel_error: the largest "
+                     "of the three; tolerance 1e-9: about one unit in the last (tenth) published digit")

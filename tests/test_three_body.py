@@ -139,13 +139,16 @@ def test_collinear_scenario_metrics():
 # --- 1766: syzygy ----------------------------------------------------------------------------
 
 def test_syzygy_equilibrium_is_the_sun_earth_l1_l2():
-    """Euler's §7/§9 equations against the restricted problem's collinear points (independent
-    formulation); Euler's model differs from the CR3BP by O(m) = 3e-6 (Sun's pull a³ for
-    GM_sun + GM_earth), so the tolerance is 1e-5."""
+    """The syzygy points (quintic of the restricted problem) against its collinear points found
+    independently (zeros of the effective-potential gradient); Euler's §7/§9 equations (with his
+    m = n²c³/a³ = μ) differ by O(μ) = 3e-6 (the Sun's pull a³ for G(M_sun + M_earth))."""
     m = sz.EARTH_SUN_MASS_RATIO
     L1, L2, _ = col.lagrange_distances_cr3bp(m, 1.0)
-    assert sz.equilibrium_conjunction(m) == pytest.approx(1 - L1, rel=1e-5)
-    assert sz.equilibrium_opposition(m) == pytest.approx(L2 - 1, rel=1e-5)
+    assert sz.equilibrium_conjunction(m) == pytest.approx(1 - L1, rel=1e-12)
+    assert sz.equilibrium_opposition(m) == pytest.approx(L2 - 1, rel=1e-12)
+    mu = sz.reduced_mass(m)
+    assert sz.euler_equilibrium_conjunction(mu) == pytest.approx(1 - L1, rel=1e-5)
+    assert sz.euler_equilibrium_opposition(mu) == pytest.approx(L2 - 1, rel=1e-5)
     b = sz.equilibrium_conjunction(m) * sz.lunar_units_per_sun_distance(m, sz.MOON_REVOLUTIONS_PER_YEAR)
     assert 3.8 < b < 4.0  # "about four lunar distances"
 
@@ -155,10 +158,10 @@ def test_euler_series_fourth_term():
     should be 4/243, not 1/81); the corrected series errs by O(ε⁶)."""
     for m in (1e-4, 1e-6):
         e = (m / 3) ** (1 / 3)
-        a = sz.equilibrium_conjunction(m)
+        a = sz.euler_equilibrium_conjunction(m)
         assert sz.euler_series_conjunction(m) - a == pytest.approx(-(e**4 / 81 + 16 * e**5 / 243), abs=2 * e**6)
         assert abs(sz.series_conjunction(m) - a) < 2 * e**6
-        assert abs(sz.series_opposition(m) - sz.equilibrium_opposition(m)) < 2 * e**6
+        assert abs(sz.series_opposition(m) - sz.euler_equilibrium_opposition(m)) < 2 * e**6
 
 
 def test_syzygy_frequency_measured_vs_linear_and_euler():
@@ -179,7 +182,7 @@ def test_syzygy_frequency_measured_vs_linear_and_euler():
 @pytest.mark.parametrize("m", [sz.EARTH_SUN_MASS_RATIO, 1e-8])
 def test_hill_value_misses_exactly_the_first_order_terms(side, m):
     """Euler's √(√28 − 1) drops the O(α) parts of the stiffnesses (u ≫ v): the frequency of the
-    full linearised problem (numerical Jacobian, eigenvalues) must be ω_Hill(1 ± c₁α) up to
+    full linearised problem (closed form, `linear_modes`) must be ω_Hill(1 ± c₁α) up to
     O(α²), with c₁ = (24/√7 − 3)/(2(2√7 − 1)) from the perturbation expansion."""
     a = sz.equilibrium_conjunction(m) if side == "conjunction" else sz.equilibrium_opposition(m)
     off = sz.linear_modes(m, side)["frequency"] / sz.HILL_FREQUENCY - 1
@@ -206,7 +209,7 @@ def test_hill_limit_is_eulers_equation():
 
 
 def test_syzygy_scenario_moon_leaves():
-    r = get("syzygy").simulate({})
+    r = get("syzygy").simulate({"duration_yr": 3.0})
     m = r.metrics
     for k in ("syzygy_distance_lunar_units", "oscillation_frequency", "oscillation_frequency_euler",
               "escape_exponent"):
@@ -218,6 +221,9 @@ def test_syzygy_scenario_moon_leaves():
     assert m["swings_before_escape"] >= 1.0
     assert m["amplitude_ratio"] == pytest.approx(m["amplitude_ratio_linear"], rel=0.02)
     assert set(r.trajectory.bodies) == {"sun", "earth", "moon"}
+    # the escape is said: Euler's oscillation holds only before it
+    assert len(r.warnings) == 1 and "left the syzygy" in r.warnings[0] and "unstable" in r.warnings[0]
+    assert get("syzygy").simulate({"duration_yr": 1.0}).warnings == []  # one swing, still there
 
 
 # --- 1768: the Moon's elements ----------------------------------------------------------------

@@ -1,24 +1,50 @@
-"""Euler 1766, *Considerationes de motu corporum coelestium* (seed 003, §5–§16).
+"""Euler 1766, *Considerationes de motu corporum coelestium* (seed 003, §5–§16), as the circular
+restricted three-body problem.
 
 The Moon kept in perpetual conjunction (or opposition) with the Sun. Units: the Sun's mean
-distance a = 1 and mean motion 1 (time unit = 1/2π year), Earth at rest at the origin, the Sun
-on a circle (Euler: u = a, θ = ζ, §11). The Moon is massless; the Earth's attraction is
-m = n²c³/a³ (§7), which by Kepler's third law is the Earth/Sun mass ratio.
+distance a = 1 and the mean motion of the Sun–Earth orbit 1 (time unit = 1/2π sidereal year),
+Earth at the origin, the Sun on a circle (Euler: u = a, θ = ζ, §11). The Moon is massless.
 
-In the frame turning with the Sun (Sun fixed at (1, 0)) Euler's equations of §5 read
+Masses. `m` is the mass ratio M_earth/M_sun (3.0035e-6). Kepler's third law for the Sun–Earth
+orbit gives n² a³ = G(M_sun + M_earth): with G·M_sun = 1 the mean motion is √(1 + m), or, in
+the units used here (mean motion 1), G(M_sun + M_earth) = 1 and
+    G·M_earth = μ,  G·M_sun = 1 − μ,   μ = m/(1 + m).
+Euler's own constant m = n²c³/a³ (§7; n: lunar revolutions per year, c: the Moon's distance)
+is this μ: n²c³ = G·M_earth (a massless Moon) and a³ = G(M_sun + M_earth) by his own equation
+for the Sun (§5, ddu − u dθ² + a³/u² = 0). His §5 equations for the Moon then use the same a³
+for the Sun's pull on the Moon, where the Sun alone pulls with a³(1 − μ): Euler's model is the
+restricted problem with the Sun's attraction too large by the factor 1 + m. The difference is of
+relative order m in the distance (−2μ/9) and the frequency, invisible at the Earth's mass ratio
+(3e-6), 0.2 % and 0.4 % at m = 0.01. (A frame turning at rate 1 with G·M_sun = 1, i.e. without
+the (1 + m) of Kepler's law, makes the same error.)
 
-    ẍ − 2ẏ − x = −m x/r³ + (1 − x)/ρ³ − 1,   ÿ + 2ẋ − y = −m y/r³ − y/ρ³,
+In the frame turning with the Sun (Sun fixed at (1, 0)) the restricted problem reads
+
+    ẍ − 2ẏ − x = −μ x/r³ + (1 − μ)[(1 − x)/ρ³ − 1],   ÿ + 2ẋ − y = −μ y/r³ − (1 − μ) y/ρ³,
 
 r = |(x, y)|, ρ = |(1 − x, −y)|; the "−1" is the Sun's pull on the Earth (the indirect term).
 
+The collinear points (the syzygy): the Moon at x = γ (conjunction, L1) or x = −γ (opposition,
+L2), γ the positive root of the quintics (Szebehely 1967, *Theory of Orbits*, §4.5)
+    L1:  γ⁵ − (3 − μ)γ⁴ + (3 − 2μ)γ³ − μγ² + 2μγ − μ = 0,
+    L2:  γ⁵ + (3 − μ)γ⁴ + (3 − 2μ)γ³ − μγ² − 2μγ − μ = 0,
+(the force balance on the x axis multiplied out, derived in `collinear_quintic`). The same points
+are roots of Euler's 1767 quintic (`collinear.lagrange_alphas`), an independent route.
+
+Linearised about a collinear point, with c₂ = μ/γ³ + (1 − μ)/(1 ∓ γ)³,
+    ẍ − 2ẏ = (1 + 2c₂) x,   ÿ + 2ẋ = (1 − c₂) y,
+    s⁴ + (2 − c₂)s² + (1 + 2c₂)(1 − c₂) = 0,
+    ω² = (2 − c₂ + √(9c₂² − 8c₂))/2 (the swing),   λ² = (c₂ − 2 + √(9c₂² − 8c₂))/2 (the escape).
+In Hill's limit (μ → 0) c₂ → 4 and this is Euler's λ⁴ − 2λ² − 27 = 0 (§16).
+
 Results and the text's errors:
-- §7: conjunction at v = αa with m(1−α)² = α² − α²(1−α)³ (re-derived, correct). The
-  substitution printed as "2 − α = x, mx² = (1−x³)(1−x)²" must be x = 1 − α.
+- §7: conjunction at v = αa with m(1−α)² = α² − α²(1−α)³ (re-derived for Euler's model,
+  correct). The substitution printed as "2 − α = x, mx² = (1−x³)(1−x)²" must be x = 1 − α.
 - §8: Euler's series α = ε − ⅓ε² − m/27 + mε/81, ε = (m/3)^{1/3}. The first three terms are
   right (m/27 = ε³/9); the fourth is not: expanding the equation gives
   α = ε − ε²/3 − ε³/9 + 4ε⁴/81 + 16ε⁵/243 …, i.e. the last term must be 4mε/243, not
   mε/81 = 3mε/243 (`series_conjunction` has the corrected coefficients; tests check both
-  against the root: the printed 4-term series errs by ≈ ε⁴/81).
+  against the root of Euler's equation: the printed 4-term series errs by ≈ ε⁴/81).
 - §9: opposition: m(1+α)² = α²(1+α)³ − α² (the text prints (1−α)³, a typo; its own remark
   "take m and α negative" gives (1+α)³); series α = ε + ε²/3 − ε³/9 − 4ε⁴/81 (the text's
   "m³" in the last term is m, and its coefficient 1/81 is again 4/243).
@@ -51,22 +77,77 @@ EARTH_SUN_MASS_RATIO = C.GM_EARTH_KM3_S2 / C.GM_SUN_KM3_S2
 MOON_REVOLUTIONS_PER_YEAR = C.SIDEREAL_YEAR_DAYS / C.SIDEREAL_MONTH_DAYS
 
 
+def reduced_mass(m: float) -> float:
+    """μ = G·M_earth / G(M_sun + M_earth) = m/(1 + m) for the mass ratio m = M_earth/M_sun; it is
+    also Euler's m = n²c³/a³ of §7 (module docstring)."""
+    m = float(m)
+    return m / (1.0 + m)
+
+
+def _check_side(side: str) -> None:
+    if side not in ("conjunction", "opposition"):
+        raise ValueError(f"side must be 'conjunction' or 'opposition', not {side!r}")
+
+
+def collinear_quintic(m: float, side: str = "conjunction") -> np.ndarray:
+    """Coefficients (highest power first) of the quintic whose positive root is γ, the Moon's
+    distance from the Earth at the collinear point, in units of the Sun–Earth distance.
+
+    Conjunction (L1, x = γ): the x force balance in the turning frame,
+        γ − (1 − μ) + (1 − μ)/(1 − γ)² − μ/γ² = 0,
+    times γ²(1 − γ)²:  γ⁵ − (3 − μ)γ⁴ + (3 − 2μ)γ³ − μγ² + 2μγ − μ = 0.
+    Opposition (L2, x = −γ):  −γ − (1 − μ) + (1 − μ)/(1 + γ)² + μ/γ² = 0, times −γ²(1 + γ)²:
+        γ⁵ + (3 − μ)γ⁴ + (3 − 2μ)γ³ − μγ² − 2μγ − μ = 0.
+    (Szebehely 1967, §4.5, with μ = m/(1 + m).)"""
+    _check_side(side)
+    mu = reduced_mass(m)
+    if side == "conjunction":
+        return np.array([1.0, -(3.0 - mu), 3.0 - 2.0 * mu, -mu, 2.0 * mu, -mu])
+    return np.array([1.0, 3.0 - mu, 3.0 - 2.0 * mu, -mu, -2.0 * mu, -mu])
+
+
+def _quintic_root(m: float, side: str) -> float:
+    """The physical root: the one in (0, 1) for L1 (the force balance is monotonic between the
+    bodies), the single positive root for L2 (one change of sign: Descartes)."""
+    c = collinear_quintic(m, side)
+    f = lambda g: float(np.polyval(c, g))  # noqa: E731
+    hi = 1.0 - 1e-15 if side == "conjunction" else 2.0
+    return float(brentq(f, 1e-300, hi, xtol=1e-300, rtol=1e-15, maxiter=400))
+
+
 def equilibrium_conjunction(m: float) -> float:
-    """α = v/a for the Moon between Earth and Sun: root in (0, 1) of
-    m(1−α)² = α² − α²(1−α)³ (1766 §7)."""
+    """α = γ = v/a for the Moon between Earth and Sun (the Sun–Earth L1): the root in (0, 1) of
+    the restricted problem's quintic (`collinear_quintic`), m = M_earth/M_sun."""
+    return _quintic_root(m, "conjunction")
+
+
+def equilibrium_opposition(m: float) -> float:
+    """α = γ = v/a for the Moon beyond the Earth (the Sun–Earth L2): the positive root of the
+    restricted problem's quintic, m = M_earth/M_sun."""
+    return _quintic_root(m, "opposition")
+
+
+def euler_equilibrium_conjunction(m_euler: float) -> float:
+    """Euler's own α (1766 §7): root in (0, 1) of m(1−α)² = α² − α²(1−α)³, with his
+    m = n²c³/a³ (= μ, `reduced_mass`). His model pulls the Moon toward the Sun with a³ where the
+    Sun alone gives a³(1 − μ): the root is short of the restricted problem's by 2μ/9 (relative, to
+    first order: the extra pull adds ≈ 2μα to a force balance of slope ≈ 9)."""
+    m = m_euler
     f = lambda a: m * (1 - a) ** 2 - a * a + a * a * (1 - a) ** 3  # noqa: E731
     return float(brentq(f, 1e-12, 1 - 1e-12, xtol=1e-16, rtol=1e-15))
 
 
-def equilibrium_opposition(m: float) -> float:
-    """α = v/a for the Moon beyond the Earth: root of m(1+α)² = α²(1+α)³ − α² (1766 §9,
-    corrected: the text prints (1−α)³)."""
+def euler_equilibrium_opposition(m_euler: float) -> float:
+    """Euler's own α beyond the Earth: root of m(1+α)² = α²(1+α)³ − α² (1766 §9, corrected: the
+    text prints (1−α)³), m = n²c³/a³."""
+    m = m_euler
     f = lambda a: m * (1 + a) ** 2 - a * a * (1 + a) ** 3 + a * a  # noqa: E731
     return float(brentq(f, 1e-12, 2.0, xtol=1e-16, rtol=1e-15))
 
 
 def euler_series_conjunction(m: float, terms: int = 4) -> float:
-    """Euler's series (1766 §8): α = (m/3)^{1/3} − ⅓(m²/9)^{1/3} − m/27 + m(m/3)^{1/3}/81."""
+    """Euler's series (1766 §8): α = (m/3)^{1/3} − ⅓(m²/9)^{1/3} − m/27 + m(m/3)^{1/3}/81
+    (his m = n²c³/a³)."""
     e = (m / 3.0) ** (1.0 / 3.0)
     parts = [e, -(m * m / 9.0) ** (1.0 / 3.0) / 3.0, -m / 27.0, m * e / 81.0]
     return float(sum(parts[:terms]))
@@ -81,7 +162,8 @@ def euler_series_opposition(m: float, terms: int = 4) -> float:
 
 
 def series_conjunction(m: float) -> float:
-    """The series of §8 with the fourth coefficient corrected: ε − ε²/3 − ε³/9 + 4ε⁴/81 + 16ε⁵/243."""
+    """The series of §8 with the fourth coefficient corrected: ε − ε²/3 − ε³/9 + 4ε⁴/81 + 16ε⁵/243
+    (an expansion of the root of Euler's §7 equation, his m)."""
     e = (m / 3.0) ** (1.0 / 3.0)
     return e - e**2 / 3 - e**3 / 9 + 4 * e**4 / 81 + 16 * e**5 / 243
 
@@ -93,23 +175,28 @@ def series_opposition(m: float) -> float:
 
 
 def lunar_units_per_sun_distance(m: float, n: float) -> float:
-    """a/c from m = n²c³/a³ (1766 §7): a/c = (n²/m)^{1/3}."""
-    return (n * n / m) ** (1.0 / 3.0)
+    """a/c, the Sun's distance in lunar distances, from Kepler's third law for both orbits:
+    n²c³/a³ = G·M_earth/G(M_sun + M_earth) = μ (1766 §7), so a/c = (n²/μ)^{1/3} =
+    (n²(1 + m)/m)^{1/3}; n = lunar revolutions per year, m = M_earth/M_sun."""
+    return (n * n / reduced_mass(m)) ** (1.0 / 3.0)
 
 
 def rhs_rotating(t, s, m):
-    """Euler's planar Sun–Earth–Moon equations in the frame turning with the Sun (see module)."""
+    """The restricted problem in the frame turning with the Sun, Earth at the origin (module
+    docstring); m = M_earth/M_sun."""
+    mu = m / (1.0 + m)
     x, y, vx, vy = s
     r3 = (x * x + y * y) ** 1.5
     dx = 1.0 - x
     rho3 = (dx * dx + y * y) ** 1.5
-    ax = 2 * vy + x - m * x / r3 + dx / rho3 - 1.0
-    ay = -2 * vx + y - m * y / r3 - y / rho3
+    ax = 2 * vy + x - mu * x / r3 + (1.0 - mu) * (dx / rho3 - 1.0)
+    ay = -2 * vx + y - mu * y / r3 - (1.0 - mu) * y / rho3
     return np.array([vx, vy, ax, ay])
 
 
 def jacobian(m: float, x0: float, h: float | None = None) -> np.ndarray:
-    """Jacobian of `rhs_rotating` at the equilibrium (x0, 0, 0, 0), central differences."""
+    """Jacobian of `rhs_rotating` at the point (x0, 0, 0, 0), central differences (a check on
+    the closed form of `linear_modes`)."""
     h = h or 1e-6 * abs(x0)
     s0 = np.array([x0, 0.0, 0.0, 0.0])
     J = np.empty((4, 4))
@@ -120,16 +207,40 @@ def jacobian(m: float, x0: float, h: float | None = None) -> np.ndarray:
     return J
 
 
+def stiffness_c2(m: float, side: str = "conjunction") -> float:
+    """c₂ = μ/γ³ + (1 − μ)/(1 ∓ γ)³ at the collinear point (−: conjunction, +: opposition):
+    the restricted problem's Hessian there is diag(1 + 2c₂, 1 − c₂) (Richardson 1980)."""
+    _check_side(side)
+    mu = reduced_mass(m)
+    g = equilibrium_conjunction(m) if side == "conjunction" else equilibrium_opposition(m)
+    rho = 1.0 - g if side == "conjunction" else 1.0 + g
+    return mu / g**3 + (1.0 - mu) / rho**3
+
+
 def linear_modes(m: float, side: str = "conjunction") -> dict:
-    """Eigen-analysis of the linearised (full, not Hill-approximated) problem at the syzygy
-    point: oscillation frequency, real (escape) exponent, and the eigenvectors."""
-    a = equilibrium_conjunction(m) if side == "conjunction" else -equilibrium_opposition(m)
-    J = jacobian(m, a)
-    w, V = np.linalg.eig(J)
-    k_osc = int(np.argmax(np.where(np.abs(w.real) < 1e-6 * np.abs(w), w.imag, -np.inf)))
-    k_esc = int(np.argmax(w.real))
-    return {"x0": a, "frequency": float(w[k_osc].imag), "escape_exponent": float(w[k_esc].real),
-            "osc_vector": V[:, k_osc], "escape_vector": np.real(V[:, k_esc]), "eigenvalues": w}
+    """The restricted problem linearised at the collinear point, in closed form.
+
+    With Uxx = 1 + 2c₂, Uyy = 1 − c₂ (`stiffness_c2`), the characteristic equation
+    s⁴ + (2 − c₂)s² + Uxx·Uyy = 0 has s² = −ω² (the swing) and s² = λ² (the escape), with
+    ω² = (2 − c₂ + √(9c₂² − 8c₂))/2, λ² = (c₂ − 2 + √(9c₂² − 8c₂))/2. The eigenvector of s is
+    (1, k, s, s·k) with k = (s² − Uxx)/(2s) (from ẍ − 2ẏ = Uxx x). Euler's λ⁴ − 2λ² − 27 = 0
+    is the case c₂ = 4."""
+    _check_side(side)
+    g = equilibrium_conjunction(m) if side == "conjunction" else equilibrium_opposition(m)
+    x0 = g if side == "conjunction" else -g
+    c2 = stiffness_c2(m, side)
+    uxx = 1.0 + 2.0 * c2
+    root = math.sqrt(9.0 * c2 * c2 - 8.0 * c2)
+    w = math.sqrt(0.5 * (2.0 - c2 + root))
+    lam = math.sqrt(0.5 * (c2 - 2.0 + root))
+
+    def vec(s):
+        k = (s * s - uxx) / (2.0 * s)
+        return np.array([1.0, k, s, s * k], dtype=complex if isinstance(s, complex) else float)
+
+    eig = np.array([1j * w, -1j * w, lam, -lam])
+    return {"x0": x0, "c2": c2, "frequency": w, "escape_exponent": lam,
+            "osc_vector": vec(1j * w), "escape_vector": vec(lam), "eigenvalues": eig}
 
 
 def hill_frequencies() -> tuple[float, float]:
@@ -142,14 +253,15 @@ def hill_first_order_coefficient(side: str = "conjunction") -> float:
     """c₁ in ω_linear/ω_Hill = 1 + c₁α + O(α²), α = v/a at syzygy: the size of what Euler's
     u ≫ v approximation (1766 §12) neglects in the swing frequency.
 
-    Linearising the full rotating-frame equations (module docstring) at (x₀, 0):
-    ẍ − 2ẏ = Kxx x, ÿ + 2ẋ = Kyy y with Kxx = 1 + 2m/|x₀|³ + 2/ρ³, Kyy = 1 − m/|x₀|³ − 1/ρ³,
-    ρ = 1 ∓ α. The equilibrium (§7) gives m/α³ = 1 + [(1−α)⁻² − 1]/α = 3 + 3α + O(α²) at
-    conjunction, and 1/ρ³ = 1 + 3α + O(α²), so Kxx = 9 + 12α, Kyy = −3 − 6α (Hill/Euler: 9 and
-    −3). ω² solves ω⁴ + (Kxx + Kyy − 4)ω² + Kxx·Kyy = 0, i.e. ω⁴ + (2 + 6α)ω² − (27 + 90α) = 0;
-    to first order ω² = √28 − 1 + α(24/√7 − 3), so c₁ = (24/√7 − 3)/(2(2√7 − 1)) = 0.70735.
-    At opposition α → −α (the Moon beyond the Earth): c₁ → −c₁. The O(α²) remainder has a
-    coefficient ≈ 0.9 (measured on `linear_modes`, both sides)."""
+    Linearising the restricted problem (module docstring) at (x₀, 0):
+    ẍ − 2ẏ = Kxx x, ÿ + 2ẋ = Kyy y with Kxx = 1 + 2c₂, Kyy = 1 − c₂, c₂ = μ/α³ + (1 − μ)/ρ³,
+    ρ = 1 ∓ α. The equilibrium gives μ/α³ = 1 + (1 − μ)[(1−α)⁻² − 1]/α = 3 + 3α + O(α²) at
+    conjunction (μ = O(α³)), and 1/ρ³ = 1 + 3α + O(α²), so Kxx = 9 + 12α, Kyy = −3 − 6α
+    (Hill/Euler: 9 and −3). ω² solves ω⁴ + (Kxx + Kyy − 4)ω² + Kxx·Kyy = 0, i.e.
+    ω⁴ + (2 + 6α)ω² − (27 + 90α) = 0; to first order ω² = √28 − 1 + α(24/√7 − 3), so
+    c₁ = (24/√7 − 3)/(2(2√7 − 1)) = 0.70735. At opposition α → −α (the Moon beyond the Earth):
+    c₁ → −c₁. The O(α²) remainder has a coefficient ≈ 0.9 (measured on `linear_modes`, both
+    sides)."""
     c1 = (24.0 / math.sqrt(7.0) - 3.0) / (2.0 * (2.0 * math.sqrt(7.0) - 1.0))
     return c1 if side == "conjunction" else -c1
 
@@ -250,10 +362,11 @@ def measured_escape_exponent(m: float, side: str = "conjunction", seed: float = 
     return float(np.polyfit(sol.t[ok], np.log(d[ok]), 1)[0])
 
 
-def fit_swing_and_escape(t, eta, amplitude: float, window: float = 20.0):
+def fit_swing_and_escape(t, eta, amplitude: float, window: float = 20.0, guess: tuple[float, float] | None = None):
     """Measure the frequency ω and the real exponent λ on a run: least-squares fit of
     η(t) = a cos ωt + b sin ωt + c e^{λt} + d e^{−λt} while |η| ≤ window·amplitude (the linear
-    regime). Starting guesses are Hill's values; returns (ω, λ, rms residual / amplitude)."""
+    regime). Starting guesses `guess` = (ω, λ), Hill's values if not given; returns
+    (ω, λ, rms residual / amplitude)."""
     from scipy.optimize import least_squares
 
     ok = np.abs(eta) <= window * amplitude
@@ -264,7 +377,8 @@ def fit_swing_and_escape(t, eta, amplitude: float, window: float = 20.0):
         w, lam, a, b, c, d = p
         return a * np.cos(w * t) + b * np.sin(w * t) + c * np.exp(lam * t) + d * np.exp(-lam * t)
 
-    p0 = [HILL_FREQUENCY, HILL_ESCAPE_EXPONENT, 0.0, amplitude, amplitude * 1e-3, 0.0]
+    w0, l0 = guess if guess is not None else (HILL_FREQUENCY, HILL_ESCAPE_EXPONENT)
+    p0 = [w0, l0, 0.0, amplitude, amplitude * 1e-3, 0.0]
     sol = least_squares(lambda p: (model(p) - eta) / amplitude, p0, xtol=1e-15, ftol=1e-15, gtol=1e-15)
     res = float(np.sqrt(np.mean(sol.fun**2)))
     return float(sol.x[0]), float(abs(sol.x[1])), res
