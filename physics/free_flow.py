@@ -43,9 +43,9 @@ def _ellipj_core(u, m, m1):
         b = math.cos(u)
         ai = 0.25 * m * (u - t * b)
         return t - ai * b, b + ai * t, 1.0 - 0.5 * m * t * t
-    if m1 <= 1e-10 and m1 * math.cosh(min(abs(u), 300.0)) ** 2 <= 1e-10:
+    if m1 <= 1e-10 and m1 * math.cosh(min(abs(u), 300.0)) ** 2 <= 1e-8:
         # A&S 16.15: sn, cn, dn to first order in m1; the first-order terms grow like m1·cosh²u,
-        # so the series is used only while that is ≤ 1e-10 (the neglected second order ≤ 1e-20)
+        # so the series is used only while that is ≤ 1e-8 (the neglected second order ≤ 1e-16, relative)
         ai = 0.25 * m1
         b = math.cosh(u)
         t = math.tanh(u)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.special import ellipk
+from scipy.special import ellipk, ellipkm1
 
 from . import hansen
 from .params import ParameterError
@@ -56,15 +56,27 @@ def pendulum_modulus_sq(phi0, phidot0, omega0):
     return np.sin(phi0) ** 2 + (phidot0 / omega0) ** 2
 
 
+def pendulum_modulus_gap(phi0, phidot0, omega0):
+    """1 − k² = cos²φ₀ − (φ̇₀/ω₀)², formed as (cos φ₀ − |φ̇₀|/ω₀)(cos φ₀ + |φ̇₀|/ω₀): near the
+    separatrix (k² → 1) this keeps its relative precision where 1 − k² computed from k² is
+    rounding noise (below ~1e-8 it would carry fewer than 8 digits; below 1e-16 none)."""
+    c = np.cos(phi0)
+    r = np.abs(phidot0) / omega0
+    return (c - r) * (c + r)
+
+
 def pendulum_period(phi0, phidot0, omega0):
     """Exact period of φ̈ = −(ω₀²/2) sin 2φ. Libration (k < 1): 4K(k)/ω₀ — the time to come back
     to the same state. Circulation (k > 1): 2K(1/k)/(k ω₀) — the time for φ to advance by π (the
-    body turns half a turn relative to F; ζ and ζ+π are the same face pair). Separatrix: inf."""
+    body turns half a turn relative to F; ζ and ζ+π are the same face pair). Separatrix: inf.
+    K from the complementary parameter (`pendulum_modulus_gap`, scipy's ellipkm1), so starts
+    within 1e-16 of the separatrix still get their (long, logarithmic) period."""
     k2 = pendulum_modulus_sq(phi0, phidot0, omega0)
-    if k2 < 1.0:
-        return 4.0 * ellipk(k2) / omega0
-    if k2 > 1.0:
-        return 2.0 * ellipk(1.0 / k2) / (np.sqrt(k2) * omega0)
+    gap = pendulum_modulus_gap(phi0, phidot0, omega0)
+    if gap > 0.0:
+        return 4.0 * float(ellipkm1(gap)) / omega0
+    if gap < 0.0:
+        return 2.0 * float(ellipkm1(-gap / k2)) / (np.sqrt(k2) * omega0)  # 1 − 1/k² = −gap/k²
     return np.inf
 
 
@@ -78,11 +90,12 @@ def classify(phi0, phidot0, omega0, tol=1e-9):
     """Euler's four cases (§826): C = −n locked, −n < C < n librating (1st–2nd), C = n
     separatrix (3rd: 90° reached after infinite time), C > n circulating (4th)."""
     k2 = pendulum_modulus_sq(phi0, phidot0, omega0)
+    gap = pendulum_modulus_gap(phi0, phidot0, omega0)
     if k2 < tol:
         return "locked"
-    if abs(k2 - 1.0) < tol:
+    if abs(gap) < tol:
         return "separatrix"
-    return "librating" if k2 < 1 else "circulating"
+    return "librating" if gap > 0 else "circulating"
 
 
 def separatrix_rate(phi, omega0):
@@ -232,6 +245,38 @@ def free_libration_floquet(orbit, gamma, gm, lam0, lamdot0, rtol=1e-12, atol=1e-
     M = np.column_stack([(flow(y0 + d * e_) - flow(y0 - d * e_)) / (2 * d) for e_ in np.eye(2)])
     c = 0.5 * np.trace(M)
     return float(np.arccos(c) / P) if abs(c) <= 1 else float("nan")
+
+
+def monodromy_half_trace(orbit, gamma, gm, lam0, lamdot0, rtol=1e-12, atol=1e-13, d=1e-6):
+    """½ tr M of the linearised flow over one orbit about the forced (periodic) solution (λ0, λ̇0)
+    (central differences of DOP853 runs): |½ tr M| ≤ 1, the forced libration is stable (a body
+    near it librates about it); > 1, it is unstable (tr M > 2: a saddle, < −2: period doubling)."""
+    P = 2.0 * np.pi / orbit.n
+    rhs = planar_rhs(orbit, gamma, gm)
+    y0 = np.array([lam0, lamdot0], float)
+
+    def flow(y):
+        return solve_ivp(rhs, (0.0, P), y, method="DOP853", rtol=rtol, atol=atol).y[:, -1]
+
+    M = np.column_stack([(flow(y0 + d * e_) - flow(y0 - d * e_)) / (2 * d) for e_ in np.eye(2)])
+    return float(0.5 * np.trace(M))
+
+
+def leaves_libration(e, gamma, lam0, lamdot0, forced_lam0, orbits=10, steps_per_orbit=256):
+    """Whether a body started at periapse with (λ0, λ̇0) (time unit 1/n) leaves the libration about
+    the forced solution (which passes periapse at `forced_lam0`, the same at every periapse) within
+    `orbits`: its angle from the forced one, sampled at every periapse, reaches a quarter turn (ζ and
+    ζ + π being the same face pair, π/2 is where it would go over to the next). The planar equation
+    is that of `spin_orbit_section` with ω₀² = 3|γ| (B < A: the B axis, i.e. λ − π/2, plays the
+    long axis). Returns (left, largest |angle| seen in rad, orbit where it left or None)."""
+    shift = 0.0 if gamma >= 0 else 0.5 * np.pi
+    th, _ = spin_orbit_section([lam0 - shift], [lamdot0], e, np.sqrt(3.0 * abs(gamma)), int(orbits), steps_per_orbit)
+    k = np.arange(1, int(orbits) + 1)
+    phi = th[0] - (forced_lam0 - shift) - 2.0 * np.pi * k
+    phi0 = lam0 - forced_lam0
+    phi = phi - np.pi * np.round((phi0) / np.pi)  # on the branch of the start
+    big = np.nonzero(np.abs(phi) >= 0.5 * np.pi)[0]
+    return bool(len(big)), float(np.max(np.abs(phi))), (int(big[0]) + 1 if len(big) else None)
 
 
 def harmonics(t, x, omega, k_max=3):

@@ -47,6 +47,18 @@ class FreeMotion:
     L_norm: float
     energy: float
     m1: float = float("nan")  # 1 − k², formed without cancellation (see `free_motion`)
+    m1_rel_uncertainty: float = 0.0  # relative rounding of m1 from the starting rates (see `free_motion`)
+
+    @property
+    def period_rel_uncertainty(self) -> float:
+        """Relative uncertainty of K (and so of the polhode period and the flip interval) from the
+        rounding of the starting rates in 1 − k²: zero where |L|² − 2EJ₂ is a sum of small terms (a
+        spin near the middle axis), large where it is the difference of large ones (a start far from
+        every axis, next to the separatrix: there the input itself does not fix 1 − k²)."""
+        if not (self.m > 0.5 and np.isfinite(self.m1) and self.m1 > 0):
+            return 0.0
+        d = max(self.m1_rel_uncertainty, 1e-300)
+        return float(abs(ellipkm1(self.m1 * (1 + d)) / ellipkm1(self.m1) - 1)) if d < 1 else float("inf")
 
     @property
     def K(self) -> float:
@@ -108,13 +120,16 @@ def free_motion(inertia, omega0) -> FreeMotion:
     # J₁(J₁ − J₂)ω₁² + J₃(J₃ − J₂)ω₃² (the middle-axis term cancels exactly): near the separatrix
     # 1 − k² is far below the rounding of k² (a nudge ε off the middle axis gives 1 − k² ∝ ε²),
     # and 1 − k computed as such would be 0 (K infinite) or noise
-    D2 = W[0] ** 2 * J1 * (J1 - J2) + W[2] ** 2 * J3 * (J3 - J2)
+    t1, t3 = W[0] ** 2 * J1 * (J1 - J2), W[2] ** 2 * J3 * (J3 - J2)
+    D2 = t1 + t3
     m1 = float(np.clip((J3 - J1) * D2 / ((J3 - J2) * D1), 0.0, 1.0))
+    # the two terms have opposite signs: their rounding (a few ulps each) relative to their sum
+    m1_unc = 4 * np.finfo(float).eps * (abs(t1) + abs(t3)) / abs(D2) if D2 != 0 else float("inf")
     s3 = 1.0 if W[2] >= 0 else -1.0
     sg2 = s3 if J3 > J1 else -s3
     phi0 = np.arctan2(W[1] / (sg2 * a[1]), W[0] / a[0])
     u0 = float(ellipkinc(phi0, m))
-    return FreeMotion(axes, sign, J, a, lam, m, s3, sg2, u0, float(np.sqrt(G)), float(0.5 * L @ w), m1)
+    return FreeMotion(axes, sign, J, a, lam, m, s3, sg2, u0, float(np.sqrt(G)), float(0.5 * L @ w), m1, float(m1_unc))
 
 
 def _pi_incomplete(n, phi, m):

@@ -51,3 +51,32 @@ def middle_axis_crossings(traj: Trajectory) -> np.ndarray:
         f = lambda d: free_flow(L0, q0, I, d)[0][k]  # noqa: E731
         out.append(traj.t[i] + brentq(f, 0.0, traj.t[i + 1] - traj.t[i], xtol=1e-14, rtol=1e-15))
     return np.array(out)
+
+
+# the interval between flips (or the polhode period) must be fixed by the starting rates to this
+# relative precision, or the run says it is not
+PERIOD_PRECISION = 1e-6
+
+
+def free_body_warnings(traj: Trajectory, fm, what: str = "the interval between flips") -> list[str]:
+    """Validity of a free body's run: stored samples dense enough for the spin and the polhode
+    (aliasing), and 1 − k² fixed by the starting rates near the separatrix."""
+    from . import _validity
+
+    out: list[str] = []
+    if len(traj.t) >= 2:
+        spacing = float(np.max(np.diff(traj.t)))
+        w = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
+        spin_period = 2 * np.pi / w if w > 0 else np.inf
+        flip = fm.flip_interval if fm is not None else np.inf
+        _validity.add(out, _validity.sparse_samples(spacing, spin_period, "the turn of the body about its axis",
+                                                    "s", "step"),
+                      _validity.sparse_samples(spacing, flip, "the interval between sign changes of ω on the middle "
+                                               "axis, half the polhode period", "s", "step"))
+    if fm is not None and fm.period_rel_uncertainty > PERIOD_PRECISION:
+        out.append(
+            f"Near the separatrix: 1 − k² = {fm.m1:.3g} is the difference of two terms "
+            f"{fm.m1_rel_uncertainty / (4 * np.finfo(float).eps):.2g} times larger, so the rounding of the starting rates alone leaves {what} uncertain by "
+            f"{fm.period_rel_uncertainty:.1e} (relative), more than {PERIOD_PRECISION:g}: start nearer a principal axis "
+            "or farther from the separatrix to fix it.")
+    return out

@@ -14,9 +14,14 @@ from ..physics.three_body import collinear as col
 from ..physics.three_body.nbody import integrate_dop853
 from .drawing import Camera, Drawing, Label, ORBIT_RADIUS, Segments, View, new_drawing
 from . import _three_body_drawing as tbd
-from .base import Diverged, Comparison, Run, Scenario, register
+from .base import Diverged, Comparison, Run, Scenario, get, register
 from .checks import register_check
 from ._three_body import GROUP, orbit_trajectory
+
+# a three-body run has left its configuration when the spacing ratio of the turning line is this
+# far (relative) from α, or the satellite this far (in primary–secondary distances) from its point
+LINE_BROKEN = 0.01
+SATELLITE_LEFT = 0.1
 
 
 def _collinear(values, progress=None):
@@ -115,7 +120,14 @@ def _collinear(values, progress=None):
         traj.series[f"{name}_x_over_distance"] = np.full(len(t), Lx[k])
     if motion == "rotating":  # angle of the frame turning with the line (for the co-rotating view)
         traj.series["frame_angle_rad"] = Om * t
-    result = Run("collinear", values, traj, metrics, comps, notes,
+    warnings = []
+    if motion == "rotating" and ratio_err > LINE_BROKEN:
+        k = int(np.argmax(np.abs(ratio / alpha - 1) > LINE_BROKEN))
+        warnings.append(
+            f"The line broke: after {Om * t[k] / (2 * math.pi):.3g} turns the spacing ratio is {LINE_BROKEN:.0%} off "
+            f"Euler's α (largest {ratio_err:.2g}): the rigidly turning line is unstable for every choice of masses, "
+            "so α and the constant spacing describe only the part before.")
+    result = Run("collinear", values, traj, metrics, comps, notes, warnings=warnings,
                     plot_series={"BC/AB (simulated)": ratio, "α (Euler)": np.full(len(t), alpha),
                                  "AB spacing (simulated)": d1, "AB spacing (Euler)": p_euler})
     if stopped:
@@ -179,7 +191,16 @@ def _restricted(values, alpha):
     X, Y, Z = col.zero_velocity_grid(mr, n=241, extent=1.6)
     extras = {"zero_velocity": {"x": X[0], "y": Y[:, 0], "two_omega": Z, "levels": CJ},
               "lagrange_points": {k: (float(x), float(y)) for k, (x, y) in pts.items()}}
-    return Run("collinear", values, traj, metrics, comps, notes,
+    warnings = []
+    if drift.max() > SATELLITE_LEFT:
+        k = int(np.argmax(drift > SATELLITE_LEFT))
+        warnings.append(
+            f"The satellite left {values['lagrange_point']}: {SATELLITE_LEFT:g} distances away after "
+            f"{t[k] / (2 * math.pi):.3g} turns (largest {drift.max():.2g}); "
+            + ("L1–L3 are unstable for every mass ratio" if values["lagrange_point"] in ("L1", "L2", "L3")
+               else f"L4 and L5 hold only for μ < 0.0385 (Gascheau; here μ = {mu:.3g})")
+            + ", so the point describes only the start of the run.")
+    return Run("collinear", values, traj, metrics, comps, notes, warnings=warnings,
                   plot_series={"satellite drift from the point (distances)": drift}, extras=extras)
 
 
@@ -294,7 +315,7 @@ register(Scenario(
         ("Collinear: turning as a rigid line", {}),
         ("Collinear: collapse from rest", {"motion": "collapse"}),
         ("Collinear: flying apart", {"motion": "expansion"}),
-        ("Earth–Moon L1", {"motion": "restricted", "lagrange_point": "L1"}),
+        ("Earth–Moon L1: the satellite drifts off (unstable)", {"motion": "restricted", "lagrange_point": "L1"}),
         ("Earth–Moon L2", {"motion": "restricted", "lagrange_point": "L2"}),
     ),
 ))
@@ -369,3 +390,20 @@ def e11_table():
                      "Eq. (33) with the table's own inputs; table − root = {:+.0f}, {:+.0f}, {:+.0f} km for L1, L2, L3; its α1, α2 "
                      "miss the root by {:.1e}, {:.1e}, far more than the printed digits' rounding: a numerical slip, not a "
                      "different equation".format(*tt["L_error_km"], *alpha_err[:2]))
+
+
+@register_check("E11.leaves", "three-body runs that leave their configuration say so: the turning line breaks, "
+                "the satellite leaves L1", "Euler 1767 §7–§11, modern")
+def e11_leaves():
+    sc = get("collinear")
+    line = sc.simulate({"turns": 20.0})
+    sat = sc.simulate({"motion": "restricted", "lagrange_point": "L1", "turns": 2.0})
+    calm = sc.simulate({"motion": "restricted", "lagrange_point": "L4", "turns": 2.0})
+    ok = (any(w.startswith("The line broke") for w in line.warnings)
+          and any(w.startswith("The satellite left L1") for w in sat.warnings) and not calm.warnings)
+    return dict(euler=line.metrics["alpha"], simulated=None, modern=None, rel_error=0.0 if ok else 1.0, tolerance=0.0,
+                passed=ok, unit="",
+                note=f"20 turns of the line: the ratio strays {line.metrics['ratio_max_rel_deviation']:.2g} from α "
+                     f"(warned above {LINE_BROKEN:g}); a satellite at Earth–Moon L1 drifts "
+                     f"{sat.metrics['satellite_drift_max']:.2g} distances in 2 turns (warned above {SATELLITE_LEFT:g}); "
+                     "one at L4 stays (no warning)")

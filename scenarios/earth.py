@@ -11,10 +11,12 @@ from ..physics import earth_precession as EP
 from ..physics.precession import linear_theory
 from .drawing import Camera
 from .base import get
+from . import _validity
 from .checks import register_check
 import math
 from ..physics import quaternion as quat
 from ..physics.params import Param, ParameterError
+from ..physics.constants import SIDEREAL_MONTH_DAYS
 from ..physics.constants import (ANOMALISTIC_MONTH_DAYS, ANOMALISTIC_YEAR_DAYS, ARCSEC_RAD, AU_KM,
                                  EARTH_DYNAMICAL_ELLIPTICITY, GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY,
                                  GEODESIC_PRECESSION_ARCSEC_PER_CY, GM_SUN_AU3_DAY2,
@@ -333,7 +335,10 @@ def _earth(values, progress=None):
         "obliquity − ε₀ (arcsec)": ((p - obl) / ARCSEC_RAD)[sel],
         "obliquity − ε₀, Euler (arcsec)": (deps_e - deps_e[0])[sel],
     }
-    return Run("earth", values, traj, m, comps, notes, plot_series=plot)
+    # the step against the fastest forcing: the Moon's pull repeats twice a sidereal month
+    warnings = _validity.add([], _validity.coarse_step(step, SIDEREAL_MONTH_DAYS / 2,
+                                                       "the Moon's pull, which repeats twice a month", "d", "step_days"))
+    return Run("earth", values, traj, m, comps, notes, plot_series=plot, warnings=warnings)
 
 
 MIN_YEARS = 0.05  # 18 days: at least one cycle of the shortest term fitted (13.66 d)

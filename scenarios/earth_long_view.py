@@ -9,13 +9,15 @@ import numpy as np
 from ..physics import earth_precession as EP
 from ..physics import quaternion as quat
 from ..physics.params import Param, ParameterError
-from ..physics.constants import ARCSEC_RAD, LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY, OBLIQUITY_J2000_RAD
+from ..physics.constants import (ARCSEC_RAD, LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY, OBLIQUITY_J2000_RAD,
+                                 SIDEREAL_MONTH_DAYS)
 from ..physics.precession import pole_angles
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
 from ._ch16_drawing import EARTH_OPTIONS, earth_scene
 from ._earth import MIN_STEPS, YR
+from . import _validity
 
 
 @functools.lru_cache(maxsize=4)
@@ -77,6 +79,8 @@ def _earth_long(values, progress=None):
                       bodies={"sun": sun / np.linalg.norm(sun, axis=1, keepdims=True),
                               "moon": moon / np.linalg.norm(moon, axis=1, keepdims=True)})
     lam_e = lam[0] - eul * ARCSEC_RAD * ty
+    warnings = _validity.add([], _validity.coarse_step(values["step_days"], SIDEREAL_MONTH_DAYS / 2,
+                                                       "the Moon's pull, which repeats twice a month", "d", "step_days"))
     return Run("earth-long-view", values, traj, m,
                   [Comparison("precession period", 360 * 3600 / eul, m["precession_period_yr"],
                               360 * 3600 / (LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY / 100), "yr",
@@ -87,7 +91,7 @@ def _earth_long(values, progress=None):
                    "physics.earth_precession.pole_star_passages to list the pole stars along the path."],
                   plot_series={"pole longitude (deg)": np.degrees(lam), "pole longitude, Euler (deg)": np.degrees(lam_e),
                                "obliquity (deg)": np.degrees(p), "obliquity, Euler (deg)": np.full_like(p, np.degrees(p[0])),
-                               "pole RA J2000 (deg)": ra, "pole Dec J2000 (deg)": dec})
+                               "pole RA J2000 (deg)": ra, "pole Dec J2000 (deg)": dec}, warnings=warnings)
 
 
 def _draw(run, spec, view):

@@ -18,7 +18,8 @@ from ..physics import quaternion as quat
 from ..physics.euler_equations import direction_cosines_dot, omega_dot
 from ..physics.torque_free_exact import exact_free_motion
 from .checks import register_check
-from ._rigid_body import INERTIA_PARAM, check_body, drift_metrics, integrate_body, middle_axis_crossings
+from ._rigid_body import (INERTIA_PARAM, check_body, drift_metrics, free_body_warnings, integrate_body,
+                          middle_axis_crossings)
 
 
 def _free_tumble(values, progress=None):
@@ -32,8 +33,10 @@ def _free_tumble(values, progress=None):
     m["angular_momentum_kg_m2_per_s"] = float(traj.momentum_norm[0])
     comps = [Comparison("vis viva A x² + B y² + C z² (§805: constant)", float(vis_viva(w0, I)),
                         float(2 * traj.energy[-1]), float(vis_viva(w0, I)), "J")]
+    warnings: list[str] = []
     try:
         fm = free_motion(I, w0)
+        warnings = free_body_warnings(traj, fm, "the polhode period")
         m["polhode_period_s"] = fm.polhode_period
         circ = "ABC"[fm.circulation_axis]
         # Euler: §808's quadrature gives the time between two sign changes of ω on the middle axis,
@@ -51,6 +54,8 @@ def _free_tumble(values, progress=None):
         euler = float(euler) if np.isfinite(euler) else None
         tc = middle_axis_crossings(traj)
         measured = 2.0 * float(np.mean(np.diff(tc))) if len(tc) >= 2 else None
+        if np.max(np.diff(traj.t), initial=0.0) > 0.25 * fm.polhode_period:  # sign changes between samples unseen
+            measured = None
         if euler is not None:
             m["polhode_period_euler_808_s"] = euler
         if measured is not None:
@@ -60,7 +65,8 @@ def _free_tumble(values, progress=None):
                                 ("" if measured is not None else "; the run is too short to see two crossings")))
     except ValueError as e:  # a permanent rotation or a sphere has no polhode
         comps.append(Comparison("polhode", None, None, None, "", str(e)))
-    return Run("free-tumble", values, traj, m, comps,
+        warnings = free_body_warnings(traj, None)
+    return Run("free-tumble", values, traj, m, comps, warnings=warnings,
                   plot_series={"ω₁": traj.omega_body[:, 0], "ω₂": traj.omega_body[:, 1],
                                "ω₃": traj.omega_body[:, 2]})
 

@@ -21,6 +21,7 @@ from ..physics.params import Param
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
 from .checks import register_check
+from . import _validity
 from ._libration import planar_moments, zeta_of
 from .drawing import Label, Option, Points, Segments
 from ._ch16_drawing import (ORBIT_OPTION, PANEL_COLOR, ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force,
@@ -123,7 +124,15 @@ def _hyperion(values, progress=None):
     else:
         notes.append("ω₀ = 1 is Euler's resonance A² = 2N: his forced libration 2e/(1 − ω₀²)·sin M is "
                      "infinite there, so no Euler curve is drawn.")
-    return Run("hyperion", values, traj, m, comps, notes, plot_series=series, extras=extras)
+    # the step against the fastest period: the torque ∝ sin 2(θ − f) turns at 2|θ̇ − ḟ| (starts up to
+    # θ̇/n = 3, the probe's rate, f fastest at periapse), and the periapse passage itself
+    fdot_max, fdot_min = (1 + e) ** 2 / (1 - e * e) ** 1.5, (1 - e) ** 2 / (1 - e * e) ** 1.5
+    hi, lo = max(3.0, values["probe_rate"]), min(0.0, values["probe_rate"])
+    T_fast = min(np.pi / max(hi - fdot_min, fdot_max - lo), 2 * np.pi / fdot_max)
+    warnings = _validity.add([], _validity.coarse_step(2 * np.pi / values["steps_per_orbit"], T_fast,
+                                                       "the torque on the spinning body, sin 2(θ − f)", "1/n",
+                                                       "steps_per_orbit"))
+    return Run("hyperion", values, traj, m, comps, notes, plot_series=series, extras=extras, warnings=warnings)
 
 
 CHAOTIC_PER_ORBIT = 0.05  # Lyapunov exponent per orbit above which a start counts as chaotic (chaotic_fraction)

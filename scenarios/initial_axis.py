@@ -12,6 +12,7 @@ from ..physics.integrator import integrate
 from ..physics.params import Param, ParameterError
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
+from . import _validity
 from scipy.integrate import solve_ivp
 from ..physics.euler_equations import omega_dot
 from .checks import register_check
@@ -53,7 +54,11 @@ def _initial_axis(values, progress=None):
                         f"simulated over the first {h:g} s"),
              Comparison("angle between Euler's axis and the numerical one", 0.0, ang, 0.0, "rad",
                         "O(t²) from the gyroscopic term, which Euler's first instant omits")]
-    return Run("initial-axis", values, traj, m, comps,
+    # the step against the fastest period: the turn of the body at the largest rate it reaches
+    w_max = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
+    warnings = _validity.add([], _validity.coarse_step(values["step"], 2 * np.pi / w_max if w_max > 0 else np.inf,
+                                                       "the turn of the body at the largest rate it reaches", "s", "step"))
+    return Run("initial-axis", values, traj, m, comps, warnings=warnings,
                   plot_series={"|ω|": np.linalg.norm(traj.omega_body, axis=1)})
 
 

@@ -21,6 +21,11 @@ from ._libration import planar_moments, stride_for, zeta_of
 from .drawing import Label, Option, Points, Segments, Sphere
 from ._ch16_drawing import (ORBIT_OPTION, PANEL_AXES_COLOR, PANEL_COLOR, POINT_COLOR, SEPARATRIX_COLOR, ZETA_COLOR,
                             ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force, f_and_zeta, wrap)
+from . import _validity
+
+# the run's first integral may wander by at most this fraction of the gap 1 − k² to the separatrix
+# before its case, period and amplitude stop meaning anything
+SEPARATRIX_DRIFT_FRACTION = 0.1
 
 
 def circular_setup(gamma, rate, zeta0, spin_ratio):
@@ -92,6 +97,7 @@ def _libration_circular(values, progress=None):
         "libration_amplitude_exact_rad": lib.libration_amplitude(phi0, phidot0, w0) if (w0 > 0 and not circ) else np.nan,
         "period_rel_error_vs_exact": abs(T_meas / T_exact - 1) if np.isfinite(T_exact) and np.isfinite(T_meas) else np.nan,
         "modulus_k2": float(lib.pendulum_modulus_sq(phi0, phidot0, w0)) if w0 > 0 else np.inf,
+        "separatrix_gap_1_minus_k2": float(lib.pendulum_modulus_gap(phi0, phidot0, w0)) if w0 > 0 else -np.inf,
         "first_integral_abs_drift": float(np.max(np.abs(jac - jac[0]))),
     }
     if case == "circulating" and w0 > 0:
@@ -143,7 +149,29 @@ def _libration_circular(values, progress=None):
     extras = {"separatrix": {"zeta_rad": series["separatrix_zeta_rad"],
                              "zeta_dot_plus": series["separatrix_zeta_dot_plus"],
                              "zeta_dot_minus": series["separatrix_zeta_dot_minus"]}}
-    return Run("libration-circular", values, traj, m, comps, notes, plot_series=series, extras=extras)
+    warnings: list[str] = []
+    # near the separatrix: the run's own first integral must stay well inside the gap 1 − k²
+    # (k² = (first integral + N/2)/N, so the integral's drift over N is the run's error in k²)
+    gap = m["separatrix_gap_1_minus_k2"]
+    if w0 > 0 and case in ("librating", "circulating") and Nn != 0:
+        k2_drift = m["first_integral_abs_drift"] / abs(Nn)
+        if k2_drift > SEPARATRIX_DRIFT_FRACTION * abs(gap):
+            warnings.append(
+                f"Near the separatrix: 1 − k² = {gap:.3g}, but the run's first integral (§825) wanders by {k2_drift:.2g} "
+                f"in k², more than {SEPARATRIX_DRIFT_FRACTION:g} of that gap: the simulated period, amplitude and even the "
+                "case (librating or circulating) are not to be trusted. The exact period (from 1 − k² formed without "
+                "cancellation) is; raise steps_per_period to bring the run closer.")
+    # the step against the fastest period: the swing through ζ_eq at up to ω₀k (torque ∝ sin 2φ), or
+    # the small oscillation
+    if w0 > 0:
+        k = np.sqrt(max(float(m["modulus_k2"]), 0.0))
+        T_fast = min(2 * np.pi / w0, np.pi / (w0 * max(k, 1e-300)))
+    else:
+        T_fast = np.pi / abs(phidot0) if phidot0 else np.inf
+    _validity.add(warnings, _validity.coarse_step(step, T_fast, "the swing through F's direction", "time units",
+                                                  "steps_per_period"))
+    return Run("libration-circular", values, traj, m, comps, notes, plot_series=series, extras=extras,
+               warnings=warnings)
 
 
 def _draw(run, spec, view):
@@ -260,3 +288,33 @@ def e7_separatrix():
     return {"euler": eul, "simulated": sim, "modern": None, "rel_error": abs(sim / eul - 1), "tolerance": 1e-4,
             "unit": "1/δ", "note": ("Euler's integral is exact on the separatrix; the run departs from it only by "
                                     "the integrator's error, amplified near the unstable point (measured ~4e-6)")}
+
+
+@register_check("E7.near-separatrix", "1 − k² = 2e-8: the exact period from the gap formed without cancellation; "
+                "the run, whose first integral wanders more than that, says so", "§826, modern")
+def e7_near_separatrix():
+    from decimal import Decimal, localcontext
+
+    g = 0.05
+    w0 = float(np.sqrt(3 * g))
+    spin = 1 - w0 * (1 - 1e-8)
+    r = get("libration-circular").simulate({"asymmetry": g, "zeta0_deg": 0.0, "spin_ratio": spin, "periods": 2.0})
+    with localcontext() as ctx:  # 4K(k)/ω₀ in 40 digits from the same floats (AGM), sharing no code
+        ctx.prec = 50
+        W0 = (Decimal(3) * Decimal(g)).sqrt()
+        kp2 = 1 - ((1 - Decimal(spin)) / W0) ** 2  # ζ₀ = 0: k² = (φ̇₀/ω₀)², φ̇₀ = δ(1 − spin), δ = 1
+        a, b = Decimal(1), kp2.sqrt()
+        for _ in range(200):
+            if abs(a - b) < Decimal(10) ** -45:
+                break
+            a, b = (a + b) / 2, (a * b).sqrt()
+        pi = Decimal("3.14159265358979323846264338327950288419716939937510582097494")
+        ref = float(4 * (pi / (2 * a)) / W0)
+    exact = r.metrics["libration_period_exact"]
+    rel = abs(exact / ref - 1)
+    warned = [w for w in r.warnings if w.startswith("Near the separatrix")]
+    return dict(euler=r.metrics["libration_period_euler"], simulated=r.metrics["libration_period"], modern=exact,
+                rel_error=rel, tolerance=1e-9, passed=rel <= 1e-9 and bool(warned), unit="1/δ",
+                note=f"reference 4K/ω₀ in 40-digit decimal arithmetic: {ref:.12g}; rel_error: the exact (modern) period "
+                     "(the rounding of the inputs moves 1 − k² by ~5e-9 relative, K by ~2.5e-10: tolerance 1e-9) "
+                     f"against it (1 − k² = {r.metrics['separatrix_gap_1_minus_k2']:.3g}). " + (warned[0] if warned else "NO WARNING"))

@@ -5,6 +5,8 @@ Check rows E8 (the forced amplitude) and E8.free (the free period).
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from scipy.integrate import solve_ivp
 from ..physics import libration as lib
@@ -19,6 +21,13 @@ from .base import get
 from .checks import register_check
 from ._libration import planar_moments, stride_for, zeta_of
 from ._ch16_drawing import ORBIT_OPTION, ZETA_OPTION, body_scene, centre_of_force, f_and_zeta
+from . import _validity
+
+# Euler's forced amplitude (§833) is called outside its regime when it is off the periodic
+# solution's first harmonic by more than this (relative), or when a body started on his formula
+# leaves the libration within EULER_START_ORBITS orbits
+EULER_AMPLITUDE_TOLERANCE = 0.10
+EULER_START_ORBITS = 10
 
 
 class ForcedSolution:
@@ -104,6 +113,17 @@ def _libration_eccentric(values, progress=None):
     z_euler = m1 * np.sin(A * t) + (dz * np.cos(w0 * t) if w0 > 0 else dz)
     free_period = lib.measured_period(t, z_free) if dz != 0 else np.nan
     amp_run = _forced_amplitude_of_run(t, zeta, n, P, free_period)
+    # is there a libration at all? the forced solution's stability (Floquet) and the run itself
+    half_trace = lib.monodromy_half_trace(fs.orbit, g, gm, fs.lam0, fs.lamdot0) if g != 0 else 1.0
+    forced_stable = abs(half_trace) <= 1.0
+    free_max = float(np.max(np.abs(z_free)))
+    tumbles = free_max >= 0.5 * np.pi  # the run went over to the next face pair: it circulates
+    # Euler's formula as a motion: start on ζ = m₁ sin At at periapse (ζ = ζ_eq, ζ̇ = m₁A)
+    euler_left, euler_max, euler_orbit = (False, 0.0, None)
+    if g != 0:
+        fdot0 = float(fs.orbit.true_anomaly_rate(np.array([0.0]))[0]) / n
+        euler_left, euler_max, euler_orbit = lib.leaves_libration(
+            e, g, -lib.equilibrium_zeta(g), fdot0 - m1 / 1.0, fs.lam0, orbits=EULER_START_ORBITS)
     mt = {
         "forced_amplitude_rad": amp_run,
         "forced_amplitude_periodic_rad": float(np.hypot(a[0], b[0])),
@@ -112,16 +132,60 @@ def _libration_eccentric(values, progress=None):
         "forced_second_harmonic_rad": float(a[1]),
         "second_order_euler_rad": float(m2e),
         "forced_max_rad": float(np.max(np.abs(zf1))),
-        "free_amplitude_rad": float(np.max(np.abs(z_free))),
+        "free_amplitude_rad": free_max,
         "free_period": free_period,
         "free_period_euler": 2 * np.pi / w0 if w0 > 0 else np.inf,
+        "forced_floquet_half_trace": half_trace,
+        "euler_start_max_offset_rad": euler_max,
     }
     # modern: the linearised free period about the forced solution (Floquet, exact in e), lengthened by
     # the free swing's own amplitude φ²/4 (pendulum); only worth computing when there is a free part
-    if dz != 0 and g > 0 and w0 < 0.5 * n:
+    if dz != 0 and g > 0 and w0 < 0.5 * n and not tumbles:
         nu = lib.free_libration_floquet(fs.orbit, g, gm, fs.lam0, fs.lamdot0)
         mt["free_period_floquet"] = 2 * np.pi / nu if nu > 0 else np.nan
         mt["free_period_modern"] = mt["free_period_floquet"] * (1 + dz**2 / 4)
+    warnings: list[str] = []
+    status = "ok"
+    if tumbles:
+        status = "tumbles"
+        for k in ("forced_amplitude_rad", "forced_amplitude_rel_error", "free_amplitude_rad", "free_period",
+                  "free_period_floquet", "free_period_modern"):
+            if k in mt:
+                mt[k] = np.nan
+        if not forced_stable:
+            for k in ("forced_amplitude_periodic_rad", "forced_second_harmonic_rad", "forced_max_rad"):
+                mt[k] = np.nan
+        warnings.append(
+            f"No libration: the body tumbles (its angle from the forced solution passed a quarter turn, reaching "
+            f"{free_max:.3g} rad)"
+            + (f"; the forced (periodic) solution itself is unstable (½ tr M = {half_trace:.3g}, |·| > 1)"
+               if not forced_stable else f", started {np.degrees(dz):g}° off a forced solution too narrow to hold it")
+            + ". Euler's forced libration (§833) and free period (§838) do not apply here, and neither the forced "
+              "amplitude nor the free period is reported.")
+    elif not forced_stable:
+        warnings.append(
+            f"The forced (periodic) libration is unstable here (½ tr M = {half_trace:.3g}, |·| > 1, Floquet): a body "
+            f"near it drifts away (this one has not yet, in {values['orbits']:g} orbits); Euler's §838 free libration "
+            "about it does not exist.")
+    if not tumbles:
+        off = abs(m1 / mt["forced_amplitude_periodic_rad"] - 1) if mt["forced_amplitude_periodic_rad"] else np.inf
+        if euler_left or off > EULER_AMPLITUDE_TOLERANCE:
+            why = []
+            if off > EULER_AMPLITUDE_TOLERANCE:
+                why.append(f"his amplitude {m1:.3g} rad is {off:.0%} off the forced solution's {mt['forced_amplitude_periodic_rad']:.3g} rad")
+            if euler_left:
+                why.append(f"a body started on his formula leaves the libration within {euler_orbit} "
+                           f"orbit{'s' if euler_orbit != 1 else ''}")
+            warnings.append(
+                f"Euler's linear forced libration ζ = A²α/(A²−2N)·sin At (§833) is outside its regime here "
+                f"(e = {e:g}, (B−A)/C = {g:g}): " + " and ".join(why) + "; it assumes e and ζ small and A² far from "
+                "2N. The simulated forced libration (modern column) is the one to read.")
+    # the step against the fastest period: the periapse passage (true anomaly's fastest turn) and
+    # the free libration
+    fdot_max = n * (1 + e) ** 2 / (1 - e * e) ** 1.5
+    T_fast = min(2 * np.pi / fdot_max, 2 * np.pi / w0 if w0 > 0 else np.inf)
+    _validity.add(warnings, _validity.coarse_step(step, T_fast, "the periapse passage or the free libration",
+                                                  "time units", "steps_per_orbit"))
     comps = [
         Comparison("forced libration amplitude A²α/(A²−2N) (§833)", m1, mt["forced_amplitude_rad"],
                    mt["forced_amplitude_periodic_rad"], "rad",
@@ -142,7 +206,14 @@ def _libration_eccentric(values, progress=None):
              "The translation prints ζ = AA/(AA−2n) sin At (α dropped) at the end of §833; §834 has it right."]
     series = {"zeta_rad": zeta, "zeta_euler_rad": z_euler, "zeta_forced_rad": z_forced, "zeta_free_rad": z_free}
     traj.series.update(series)
-    return Run("libration-eccentric", values, traj, mt, comps, notes, plot_series=series)
+    if tumbles:  # the run's values are not libration values: leave them out of the table
+        def finite(v):
+            return v if v is not None and np.isfinite(v) else None
+
+        comps = [dataclasses.replace(c, simulated=finite(c.simulated), modern=finite(c.modern),
+                                     note=c.note + "; the body tumbles: no libration to measure") for c in comps]
+    return Run("libration-eccentric", values, traj, mt, comps, notes, plot_series=series, status=status,
+               warnings=warnings)
 
 
 def _draw(run, spec, view):
@@ -212,3 +283,32 @@ def e8_free():
                      f"(φ²/4 = {np.radians(1.0) ** 2 / 4:.1e}): {neglected:.1e} in all; tolerance 3× that. The run is "
                      f"{abs(T / Tm - 1):.1e} from the modern value: zero-crossing jitter from the combination tones "
                      "ν ± n over ~15 free periods (it halves when the run is doubled)")}
+
+
+@register_check("E8.tumbles", "no libration at all (e = 0.27, 3(B−A)/C = 0.51): the run says it tumbles and "
+                "reports no forced amplitude", "§833–838")
+def e8_tumbles():
+    r = get("libration-eccentric").simulate({"eccentricity": 0.27, "asymmetry": 0.17})
+    m = r.metrics
+    ok = (r.status == "tumbles" and not np.isfinite(m["forced_amplitude_rad"]) and not np.isfinite(m["free_period"])
+          and abs(m["forced_floquet_half_trace"]) > 1 and any(w.startswith("No libration") for w in r.warnings))
+    return dict(euler=m["forced_amplitude_euler_rad"], simulated=None, modern=None, rel_error=0.0 if ok else 1.0,
+                tolerance=0.0, passed=ok, unit="rad",
+                note=f"status {r.status!r}; the forced (periodic) solution is unstable (½ tr M = "
+                     f"{m['forced_floquet_half_trace']:.3f}, Floquet) and the body started 2° off it leaves within the "
+                     "run; Euler's 1.10 rad is shown, no simulated amplitude or free period is")
+
+
+@register_check("E8.linear-regime", "forced libration beyond Euler's linear regime (e = 0.27, 3(B−A)/C = 0.17): the "
+                "36° swing computed, Euler's formula flagged", "§833–835")
+def e8_linear_regime():
+    r = get("libration-eccentric").simulate({"eccentricity": 0.27, "asymmetry": 0.17 / 3})
+    m = r.metrics
+    rel = abs(m["forced_amplitude_rad"] / m["forced_amplitude_periodic_rad"] - 1)
+    warned = [w for w in r.warnings if "outside its regime" in w]
+    return dict(euler=m["forced_amplitude_euler_rad"], simulated=m["forced_amplitude_rad"],
+                modern=m["forced_amplitude_periodic_rad"], rel_error=rel, tolerance=1e-3,
+                passed=rel <= 1e-3 and r.status == "ok" and bool(warned), unit="rad",
+                note=f"largest forced swing {np.degrees(m['forced_max_rad']):.1f}°, stable (½ tr M = "
+                     f"{m['forced_floquet_half_trace']:.3f}); rel_error: the run's first harmonic against the periodic "
+                     "solution's (free swing of 2° fitted alongside). " + (warned[0] if warned else "NO WARNING"))

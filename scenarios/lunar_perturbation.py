@@ -13,6 +13,7 @@ from ..physics.params import Param, ParameterError
 from .drawing import Camera, Drawing, Frame, Label, Mesh, Option, Segments, Sphere, View, circle, flat_disc, new_drawing, segments
 from . import _three_body_drawing as tbd
 from .base import Comparison, Run, Scenario, register
+from . import _validity
 import functools
 from ..physics.three_body import lunar_elements as le
 from .checks import register_check
@@ -122,7 +123,12 @@ def _lunar(values, progress=None):
         "perigee longitude (deg, simulated)": varpi_deg,
         "perigee longitude (deg, first order: half)": varpi_deg[0] + np.degrees(fo["apse_rate"]) * tt,
     }
-    return Run("lunar-perturbation", values, traj, metrics, comps, notes, plot_series=plot)
+    # the RK4 step against the fastest period: the Moon's passage through perigee
+    e = values["eccentricity"]
+    T_fast = le.MOON_J2000["sidereal_month_days"] * (1 - e * e) ** 1.5 / (1 + e) ** 2
+    warnings = _validity.add([], _validity.coarse_step(values["step_days"], T_fast,
+                                                       "the Moon's passage through perigee", "d", "step_days"))
+    return Run("lunar-perturbation", values, traj, metrics, comps, notes, plot_series=plot, warnings=warnings)
 
 
 # ---- the scene ---------------------------------------------------------------------------------

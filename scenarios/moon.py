@@ -15,6 +15,7 @@ import functools
 import numpy as np
 from .drawing import Camera
 from .base import get
+from . import _validity
 from .checks import register_check
 from ..physics import constants as C
 from ..physics import moon
@@ -292,7 +293,11 @@ def _moon(values, progress=None):
     }
     traj.series.update({"libration_longitude_deg": series["libration_longitude_deg"],
                         "libration_latitude_deg": series["libration_latitude_deg"]})
-    return Run("moon", values, traj, m, comps, notes, plot_series=series)
+    # the step against the fastest forcing: the Earth's pull on the Moon's figure repeats twice a month
+    warnings = _validity.add([], _validity.coarse_step(values["step_days"], C.SIDEREAL_MONTH_DAYS / 2,
+                                                       "the Earth's pull on the Moon's figure, which repeats twice "
+                                                       "a month", "d", "step_days"))
+    return Run("moon", values, traj, m, comps, notes, plot_series=series, warnings=warnings)
 
 
 EYE_RADII = 2.3  # the Earth-view camera's distance in Moon radii (drawn 1): the disc spans ~52° of the view

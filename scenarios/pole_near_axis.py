@@ -13,6 +13,7 @@ from ..physics.precession import (TYPOS_840_843, equal_moments_841, pole_rates_8
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
+from . import _validity
 from .base import get
 from .checks import register_check
 from ._precession import MAX_SAMPLES
@@ -97,7 +98,10 @@ def _pole_near_axis(values, progress=None):
                                 "§843: at right angles to FA, around A in the sense C→B when aa > cc"))
         comps.append(Comparison("dβ cos η + dγ cos θ", 0.0, m["perpendicularity_841"], None, "rad/s", "§841"))
     ob = traj.omega_body / np.linalg.norm(traj.omega_body, axis=1, keepdims=True)
-    return Run("pole-near-axis", values, traj, m, comps, notes,
+    # the step against the fastest period: F's pull on the turning body repeats twice a turn
+    warnings = _validity.add([], _validity.coarse_step(step, T / 2, "half a turn of the body under F (the pull "
+                                                       "repeats twice a turn)", "s", "steps_per_turn"))
+    return Run("pole-near-axis", values, traj, m, comps, notes, warnings=warnings,
                   plot_series={"β − 90° (deg)": np.degrees(np.arccos(np.clip(ob[:, 1], -1, 1))) - 90,
                                "γ − 90° (deg)": np.degrees(np.arccos(np.clip(ob[:, 2], -1, 1))) - 90,
                                "spin γ' (rad/s)": np.linalg.norm(traj.omega_body, axis=1)})

@@ -13,12 +13,24 @@ from ..physics.precession import (TYPOS_844_849, euler_N, fit_pole, linear_theor
                           pole_angles, resonance_849)
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
-from .base import Comparison, Run, Scenario, register
+from .base import Comparison, Run, Scenario, get, register
 import functools
 from .checks import register_check
 from ._precession import MAX_SAMPLES
 from .drawing import Option
 from ._ch16_drawing import body_scene, centre_line, centre_of_force, pole_cone
+from . import _validity
+
+# Euler's nutation (§844) is outside its regime when his amplitudes differ from the linear theory
+# with the gyroscopic term he dropped (which puts the resonance at ε' = εC/A = 2δ instead of ε = 2δ)
+# by more than this: far from the resonance the two differ by ~C/A − 1 (10 % at f = 0.1), near it
+# the difference blows up
+EULER_NUTATION_TOLERANCE = 0.5
+# the corrected linear theory itself fails where its denominator ε'² − 4δ² is within this many
+# times ε'N of zero (the O(N) terms both theories drop shift the resonance by ~N)
+RESONANCE_WIDTHS = 10.0
+# Euler's small-α hypothesis (§845): the pole of rotation near the figure axis
+ALPHA_MAX_RAD = 0.1
 
 
 def spheroid_moments(flattening):
@@ -166,6 +178,34 @@ def _precession_circular(values, progress=None):
     notes = [f"N/δ = {N:.3g}: Euler holds p and λ fixed inside his equations 4–5, an error of relative order N/δ.",
              f"Euler drops the gyroscopic term of §840: his N has the equatorial moment where the true "
              f"precession has the polar one, so his rate is {I[2] / I[0]:.4f}× the corrected one."]
+    warnings: list[str] = []
+    pairs = ((eul.obliquity_amplitude, corr.obliquity_amplitude), (eul.longitude_amplitude, corr.longitude_amplitude))
+    euler_finite = all(np.isfinite(e_) for e_, _ in pairs)
+    off = max((abs(e_ / c_ - 1) for e_, c_ in pairs if np.isfinite(e_) and np.isfinite(c_) and c_ != 0), default=0.0)
+    if not euler_finite or off > EULER_NUTATION_TOLERANCE:
+        warnings.append(
+            f"Euler's nutation (§844) is outside its regime: ε/δ = {r:g} is near his resonance ε = 2δ, where his "
+            "amplitudes ∝ 1/(εε − 4δδ) "
+            + (f"differ by {off:.0%} from" if euler_finite else "have no finite value, unlike")
+            + f" those of the linear theory with the gyroscopic term he dropped (whose resonance is at ε/δ = 2A/C = "
+            f"{2 * I[0] / I[2]:.4f}); read the simulated nutation (§849: \"the attempts found go to infinity\").")
+    den_c = corr.eps_gyro ** 2 - 4 * delta ** 2
+    if abs(den_c) < RESONANCE_WIDTHS * corr.eps_gyro * N:
+        warnings.append(
+            f"The linear nutation theory itself fails here: ε'/δ = {corr.eps_gyro:.4g} puts its denominator "
+            f"ε'² − 4δ² = {den_c:.3g} within {RESONANCE_WIDTHS:g}·ε'N of zero, the size of the terms of order N it "
+            "drops; only the simulation describes the nodding.")
+    if m["alpha_max_rad"] > ALPHA_MAX_RAD:
+        warnings.append(
+            f"The pole of rotation went {np.degrees(m['alpha_max_rad']):.3g}° from the figure axis: Euler's "
+            f"small-α hypothesis (§845) no longer holds (threshold {np.degrees(ALPHA_MAX_RAD):.3g}°), nor do his "
+            "precession and nutation formulas built on it.")
+    # the step against the fastest period the torque kicks must follow: the forcing in 2φ (π/δ) and,
+    # through the figure axis, the free (Eulerian) wobble at ε' = εC/A
+    step = 2 * np.pi / values["steps_per_orbit"]
+    _validity.add(warnings, _validity.coarse_step(step, min(np.pi / delta, 2 * np.pi / corr.eps_gyro),
+                                                  "the wobble of the figure axis at ε' or the nodding in 2φ",
+                                                  "1/δ", "steps_per_orbit"))
     if abs(r - 2) < 1.0 or abs(r - 2 * I[0] / I[2]) < 1.0:
         notes.append(f"ε/δ = {r:g} is near the resonance: Euler's formulas diverge at ε = 2δ (§849: "
                      f"\"the attempts found go to infinity\"), the corrected linear theory at ε/δ = 2A/C = "
@@ -183,12 +223,16 @@ def _precession_circular(values, progress=None):
     pe, le = eul.pole(t, np.pi / 2, h)
     p, lam = pole_angles(traj.figure_axis)
     sec = eul.precession_rate * t
-    return Run("precession-circular", values, traj, m, comps, notes, plot_series={
+    series = {
         "obliquity p (rad)": p, "obliquity p, Euler §847 (rad)": pe,
         "longitude λ (rad)": lam, "longitude λ, Euler §847 (rad)": le,
         "λ − Euler's mean precession (rad)": lam - np.pi / 2 - sec,
         "Euler's nutation in λ (rad)": le - np.pi / 2 - sec,
-    })
+    }
+    # at ε = 2δ exactly Euler's curves have no value (his denominators vanish): left out, not drawn
+    # as infinities (which would read as a diverged run)
+    series = {k: v for k, v in series.items() if "Euler" not in k or np.all(np.isfinite(v))}
+    return Run("precession-circular", values, traj, m, comps, notes, warnings=warnings, plot_series=series)
 
 
 def _draw(run, spec, view):
@@ -329,3 +373,18 @@ def e10_resonance():
     return dict(euler=pred, simulated=slope, modern=None, rel_error=rel, tolerance=0.05, unit="rad per 1/δ",
                 note=f"ε/δ = 2A/C = {r:.4f}; α reached {alpha.max():.3g} rad in 4 revolutions (Euler's formulas diverge). "
                      "Tolerance: terms of order α and N/δ beside the secular growth over the fitted span")
+
+
+@register_check("E10.euler-regime", "Euler's nutation near ε = 2δ is flagged (ε/δ = 2.2), not far from it (ε/δ = 8)",
+                "§844, §849")
+def e10_euler_regime():
+    sc = get("precession-circular")
+    near = sc.simulate(eps_over_delta=2.2, orbits=20.0)
+    far = sc.simulate(eps_over_delta=8.0, orbits=20.0)
+    warned = [w for w in near.warnings if w.startswith("Euler's nutation (§844) is outside its regime")]
+    m = near.metrics
+    ok = bool(warned) and not far.warnings
+    return dict(euler=m["nutation_obliquity_euler"], simulated=m["nutation_obliquity"],
+                modern=m["nutation_obliquity_corrected"], rel_error=0.0 if ok else 1.0, tolerance=0.0, passed=ok,
+                unit="rad", note=f"threshold: Euler's amplitudes more than {EULER_NUTATION_TOLERANCE:.0%} off the linear "
+                "theory with the gyroscopic term (docs/validity.md). " + (warned[0] if warned else "NO WARNING"))
