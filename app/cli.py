@@ -114,6 +114,11 @@ def cmd_run(args) -> int:
                   + (f"  ({c.note})" if c.note else ""))
     for n in result.notes:
         print("note:", n)
+    if result.status != "ok":
+        print("status:", result.status)
+    for w in result.warnings:
+        if w not in result.notes:  # a divergence is said in both
+            print("warning:", w)
     if "final_state" in out:
         fs = out["final_state"]
         print(f"final state at t={number(fs['t'], 10)}: q_wxyz={number(fs['quaternion_wxyz'], 10)} "

@@ -85,8 +85,9 @@ class Run:
       `--json` "metrics".
     - `comparisons`: the Euler / simulated / modern rows.
     - `warnings`: one sentence per result outside the validity of a formula or of the numerics
-      (empty when the run is inside every limit); `status` is "ok" or says what went wrong
-      ("diverged": only the finite part before the trouble is kept).
+      (empty when the run is inside every limit; docs/validity.md lists them); `status` is "ok"
+      or says what went wrong ("diverged": only the finite part before the trouble is kept;
+      "tumbles": no libration, so no libration values are reported).
     - `trajectory`: times, attitudes (w, x, y, z), ω and L on the body axes, positions of other
       bodies, and the derived paths (numpy arrays).
     """

@@ -70,7 +70,7 @@ def _hyperion(values, progress=None):
     }
     for p in RESONANCES:
         m[f"gp_half_width_{p:g}"] = float(lib.resonance_half_width(p, e, w0))
-        m[f"gp_half_width_series_{p:g}"] = float(w0 * np.sqrt(abs(hansen.goldreich_peale_series(p, e))))
+        m[f"gp_series_half_width_{p:g}"] = float(w0 * np.sqrt(abs(hansen.goldreich_peale_series(p, e))))
     m["overlap_1_and_1.5"] = float((m["gp_half_width_1"] + m["gp_half_width_1.5"]) / 0.5)
     # the islands at these values: each resonance's periodic orbit followed from small ω₀
     islands = []
@@ -106,8 +106,8 @@ def _hyperion(values, progress=None):
     comps = [Comparison(f"resonance θ̇/n = {p:g}: half-width ω₀√|H(p,e)|", None, None,
                         m[f"gp_half_width_{p:g}"], "n",
                         f"H exact (quadrature over one orbit); Goldreich–Peale's series (1966, to "
-                        f"e^{hansen.GP_SERIES_NEXT_ORDER[p] - 2}): {m[f'gp_half_width_series_{p:g}']:.5g}"
-                        + (f", {m[f'gp_half_width_series_{p:g}'] / m[f'gp_half_width_{p:g}'] - 1:+.2%}"
+                        f"e^{hansen.GP_SERIES_NEXT_ORDER[p] - 2}): {m[f'gp_series_half_width_{p:g}']:.5g}"
+                        + (f", {m[f'gp_series_half_width_{p:g}'] / m[f'gp_half_width_{p:g}'] - 1:+.2%}"
                            if m[f"gp_half_width_{p:g}"] > 0 else ""))
              for p in RESONANCES]
     comps.append(Comparison("Lyapunov exponent of the probe start", None, m["lyapunov_probe_per_orbit"], None,

@@ -118,12 +118,13 @@ def _libration_eccentric(values, progress=None):
     forced_stable = abs(half_trace) <= 1.0
     free_max = float(np.max(np.abs(z_free)))
     tumbles = free_max >= 0.5 * np.pi  # the run went over to the next face pair: it circulates
-    # Euler's formula as a motion: start on ζ = m₁ sin At at periapse (ζ = ζ_eq, ζ̇ = m₁A)
+    # Euler's formula as a motion: start on ζ = m₁ sin At at periapse (ζ = ζ_eq, ζ̇ = m₁A, A = n), i.e.
+    # λ = −ζ_eq, λ̇ = ḟ(0) − m₁n; in the time unit 1/n of `leaves_libration`, λ̇/n = ḟ(0)/n − m₁
     euler_left, euler_max, euler_orbit = (False, 0.0, None)
     if g != 0:
         fdot0 = float(fs.orbit.true_anomaly_rate(np.array([0.0]))[0]) / n
         euler_left, euler_max, euler_orbit = lib.leaves_libration(
-            e, g, -lib.equilibrium_zeta(g), fdot0 - m1 / 1.0, fs.lam0, orbits=EULER_START_ORBITS)
+            e, g, -lib.equilibrium_zeta(g), fdot0 - m1, fs.lam0, orbits=EULER_START_ORBITS)
     mt = {
         "forced_amplitude_rad": amp_run,
         "forced_amplitude_periodic_rad": float(np.hypot(a[0], b[0])),

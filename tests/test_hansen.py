@@ -94,7 +94,7 @@ def test_hyperion_reports_exact_widths_and_the_series_beside():
     for p in RES:
         exact = w0 * math.sqrt(abs(_H_by_mean_anomaly(p, 0.5)))
         assert r.metrics[f"gp_half_width_{p:g}"] == pytest.approx(exact, rel=1e-3)
-        assert r.metrics[f"gp_half_width_series_{p:g}"] == pytest.approx(
+        assert r.metrics[f"gp_series_half_width_{p:g}"] == pytest.approx(
             w0 * math.sqrt(abs(hansen.goldreich_peale_series(p, 0.5))), rel=1e-12)
     rows = [c for c in r.comparisons if "half-width" in c.label]
     assert len(rows) == len(RES) and all("Goldreich–Peale's series" in c.note for c in rows)

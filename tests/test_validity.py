@@ -228,3 +228,12 @@ def test_every_preset_runs_without_warnings_unless_it_is_about_the_breakdown():
     for name in ("Syzygy: the Moon leaves", "Precession: ε/δ = 2.2, Euler's nutation fails",
                  "Forced swing: near the resonance A² = 2N", "Earth–Moon L1: the satellite drifts off (unstable)"):
         assert name in about_breakdown_warned
+
+
+def test_cli_prints_status_and_warnings(capsys):
+    from theoria.app.cli import main
+
+    assert main(["run", "libration-eccentric", "--set", "asymmetry=0.17", "--set", "eccentricity=0.27",
+                 "--set", "orbits=10"]) == 0
+    out = capsys.readouterr().out
+    assert "status: tumbles" in out and "warning: No libration" in out
