@@ -27,6 +27,18 @@ Sources
   lunar model, Williams, Boggs & Folkner 2013, JPL IOM 335-JW,DB,WF-20130722-016): the Moon's
   moment differences; the mean lunar equator's inclination I (IAU; Meeus ch. 53).
 - The Astronomical Almanac: the sidereal year.
+- JPL DE421 (Folkner, Williams & Boggs 2009, IPN Progress Report 42-178; its lunar model:
+  Williams, Boggs & Folkner 2008, "DE421 Lunar Orbit, Physical Librations, and Surface
+  Coordinates", JPL IOM 335-JW,DB,WF-20080314-001): the Moon's gravity field of degree 2 and 3
+  (unnormalised, reference radius 1738 km), the fluid core's share of the moment C and the tidal
+  Love number k2 of its lunar model. The numbers are those of the ephemeris file's header (the
+  `de421` package that theoria depends on); tests/test_real_sky.py reads them back from that file.
+  The rotation from DE421's principal-axis frame to its mean-Earth frame: the same memo, as NAIF's
+  lunar frame kernel moon_080317.tf gives it (frame MOON_ME_DE421).
+- Vondrák, Capitaine & Wallace 2011 (A&A 534, A22), long-term precession: the ecliptic and
+  equator poles over ±200,000 years (SOFA/ERFA `ltpecl`, `ltpequ`, which the scenario calls).
+- Peale 1969 (AJ 74, 483), Cassini states: the Moon's mean obliquity to the ecliptic is the
+  IAU value I above (1.54242°, the mean lunar equator's inclination).
 
 Frames and periods
 ------------------
@@ -108,6 +120,32 @@ MOON_INCLINATION_RANGE_DEG = (4.99, 5.30)  # its oscillation about the mean (per
 MOON_BETA_LLR = 631.0e-6  # (C − A)/B, lunar laser ranging (Williams et al. 2014; DE430)
 MOON_GAMMA_LLR = 227.7e-6  # (B − A)/C, idem
 MOON_EQUATOR_INCLINATION_DEG = 1.54242  # mean lunar equator to the ecliptic (IAU; Meeus ch. 53)
+
+# DE421's lunar model (Williams, Boggs & Folkner 2008; the header of the ephemeris file). The field
+# is unnormalised, referred to the principal axes, reference radius MOON_REFERENCE_RADIUS_KM.
+MOON_BETA_DE421 = 0.0006310022025364629  # (C − A)/B, LBET
+MOON_GAMMA_DE421 = 0.0002277305314199142  # (B − A)/C, LGAM
+MOON_C22_DE421 = 2.238976709652413e-05  # C22M (J2M = 2.032732576370724e-4 follows from β, γ and C22)
+# the degree-3 field (C30 = −J3, C31, S31, C32, S32, C33, S33): J3M, C31M, S31M, C32M, S32M, C33M, S33M
+MOON_DEGREE3_DE421 = (-8.404701525941e-06, 2.8452435e-05, 5.9008e-06, 4.84638724000903e-06,
+                      1.6841984741476e-06, 1.674047530039142e-06, -2.485526e-07)
+MOON_REFERENCE_RADIUS_KM = 1738.0  # AM
+MOON_CORE_MOMENT_FRACTION_DE421 = 0.0007  # IFAC: the fluid core's polar moment / the Moon's C
+MOON_LOVE_K2_DE421 = 0.02163368386360741  # K2M, the Moon's tidal Love number (not modelled; sizes the tides)
+MOON_TIDE_DELAY_DE421_DAYS = 0.1078586819856588  # TAUM, the time lag of the lunar tide (not modelled)
+MOON_CORE_FRICTION_DE421_PER_DAY = 1.493760249305661e-08  # KVC: core–mantle friction / C (not modelled)
+# C/(M R²) from γ = (B − A)/C and C22 = (B − A)/(4 M R²) (a relation, not a fit)
+MOON_POLAR_MOMENT_FACTOR_DE421 = 4.0 * MOON_C22_DE421 / MOON_GAMMA_DE421  # 0.39327
+# DE421's principal-axis (PA) frame to its mean-Earth (ME) frame: v_ME = R1(−c) R2(−b) R3(−a) v_PA with
+# frame rotations R_i, angles about z, y, x: 67.92″, 78.56″, 0.30″ (moon_080317.tf's TKFRAME_31007, axes
+# 3, 2, 1), written in milliarcseconds
+MOON_PA_TO_ME_DE421_MAS = (67920, 78560, 300)
+# DE421's optical libration (the Earth's centre seen on the Moon's mean-Earth axes): the largest |longitude|
+# and |latitude| in each of 16 windows of 18.6 years from 1900 on (to 2197.6), the range of those maxima
+# (computed from the file every 0.02 day; tests/test_real_sky.py recomputes them)
+MOON_OPTICAL_LIBRATION_LON_MAX_DE421_DEG = (8.070, 8.141)
+MOON_OPTICAL_LIBRATION_LAT_MAX_DE421_DEG = (6.862, 6.867)
+MOON_OPTICAL_LIBRATION_DE421_WINDOWS = (1900, 16)  # first year, number of 18.6-year windows
 
 
 def period_days(rate_deg_per_cy: float) -> float:

@@ -224,6 +224,15 @@ def kepler_position(t, a, e, inc, node, varpi, L):
     return kepler.position(L - varpi, a, e, inc, node, varpi - node)
 
 
+def sun_mean_orbit(t):
+    """The Sun seen from the Earth on its fixed mean Kepler ellipse of J2000 (AU, ecliptic J2000;
+    t in days from J2000)."""
+    t = np.asarray(t, float)
+    s = SUN_J2000
+    n = C.K_GAUSS * math.sqrt(1 + M_EMB) / s["a"] ** 1.5
+    return kepler_position(t, s["a"], s["e"], 0.0, 0.0, math.radians(s["varpi"]), math.radians(s["L"]) + n * t)
+
+
 @dataclass(frozen=True)
 class MeanOrbits:
     """For runs of millennia: the Sun on its fixed Kepler ellipse, the Moon on a Kepler ellipse
@@ -232,11 +241,7 @@ class MeanOrbits:
     moon: MeanElements
 
     def sun(self, t):
-        t = np.asarray(t, float)
-        s = SUN_J2000
-        n = C.K_GAUSS * math.sqrt(1 + M_EMB) / s["a"] ** 1.5
-        return kepler_position(t, s["a"], s["e"], 0.0, 0.0, math.radians(s["varpi"]),
-                               math.radians(s["L"]) + n * t)
+        return sun_mean_orbit(t)
 
     def moon_pos(self, t):
         t = np.asarray(t, float)

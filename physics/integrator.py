@@ -11,7 +11,9 @@ The error is proportional to the torque: a free body is integrated exactly at an
 
 Torques supported in the compiled loop: a constant body-frame torque (P, Q, R) and the
 first-order gravity gradient of point masses (Euler §815, MacCullagh):
-    τ_body = 3GM/s⁵ · (s × I s),   s the body-frame vector from the centre to the mass.
+    τ_body = 3GM/s⁵ · (s × I s),   s the body-frame vector from the centre to the mass,
+and, optionally, the next term of the body's field, its degree-3 harmonics (`Degree3Field`;
+physics.gravity_field), acted on by the same point masses.
 """
 from __future__ import annotations
 
@@ -23,6 +25,7 @@ import numpy as np
 
 from . import quaternion as quat
 from .free_flow import drift, prepare, rotate_inverse
+from .gravity_field import degree3_torque_into
 from .inertia import validate_moments
 from .errors import ParameterError, StepTooLarge
 
@@ -50,8 +53,19 @@ class PointMass:
     position: Callable[[np.ndarray], np.ndarray]
 
 
+@dataclass(frozen=True)
+class Degree3Field:
+    """The body's degree-3 gravity field: unnormalised coefficients (C30, C31, S31, C32, S32,
+    C33, S33) on the principal axes (C30 = −J3), and `mr2_over_c_times_r` = (M R²/C)·R, the
+    scale that turns G·M_point into the torque divided by C (physics.gravity_field; R in the
+    unit of the positions)."""
+
+    coefficients: Sequence[float]
+    mr2_over_c_times_r: float
+
+
 @nb.njit(cache=True, nogil=True)
-def _torque(L, q, I, tq, pos, gm):
+def _torque(L, q, I, tq, pos, gm, c3, k3):
     t = tq.copy()
     for p in range(gm.shape[0]):
         s = rotate_inverse(q, pos[p])
@@ -61,11 +75,13 @@ def _torque(L, q, I, tq, pos, gm):
         t[0] += f * (s[1] * Is2 - s[2] * Is1)
         t[1] += f * (s[2] * Is0 - s[0] * Is2)
         t[2] += f * (s[0] * Is1 - s[1] * Is0)
+        if k3 != 0.0:
+            degree3_torque_into(t, s, c3, gm[p] * k3)
     return t
 
 
 @nb.njit(cache=True, nogil=True)
-def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, out_L, out_q, ip, c, tab):
+def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, c3, k3, out_L, out_q, ip, c, tab):
     """n_steps steps of the splitting; every `stride` steps the state goes to out_L, out_q
     (row 0 is the initial state). pos: (n_steps, n_stages, n_masses, 3). (ip, c, tab): the
     free flow's constants, `prepare(L0, I, h)` of the run's first state (used when no torque
@@ -80,7 +96,7 @@ def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, out_L,
             L, q = drift(L, q, I, h, ip, c, tab)
         else:
             for j in range(kick.shape[0]):
-                L = L + (kick[j] * h) * _torque(L, q, I, tq, pos[k, j], gm)
+                L = L + (kick[j] * h) * _torque(L, q, I, tq, pos[k, j], gm, c3, k3)
                 if drift_c[j] != 0.0:
                     ipj, cj, tabj = prepare(L, I, drift_c[j] * h)
                     L, q = drift(L, q, I, drift_c[j] * h, ipj, cj, tabj)
@@ -104,6 +120,7 @@ def integrate(
     t0: float = 0.0,
     progress: Callable[[float], None] | None = None,
     chunk_steps: int = 20000,
+    field3: Degree3Field | None = None,
 ):
     """Integrate from t0 over `duration` in steps of (at most) `step`.
 
@@ -125,6 +142,8 @@ def integrate(
     tq = np.zeros(3) if torque_body is None else np.asarray(torque_body, float)
     has_tq = torque_body is not None and bool(np.any(tq != 0))
     gm = np.array([m.gm for m in masses], float)
+    c3 = np.zeros(7) if field3 is None else np.asarray(field3.coefficients, float).reshape(7)
+    k3 = 0.0 if field3 is None else float(field3.mr2_over_c_times_r)
     L = I * w0
     q = quat.normalize(np.asarray(q0, float))
     t_out = [np.array([t0])]
@@ -145,7 +164,7 @@ def integrate(
         try:
             if consts is None:
                 consts = prepare(L, I, h)  # the free orbit's constants, from the first state, once
-            L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, oL, oq, *consts)
+            L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, c3, k3, oL, oq, *consts)
         except ZeroDivisionError:  # found by tests/test_fuzz.py: spin 1e-155 with moments ~1e-6 underflows
             raise ParameterError("parameters", "these values", "rates so small that their squares underflow "
                                  "(|ω| below ~1e-150): practically at rest; use larger rates or torques") from None

@@ -14,7 +14,9 @@ Sources (values used below):
   (Capitaine et al. 2003, P03) has p_A = 5028.796195″/century; the 0.3″/century difference moves
   the Moon by < 0.1″ within a century of J2000, far below this truncation's ~10″.
 - Optical libration in longitude and latitude: Meeus ch. 53 (l', b' for a uniformly rotating
-  Moon in the Cassini state); maxima about ±7.9° and ±6.8° over the 18.6-yr cycle.
+  Moon in the Cassini state). The maxima quoted for it, about ±7.9° and ±6.8°, are short of the real
+  Moon's: DE421 reaches 8.07–8.14° and 6.86–6.87° in each 18.6-yr cycle of 1900–2200
+  (physics.constants, MOON_OPTICAL_LIBRATION_*_DE421_DEG).
 - Physical libration in longitude τ: Meeus ch. 53 after Eckhardt (1981, Moon & Planets 25, 3):
   τ = −0.00467° sin M′ (−16.8″, anomalistic month) + 0.02520° E sin M (+90.7″, anomalistic year)
   + 0.00115° sin(M′ − 2D) + … (degrees).
@@ -35,8 +37,6 @@ GM_EARTH_KM3_DAY2 = C.GM_EARTH_KM3_S2 * C.SECONDS_PER_DAY**2
 PRECESSION_DEG_PER_CY = C.GENERAL_PRECESSION_IAU1976_ARCSEC_PER_CY / 3600.0
 MEEUS_TAU_MPRIME_DEG = -0.00467  # physical libration in longitude, sin M′ (Meeus ch. 53, Eckhardt 1981)
 MEEUS_TAU_ANNUAL_DEG = 0.02520  # ... E sin M
-OPTICAL_MAX_LON_DEG = 7.9  # published maxima of the optical libration
-OPTICAL_MAX_LAT_DEG = 6.8
 
 
 def moments(beta=C.MOON_BETA_LLR, gamma=C.MOON_GAMMA_LLR):
