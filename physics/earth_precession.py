@@ -243,6 +243,12 @@ class MeanOrbits:
     def sun(self, t):
         return sun_mean_orbit(t)
 
+    @staticmethod
+    def sun_mean_longitude(t):
+        """The Sun's mean longitude (rad) on its mean orbit, t in days from J2000."""
+        s = SUN_J2000
+        return math.radians(s["L"]) + C.K_GAUSS * math.sqrt(1 + M_EMB) / s["a"] ** 1.5 * np.asarray(t, float)
+
     def moon_pos(self, t):
         t = np.asarray(t, float)
         m = self.moon

@@ -409,16 +409,18 @@ def earth_scene(run, spec, view: View, long_view: bool) -> Drawing:
 def year_marks(d: Drawing, run, axis, radius: float, every: int = 2) -> None:
     """Marks on the pole's path every 1000 years (2000 over more than 6000), labelled "AD year"
     (every `every`-th label, the first always: the oblique view has less room)."""
-    t = np.asarray(run.trajectory.t, float)
+    t = np.asarray(run.trajectory.t, float)  # years from J2000 (a run may start before it)
     span = t[-1] - t[0]
     if run.trajectory.time_unit != "yr" or span < 1000:
         return
     step = 2000.0 if span > 6000 else 1000.0
-    years = np.arange(0.0, t[-1] + 1e-9, step)
+    years = np.arange(np.ceil(t[0] / step - 1e-9) * step, t[-1] + 1e-9, step)
     idx = [int(np.argmin(np.abs(t - y))) for y in years]
     a = axis[idx]
     d.add(Points(name="pole_years/points", points=radius * 1.005 * a, colors=WIGGLE_COLOR, size=0.05))
     out = unit(np.stack([a[:, 0], a[:, 1], np.zeros(len(a))], 1))  # away from the ecliptic pole
     for k in range(len(idx)):
         if (k % every == 0 and k < len(idx) - 1) or k == 0:
-            d.add(Label(name=f"pole_years/{k}", text=f"AD {int(round(2000 + years[k]))}", position=radius * a[k] + 0.1 * out[k]))
+            y = int(round(2000 + years[k]))
+            d.add(Label(name=f"pole_years/{k}", text=f"AD {y}" if y > 0 else f"{1 - y} BC",
+                        position=radius * a[k] + 0.1 * out[k]))

@@ -359,7 +359,11 @@ def test_presets_give_finite_metrics_or_say_why_not(name):
                 assert np.isnan(m["precession_rate_arcsec_per_yr"]) and np.isnan(m["nutation_longitude_18_6yr_arcsec"])
                 assert any("Precession not measurable in a run shorter than" in n for n in r.notes)
         if name == "earth-long-view":
-            assert m["precession_rate_arcsec_per_yr"] == pytest.approx(_newtonian_psi_a_rate(), rel=0.01)
+            if r.params["ecliptic"] == "fixed":
+                assert m["precession_rate_arcsec_per_yr"] == pytest.approx(_newtonian_psi_a_rate(), rel=0.01)
+            else:  # the same measure of Vondrák et al.'s pole (their ecliptic drives the run)
+                assert m["precession_rate_arcsec_per_yr"] == pytest.approx(m["precession_rate_vondrak_arcsec_per_yr"],
+                                                                           rel=2e-3)
 
 
 @pytest.mark.parametrize("name,given", [("earth", {"years": 3e-222}), ("earth", {"years": 1e-300}),
