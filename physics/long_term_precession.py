@@ -45,6 +45,7 @@ from . import constants as C
 from .constants import ARCSEC_RAD, JULIAN_CENTURY_DAYS, JULIAN_YEAR_DAYS, OBLIQUITY_J2000_RAD
 
 J2000_YEAR = 2000.0
+GRID_YEARS = 10.0  # the ecliptic pole is tabulated this densely and interpolated (its shortest period: centuries)
 # the geodesic precession as a rate (rad/day) about the orbit normal, eastward
 GEODESIC_RAD_PER_DAY = C.GEODESIC_PRECESSION_ARCSEC_PER_CY * ARCSEC_RAD / JULIAN_CENTURY_DAYS
 
@@ -97,13 +98,26 @@ def rotation_to_ecliptic_of_date(k):
     return np.eye(3) + vx + f * (vx @ vx)
 
 
-def on_ecliptic_of_date(position: Callable, ecliptic_pole: Callable) -> Callable:
+def on_ecliptic_of_date(position: Callable, ecliptic_pole: Callable, span_days=None) -> Callable:
     """A position function of the fixed J2000 ecliptic (an orbit about ẑ) carried onto the moving
-    ecliptic: p(t) → R(t) p(t), R the rotation taking ẑ to k̂(t)."""
+    ecliptic: p(t) → R(t) p(t), R the rotation taking ẑ to k̂(t). With `span_days` = (t0, t1) the
+    pole is tabulated every GRID_YEARS over it and interpolated (for the millions of kick times of a
+    full integration)."""
+    pole = ecliptic_pole
+    if span_days is not None:
+        from scipy.interpolate import CubicSpline
+
+        step = GRID_YEARS * JULIAN_YEAR_DAYS
+        tg = np.arange(np.floor(span_days[0] / step) - 2, np.ceil(span_days[1] / step) + 3) * step
+        spline = CubicSpline(tg, ecliptic_pole(tg))
+
+        def pole(t):
+            k = spline(t)
+            return k / np.linalg.norm(k, axis=-1, keepdims=True)
 
     def moved(t):
         t = np.asarray(t, float)
-        R = rotation_to_ecliptic_of_date(ecliptic_pole(t))
+        R = rotation_to_ecliptic_of_date(pole(t))
         return np.einsum("...ij,...j->...i", R, position(t))
 
     return moved
@@ -137,9 +151,6 @@ def secular_rate(s, k, torques: SecularTorques):
     """dŝ/dt (…, 3) for spin axes s and ecliptic poles k (both (…, 3), unit)."""
     c = np.sum(k * s, axis=-1, keepdims=True)
     return torques.kappa * c * np.cross(s, k) + torques.geodesic * np.cross(k, s)
-
-
-GRID_YEARS = 10.0  # the ecliptic pole is tabulated this densely and interpolated (its shortest period: centuries)
 
 
 def integrate_secular(torques: SecularTorques, ecliptic_pole: Callable, s0, t_days, rtol=1e-12, atol=1e-14):

@@ -75,6 +75,17 @@ def secular_torques() -> LT.SecularTorques:
     return secular_calibration()[0]
 
 
+def kepler_secular_torques(orb: EP.MeanOrbits, H=EARTH_DYNAMICAL_ELLIPTICITY) -> LT.SecularTorques:
+    """The averaged torques of exactly the full model's orbits (the Sun's and the Moon's mean Kepler
+    ellipses, ⟨r⁻³⟩ = 1/(a³(1 − e²)^{3/2})) and, like the full model, no geodesic precession: what
+    the averaging error is measured with."""
+    spin = EP.SPIN_RAD_DAY
+    me = orb.moon
+    return LT.SecularTorques(
+        LT.kappa(GM_SUN_AU3_DAY2, LT.kepler_inverse_cube(EP.SUN_J2000["a"], EP.SUN_J2000["e"]), 0.0, H, spin),
+        LT.kappa(EP.GM_MOON_AU3_DAY2, LT.kepler_inverse_cube(me.a, me.e), me.inc, H, spin), 0.0)
+
+
 def ecliptic_pole_function(ecliptic: str):
     return LT.vondrak_ecliptic_pole if ecliptic == "moving" else LT.fixed_ecliptic_pole
 
