@@ -272,12 +272,7 @@ def _earth_long(values, progress=None):
     notes.append(f"Frame: the J2000 ecliptic; {eclip}. The pole is compared with Vondrák, Capitaine & Wallace "
                  "(2011, A&A 534, A22) long-term precession (ERFA ltpequ), valid ±200,000 years.")
     comps = [Comparison("precession period", 360 * 3600 / eul, m["precession_period_yr"], 360 * 3600 / rate_ref, "yr",
-                        "the mean rate of the pole's longitude about the ecliptic pole of date over this run (the "
-                        "rate changes with the obliquity and the ecliptic's motion), the same measure for "
-                        "Vondrák et al.'s pole as the modern value. At J2000 alone: IAU 2006 p_A "
-                        f"{GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100:.4f}″/yr (period "
-                        f"{360 * 3600 / (GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100):,.0f} yr) on the moving "
-                        f"ecliptic, ψ_A {LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY / 100:.4f}″/yr on the fixed one"),
+                        "mean rate about the ecliptic pole of date over the run; modern: the same for Vondrák's pole"),
              Comparison("pole − Vondrák 2011, largest (°)", None, m["pole_vs_vondrak_max_deg"], 0.0, "deg",
                         f"the angle between this run's pole and the long-term precession's over "
                         f"{values['start_year']:g}…{values['start_year'] + values['years']:g}"),

@@ -451,17 +451,14 @@ def _moon(values, progress=None):
     comps = [
         Comparison("optical libration in longitude, max (°)", None, m["optical_libration_lon_max_deg"],
                    m["optical_libration_lon_max_de421_deg"], "deg",
-                   f"modern: DE421 over the same dates ({window}), sub-Earth point on the principal axes like the "
-                   f"run; on DE421's mean-Earth axes {m['optical_libration_lon_max_de421_me_deg']:.3f}°. Each "
-                   f"18.6-yr cycle of DE421 from {y0:.0f} to {y1:.0f} reaches {lo_cyc:.2f}–{hi_cyc:.2f}° (mean-Earth "
-                   "axes; the often quoted 7.9° is the uniformly rotating Moon's, Meeus ch. 53)"),
+                   f"DE421, {window} (mean-Earth axes {m['optical_libration_lon_max_de421_me_deg']:.3f}°; each 18.6-yr "
+                   f"cycle {y0:.0f}–{y1:.0f}: {lo_cyc:.2f}–{hi_cyc:.2f}°)"),
         Comparison("optical libration in latitude, max (°)", None, m["optical_libration_lat_max_deg"],
                    m["optical_libration_lat_max_de421_deg"], "deg",
-                   f"modern: DE421 over the same dates ({window}); mean-Earth axes "
-                   f"{m['optical_libration_lat_max_de421_me_deg']:.3f}°; each 18.6-yr cycle {y0:.0f}–{y1:.0f}: "
-                   f"{la_lo:.3f}–{la_hi:.3f}° (I + i = 1.54° + 5.15° plus the perturbations of the latitude)"),
+                   f"DE421, {window} (mean-Earth axes {m['optical_libration_lat_max_de421_me_deg']:.3f}°; each 18.6-yr "
+                   f"cycle {y0:.0f}–{y1:.0f}: {la_lo:.3f}–{la_hi:.3f}°)"),
         Comparison(f"attitude − DE421 after {values['years']:g} yr (″)", None, m["attitude_vs_de421_final_arcsec"], 0.0,
-                   "arcsec", real["note"]),
+                   "arcsec", f"largest {m['attitude_vs_de421_max_arcsec']:.2f}″; time plot option: the difference"),
         Comparison("physical libration in longitude, sin M′ (anomalistic month)", m["physical_libration_mprime_euler_arcsec"],
                    m["physical_libration_mprime_arcsec"], m["physical_libration_mprime_published_arcsec"], "arcsec",
                    "Euler: −α·2N/(A²−2N), α = 6.289° the equation of the centre; published (Eckhardt 1981) includes "
@@ -486,7 +483,10 @@ def _moon(values, progress=None):
         "plot_series: sub-Earth longitude/latitude (deg, the wobbling face), the same for uniform rotation "
         "(Meeus l′, b′), the physical libration τ (arcsec) with Euler's Σ-term curve, and the attitude's "
         "difference from DE421 (arcsec: the whole angle, the tilt of the pole and the turn about it).",
-        model_note(values),
+        real["note"],
+        "Optical libration, modern column: DE421 over the same dates, the sub-Earth point on DE421's principal "
+        "axes like the run's body axes (the often quoted 7.9° and 6.8° are the uniformly rotating Moon's, "
+        "Meeus ch. 53, and short of the real Moon's).",
     ]
     if short:
         notes.append("Span under 3 years: the free libration is fitted at Euler's period 2π/√(2N), not measured, "
