@@ -135,16 +135,18 @@ def _cassini(values, progress=None):
     }
     comps = [
         Comparison("obliquity of the spin axis to the ecliptic (°)", I_peale, mean_obl, C.MOON_EQUATOR_INCLINATION_DEG,
-                   "deg", "Euler column: Peale's equation (physics.cassini); simulated: the figure axis's mean angle "
-                   "to the ecliptic pole over whole node cycles; modern: the IAU mean lunar equator (1.54242°)"),
+                   "deg", "Euler column: Peale's equation; modern: IAU mean lunar equator"),
         Comparison("spin axis out of the plane (ecliptic pole, orbit normal), rms (″)", 0.0,
                    m["out_of_plane_rms_arcsec"], None, "arcsec",
-                   "Cassini's third law: 0; the run's axis nods out of the plane by the forced physical libration "
-                   "in latitude (monthly terms of ~100″ on the Moon; Eckhardt 1981)"),
+                   "Cassini's third law: 0; the monthly nod of the axis (forced libration in latitude)"),
         Comparison("spin–orbit normal angle θ = i + I (°)", math.degrees(inc) + I_peale, m["spin_to_orbit_normal_mean_deg"],
                    C.MOON_MEAN_INCLINATION_DEG + C.MOON_EQUATOR_INCLINATION_DEG, "deg",
                    "state 2: the ecliptic pole between the spin axis and the orbit normal"),
     ]
+    notes_rows = ("Obliquity: simulated is the figure axis's mean angle to the ecliptic pole over whole node cycles; "
+                  "Euler's column is Peale's equation (physics.cassini), modern the IAU mean lunar equator. The axis "
+                  "leaves the plane of the other two normals by its monthly nod, the forced physical libration in "
+                  "latitude (DE421's own axis nods by ±0.06°).")
     notes = [
         f"Started {values['start_offset_deg']:+g}° from Peale's state ({I_peale:.4f}°); the axis then circles the "
         "state (free precession) while following the node. "
@@ -153,6 +155,7 @@ def _cassini(values, progress=None):
         "Moments from lunar laser ranging (β, γ); the Earth on a Kepler ellipse with the Moon's mean distance, "
         "eccentricity and inclination, its node and perigee turning at the observed sidereal rates (Meeus ch. 47); "
         "the Sun on a circle in the ecliptic. A rigid Moon without the degree-3 field or a core (Peale's setting).",
+        notes_rows,
     ]
     node_line = unit(np.cross(k, nrm))
     traj = Trajectory(t, q, L, I, time_unit="day", bodies={"earth": earth(t)})
