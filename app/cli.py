@@ -90,11 +90,52 @@ def cmd_list(args) -> int:
     return 0
 
 
+def _check_table_out(path: str | None) -> str | None:
+    """`theoria run --out FILE`: .parquet or .csv, in a folder that exists (checked before the run)."""
+    if path is None:
+        return None
+    import os
+
+    low = path.lower()
+    if not (low.endswith(".parquet") or low.endswith(".csv")):
+        raise ParameterError("--out", path, "a file name ending in .parquet or .csv")
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
+        raise ParameterError("--out", path, f"its folder {parent} must exist and be writable")
+    if os.path.isdir(path):
+        raise ParameterError("--out", path, "is a folder; give a file name")
+    return path
+
+
+def write_table(run, path: str) -> int:
+    """The run's samples (Run.to_dataframe: one row per sample, units in the column names) as
+    Parquet or CSV, written beside the target and renamed (whole or absent). Returns rows written."""
+    import os
+
+    df = run.to_dataframe()
+    tmp = f"{path}.tmp{os.getpid()}"
+    try:
+        if path.lower().endswith(".parquet"):
+            df.attrs = {}
+            df.to_parquet(tmp, index=False)
+        else:
+            df.to_csv(tmp, index=False)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return len(df)
+
+
 def cmd_run(args) -> int:
+    table_out = _check_table_out(getattr(args, "out", None))
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     prog = Progress(f"run {sc.name}", quiet=False)
     result = sc.simulate_fn(values, progress=prog)
     prog.done()
+    if table_out is not None:
+        n = write_table(result, table_out)
+        sys.stderr.write(f"wrote {n} samples × {len(result.columns())} columns to {table_out}\n")
     out = result.to_json()
     if args.json:
         print(json.dumps(out, indent=2))
@@ -172,6 +213,25 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_sweep(args) -> int:
+    from theoria.app.sweep import run_sweep
+    from theoria.scenarios import get
+
+    sc = get(args.name)
+    summary, _ = run_sweep(sc, grid=args.grid, random=args.random, samples=args.samples, out=args.out,
+                           cluster=args.cluster, resume=args.resume, metrics=args.metrics, fixed=_parse_sets(args.set),
+                           preset=args.preset, seed=args.seed, chunk=args.chunk, workers=args.workers,
+                           progress=not args.quiet)
+    sys.stderr.write(summary.line() + "\n")
+    if args.json:
+        import dataclasses
+
+        print(json.dumps(dataclasses.asdict(summary), indent=2))
+    if summary.interrupted:
+        return 143 if summary.signal == "SIGTERM" else 130
+    return 0
+
+
 def cmd_serve(args) -> int:
     from theoria.app.server import serve
 
@@ -240,6 +300,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="start from a preset (its name or a unique part of it; `theoria list` shows them)")
         if name == "run":
             s.add_argument("--json", action="store_true")
+            s.add_argument("--out", default=None, metavar="FILE.parquet|FILE.csv",
+                           help="also write the run's samples as a table (one row per sample)")
         else:
             s.add_argument("--out", required=True)
         s.set_defaults(fn=fn)
@@ -249,6 +311,27 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--check", action="store_true", help="only validate the file (exit 0 if it is theoria's)")
     s.add_argument("--web-viewer", action="store_true", help="rerun's web viewer instead of the native one")
     s.set_defaults(fn=cmd_replay)
+
+    s = sub.add_parser("sweep", help="many runs on Dask, written chunk by chunk to Zarr or Parquet (docs/sweeps.md)")
+    s.add_argument("name")
+    s.add_argument("--grid", action="append", metavar="NAME=START:STOP:COUNT",
+                   help="a swept parameter (COUNT values, both ends included), or NAME=V1,V2,…; repeat for more")
+    s.add_argument("--random", action="append", metavar="NAME=LO:HI",
+                   help="a parameter drawn uniformly in [LO, HI], --samples times (a 'sample' dimension)")
+    s.add_argument("--samples", default=None, metavar="N")
+    s.add_argument("--seed", type=int, default=0, help="seed of the random draws (default 0)")
+    s.add_argument("--set", action="append", metavar="KEY=VALUE", help="a fixed parameter")
+    s.add_argument("--preset", default=None, metavar="NAME", help="fixed parameters from a preset")
+    s.add_argument("--out", required=True, metavar="FILE.zarr|FILE.parquet")
+    s.add_argument("--cluster", default=None, metavar="ADDRESS",
+                   help="an existing Dask scheduler (tcp://host:8786); default: a local cluster on this machine's cores")
+    s.add_argument("--workers", default=None, type=int, help="workers of the local cluster (default: one per core)")
+    s.add_argument("--resume", action="store_true", help="keep the finished chunks of --out and compute the rest")
+    s.add_argument("--metrics", default=None, metavar="A,B", help="the metrics to keep (default: all)")
+    s.add_argument("--chunk", default=None, metavar="N", help="runs per chunk (default: chosen from the grid)")
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.add_argument("--json", action="store_true", help="print a summary as JSON on stdout")
+    s.set_defaults(fn=cmd_sweep)
 
     s = sub.add_parser("check", help="every result of Euler's: Euler / simulated / modern")
     s.add_argument("ids", nargs="*")

@@ -269,6 +269,24 @@ def _rename_error(e: ParameterError, params, values) -> ParameterError:
     return ParameterError("parameters", "these values", str(e))
 
 
+@dataclass(frozen=True)
+class Batch:
+    """A scenario's batched path for sweeps: many runs advanced together (one shared orbit, a
+    compiled kernel over the batch) instead of one after another.
+
+    - `fn(values, swept)`: `values` the fixed parameters (validated), `swept` name → (n,) arrays of
+      the swept ones; returns name → (n,) metric arrays (the same names and values, to round-off,
+      as `simulate` gives for each point), optionally "_status" (codes of app.sweep.STATUS) and
+      "_messages" (index → sentence) for points it refuses.
+    - `sweepable`: the parameters that may vary across one batch (a sweep over any other one maps
+      single runs);
+    - `metrics`: the metrics `fn` computes (a sweep asking for others maps single runs)."""
+
+    fn: Callable[[dict[str, Any], dict[str, np.ndarray]], dict[str, np.ndarray]]
+    sweepable: tuple[str, ...]
+    metrics: tuple[str, ...]
+
+
 RESERVED = ("progress", "preset")  # keywords of Scenario.simulate: no parameter may be called so
 
 
@@ -300,6 +318,7 @@ class Scenario:
     # values that make a quick, coarser run of the same scene (shorter or with a larger step): the
     # first picture while the full run computes, and the tests' runs; {} when the defaults are quick
     preview: Mapping[str, Any] = field(default_factory=dict)
+    batch: Batch | None = None  # the batched path of sweeps (many runs on one compiled kernel), if any
 
     def __post_init__(self):
         for p in self.params:
@@ -354,6 +373,25 @@ class Scenario:
         merged.update(given or {})
         merged.update(values)
         return self.simulate_fn(self.resolve(merged), progress=progress)
+
+    def sweep(self, grid=None, random=None, samples=None, out=None, cluster=None, resume=False, metrics=None,
+              preset=None, seed=0, chunk=None, workers=None, progress=False, **values):
+        """Many runs on Dask (a local cluster on this machine's cores, or `cluster="tcp://…"`),
+        written chunk by chunk to `out` (.zarr: an xarray Dataset, one dimension per swept
+        parameter; .parquet: a flat table) and returned opened.
+
+        grid: {name: (start, stop, count)} or {name: "start:stop:count"} or {name: [values]};
+        random: {name: (lo, hi)} with `samples` draws (a `sample` dimension, `seed`); the other
+        parameters from `preset` and the keywords. `resume=True` keeps every finished chunk of
+        `out`. `metrics`: the metric names to keep (default all). See docs/sweeps.md."""
+        from ..app.sweep import run_sweep
+
+        summary, result = run_sweep(self, grid=grid, random=random, samples=samples, out=out, cluster=cluster,
+                                    resume=resume, metrics=metrics, fixed=values, preset=preset, seed=seed,
+                                    chunk=chunk, workers=workers, progress=progress)
+        if result is None:
+            raise KeyboardInterrupt(summary.line())
+        return result
 
     def resolve(self, given: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """The full, validated values: defaults overridden by `given`."""

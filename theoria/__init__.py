@@ -11,6 +11,7 @@ One import gives what a notebook needs::
     run.metrics, run.comparisons, run.warnings, run.trajectory
     run.to_dataframe(); run.record("x.rrd"); run.export_html("x.html"); run.show()
     th.check("E2")                          # rows of `theoria check`
+    th.scenario("libration-eccentric").sweep(grid={"eccentricity": (0, 0.5, 16)}, out="m.zarr")
 
 A bad value raises `th.ParameterError` (a ValueError) naming the parameter, the value and the
 allowed range: the same line the command line prints with exit status 2. The physics

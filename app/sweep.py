@@ -1,0 +1,976 @@
+"""Many runs of one scenario on Dask: `theoria sweep` and `Scenario.sweep` (design.md, "Many runs").
+
+A sweep is a grid over some parameters (`name=start:stop:count`, or `name=v1,v2,…`), optionally
+with random samples of others (`name=lo:hi` with `samples`: a `sample` dimension, the same draws at
+every grid point), every other parameter fixed. It is cut into chunks; each chunk is one Dask task
+(a local cluster on this machine's cores by default, or an existing scheduler by address) and its
+results are written by this process, chunk by chunk, as they arrive:
+
+- Zarr (`out.zarr`): an xarray Dataset, one dimension per swept parameter (coordinates carry their
+  units), one variable per metric, `status` (0 not run yet, 1 ok, 2 diverged, 3 refused, 4 failed),
+  the fixed parameters, the spec and the theoria version as attributes. A chunk counts as finished
+  when its `status` is written, which happens after its metrics: `resume=True` recomputes nothing
+  that finished.
+- Parquet (`out.parquet`): a flat table, one row per run; the chunks go to `out.parquet.parts/`
+  while the sweep runs and are joined into the one file at the end.
+
+Scenarios with a batched path (`Scenario.batch`: many bodies advanced together on one shared
+orbit) use it when every swept parameter is one the batch can vary and every asked metric is one
+it computes; otherwise each chunk maps single runs.
+
+Ctrl-C or SIGTERM: the finished chunks stay, the cluster is shut down, exit status 130.
+"""
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import math
+import os
+import re
+import shutil
+import signal
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ..physics.errors import ParameterError
+
+STATUS = {"not run": 0, "ok": 1, "diverged": 2, "refused": 3, "failed": 4}
+SAMPLE = "sample"
+MAX_MESSAGES = 1000
+
+
+# ------------------------------------------------------------------------------------- the plan
+
+@dataclass
+class Axis:
+    """One swept parameter: its name in the scenario, values, unit and help."""
+
+    name: str
+    values: np.ndarray
+    unit: str
+    help: str
+    random: bool = False
+    spec: str = ""
+
+
+@dataclass
+class Plan:
+    scenario: Any
+    fixed: dict[str, Any]
+    grid: list[Axis]
+    random: list[Axis]
+    samples: int
+    seed: int
+    metrics: list[str] | None
+    chunks: tuple[int, ...] = ()
+    batched: bool = False
+
+    @property
+    def dims(self) -> tuple[str, ...]:
+        return tuple(a.name for a in self.grid) + ((SAMPLE,) if self.random else ())
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(a.values) for a in self.grid) + ((self.samples,) if self.random else ())
+
+    @property
+    def size(self) -> int:
+        return int(np.prod(self.shape)) if self.shape else 1
+
+    def chunk_regions(self) -> list[tuple[slice, ...]]:
+        ranges = [range(0, n, c) for n, c in zip(self.shape, self.chunks)]
+        out = []
+        for starts in np.ndindex(*[len(r) for r in ranges]):
+            out.append(tuple(slice(r[i], min(r[i] + c, n)) for r, i, c, n in zip(ranges, starts, self.chunks, self.shape)))
+        return out
+
+    def points(self, region: tuple[slice, ...]) -> dict[str, np.ndarray]:
+        """The swept values at every point of a region, flattened in C order."""
+        idx = np.meshgrid(*[np.arange(s.start, s.stop) for s in region], indexing="ij")
+        out = {}
+        for k, a in enumerate(self.grid):
+            out[a.name] = a.values[idx[k].ravel()]
+        if self.random:
+            isamp = idx[-1].ravel()
+            for a in self.random:
+                out[a.name] = a.values[isamp]
+        return out
+
+    def spec(self) -> dict:
+        """What identifies this sweep (a resume must match it)."""
+        return {
+            "scenario": self.scenario.name,
+            "fixed": {k: _plain(v) for k, v in self.fixed.items()},
+            "grid": {a.name: [_plain(v) for v in a.values] for a in self.grid},
+            "random": {a.name: a.spec for a in self.random},
+            "samples": self.samples if self.random else 0,
+            "seed": self.seed if self.random else None,
+            "metrics": self.metrics,
+            "dims": list(self.dims),
+            "chunks": list(self.chunks),
+        }
+
+
+def _plain(v):
+    if isinstance(v, (np.floating, float)):
+        return float(v)
+    if isinstance(v, (np.integer, int)) and not isinstance(v, bool):
+        return int(v)
+    if isinstance(v, tuple):
+        return [_plain(x) for x in v]
+    return v
+
+
+_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def _match_param(sc, name: str, flag: str, spec: str):
+    """The parameter called `name`: its exact name or the one name it begins (e.g. `e` for
+    `eccentricity`); anything else is a ParameterError listing the names there are."""
+    names = [p.name for p in sc.params]
+    if name in names:
+        return sc.param(name)
+    hits = [n for n in names if n.startswith(name)] if name else []
+    if len(hits) == 1:
+        return sc.param(hits[0])
+    known = ", ".join(names)
+    what = f"more than one parameter begins so ({', '.join(hits)})" if len(hits) > 1 else "unknown parameter"
+    raise ParameterError(name or flag, spec, f"{what}; parameters of {sc.name}: {known}")
+
+
+def parse_grid(sc, spec: str) -> Axis:
+    """`name=start:stop:count` (count values from start to stop, both included) or `name=v1,v2,…`."""
+    form = "name=start:stop:count (count ≥ 1 values, both ends included) or name=v1,v2,…"
+    if not isinstance(spec, str) or "=" not in spec:
+        raise ParameterError("--grid", spec, form)
+    name, rhs = (s.strip() for s in spec.split("=", 1))
+    p = _match_param(sc, name, "--grid", spec)
+    if p.kind == "vec3":
+        raise ParameterError(p.name, rhs, "a vector parameter cannot be swept; sweep a number parameter")
+    if ":" in rhs:
+        parts = rhs.split(":")
+        if len(parts) != 3 or not all(re.fullmatch(_NUM, x.strip()) for x in parts[:2]):
+            raise ParameterError("--grid", spec, form)
+        try:
+            count = int(parts[2])
+        except ValueError:
+            raise ParameterError("--grid", spec, f"count must be a whole number ≥ 1; {form}") from None
+        if count < 1:
+            raise ParameterError("--grid", spec, f"count must be at least 1; {form}")
+        if count > 10_000_000:
+            raise ParameterError("--grid", spec, "count at most 10,000,000")
+        lo, hi = p.parse(parts[0].strip()), p.parse(parts[1].strip())
+        vals = np.linspace(lo, hi, count)
+        if p.kind == "int":
+            if not np.all(vals == np.round(vals)):
+                raise ParameterError(p.name, rhs, f"whole numbers: {count} values from {lo} to {hi} are not "
+                                     "(choose a count that steps by whole numbers)")
+            vals = np.round(vals).astype(np.int64)
+    else:
+        items = [x.strip() for x in rhs.split(",") if x.strip()]
+        if not items:
+            raise ParameterError("--grid", spec, form)
+        vals = [p.parse(x) for x in items]
+        vals = np.array(vals, dtype=object if p.kind == "choice" else (np.int64 if p.kind == "int" else float))
+    for v in np.unique(vals) if vals.dtype != object else vals:  # every value in range
+        p.parse(v.item() if hasattr(v, "item") else v)
+    return Axis(p.name, vals, p.unit, p.help, spec=spec)
+
+
+def parse_random(sc, spec: str, samples: int, rng) -> Axis:
+    """`name=lo:hi`: `samples` values drawn uniformly in [lo, hi] (whole numbers for an int parameter)."""
+    form = "name=lo:hi"
+    if not isinstance(spec, str) or "=" not in spec:
+        raise ParameterError("--random", spec, form)
+    name, rhs = (s.strip() for s in spec.split("=", 1))
+    p = _match_param(sc, name, "--random", spec)
+    parts = rhs.split(":")
+    if len(parts) != 2 or not all(re.fullmatch(_NUM, x.strip()) for x in parts):
+        raise ParameterError("--random", spec, form)
+    if p.kind not in ("float", "int"):
+        raise ParameterError(p.name, rhs, "random sampling needs a number parameter")
+    lo, hi = p.parse(parts[0].strip()), p.parse(parts[1].strip())
+    if hi < lo:
+        raise ParameterError("--random", spec, "lo ≤ hi")
+    if p.kind == "int":
+        vals = rng.integers(int(lo), int(hi) + 1, size=samples)
+    else:
+        vals = rng.uniform(lo, hi, size=samples)
+        if p.exclusive_min and p.minimum is not None:
+            vals = np.where(vals <= p.minimum, np.nextafter(p.minimum, np.inf), vals)
+    return Axis(p.name, vals, p.unit, p.help, random=True, spec=rhs)
+
+
+def make_plan(sc, grid=None, random=None, samples=None, fixed=None, preset=None, metrics=None, seed=0,
+              chunk=None, workers=1) -> Plan:
+    """Check everything about a sweep before any work: the swept names and ranges, the fixed
+    values, every grid point against the scenario's own cross-parameter check."""
+    grid = _as_specs(grid, "--grid")
+    random = _as_specs(random, "--random")
+    if random and samples is None:
+        raise ParameterError("--samples", None, "a number of samples ≥ 1 with --random")
+    if samples is not None:
+        try:
+            samples = int(samples)
+        except (TypeError, ValueError):
+            raise ParameterError("--samples", samples, "a whole number ≥ 1") from None
+        if samples < 1 or samples > 10_000_000:
+            raise ParameterError("--samples", samples, "a whole number from 1 to 10,000,000")
+        if not random:
+            raise ParameterError("--samples", samples, "only with --random name=lo:hi")
+    if not grid and not random:
+        raise ParameterError("--grid", None, "at least one --grid name=start:stop:count (or --random name=lo:hi)")
+    axes = [parse_grid(sc, g) for g in grid]
+    rng = np.random.default_rng(seed)
+    raxes = [parse_random(sc, r, samples, rng) for r in random]
+    names = [a.name for a in axes + raxes]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise ParameterError(dup[0], "swept twice", "each parameter in one --grid or --random only")
+    given: dict[str, Any] = {}
+    if preset is not None:
+        try:
+            given.update(sc.presets[sc.preset_name(preset)])
+        except ParameterError as e:
+            raise ParameterError("--preset", preset, e.allowed) from None
+    for k, v in dict(fixed or {}).items():
+        p = _match_param(sc, k, "--set", f"{k}={v}")
+        if p.name in names:
+            raise ParameterError(p.name, v, "is swept; a --set value would be ignored")
+        given[p.name] = v
+    given = {k: v for k, v in given.items() if k not in names}
+    values = sc.resolve(given)
+    fixed_values = {k: v for k, v in values.items() if k not in names}
+    if metrics is not None:
+        metrics = [m.strip() for m in (metrics.split(",") if isinstance(metrics, str) else metrics) if m.strip()]
+        if not metrics:
+            raise ParameterError("--metrics", "", "one or more metric names, comma-separated")
+    plan = Plan(sc, fixed_values, axes, raxes, int(samples or 0), int(seed), metrics)
+    if plan.size > 50_000_000:
+        raise ParameterError("--grid", "x".join(map(str, plan.shape)), "at most 50,000,000 runs in one sweep")
+    # the scenario's cross-parameter check at every point (cheap; a bad corner is found now)
+    if sc.check is not None:
+        pts = plan.points(tuple(slice(0, n) for n in plan.shape))
+        for i in range(plan.size):
+            sc.check({**fixed_values, **{k: _item(v[i]) for k, v in pts.items()}})
+    batch = getattr(sc, "batch", None)
+    plan.batched = bool(batch is not None and set(names) <= set(batch.sweepable)
+                        and (metrics is None or set(metrics) <= set(batch.metrics)))
+    plan.chunks = _chunk_shape(plan, chunk, workers)
+    return plan
+
+
+def _as_specs(x, flag) -> list[str]:
+    """Specs as strings. From Python also a mapping: name → "0:0.5:64", (start, stop, count) for a
+    grid or (lo, hi) for random draws, or a list of values."""
+    if x is None:
+        return []
+    if isinstance(x, str):
+        return [x]
+    if not isinstance(x, Mapping):
+        return [str(s) for s in x]
+    out = []
+    for k, v in x.items():
+        if isinstance(v, str):
+            out.append(f"{k}={v}")
+        elif isinstance(v, tuple) and (len(v) == 3 and flag == "--grid" or len(v) == 2 and flag == "--random"):
+            out.append(f"{k}=" + ":".join(repr(_plain(i)) for i in v))
+        elif flag == "--grid" and isinstance(v, (list, np.ndarray)):
+            out.append(f"{k}=" + ",".join(i if isinstance(i, str) else repr(_plain(i)) for i in v))
+        else:
+            want = "(start, stop, count), a list of values or 'start:stop:count'" if flag == "--grid" else "(lo, hi) or 'lo:hi'"
+            raise ParameterError(flag, f"{k}={v!r}", want)
+    return out
+
+
+def _item(v):
+    return v.item() if hasattr(v, "item") else v
+
+
+def _chunk_shape(plan: Plan, chunk, workers) -> tuple[int, ...]:
+    """Runs per chunk: `chunk` if given; else up to 256 for the batched path (one shared orbit per
+    batch: whole rows of the last dimensions) and up to 16 for single runs, with at least ~4 chunks
+    per worker. Filled from the last dimension backwards."""
+    total = plan.size
+    if chunk is not None:
+        try:
+            target = int(chunk)
+        except (TypeError, ValueError):
+            raise ParameterError("--chunk", chunk, "a whole number of runs ≥ 1") from None
+        if target < 1:
+            raise ParameterError("--chunk", chunk, "a whole number of runs ≥ 1")
+    else:
+        cap = 256 if plan.batched else 16
+        target = max(1, min(cap, total // max(1, 4 * workers)))
+    out = []
+    left = target
+    for n in reversed(plan.shape):
+        c = max(1, min(n, left))
+        out.append(c)
+        left = max(1, left // c)
+    return tuple(reversed(out))
+
+
+# --------------------------------------------------------------------------- the work of a chunk
+
+def run_chunk(task: dict) -> dict:
+    """One chunk, on a worker: the batched path, or single runs one after another. Returns metric
+    arrays (name → (n,)), `status` codes and messages for the runs that did not finish ok."""
+    from ..scenarios import get
+
+    t0 = time.perf_counter()
+    sc = get(task["scenario"])
+    fixed, points, metrics = task["fixed"], task["points"], task["metrics"]
+    n = len(next(iter(points.values())))
+    if task.get("threads"):
+        try:
+            import numba
+
+            numba.set_num_threads(max(1, min(int(task["threads"]), numba.config.NUMBA_NUM_THREADS)))
+        except Exception:  # noqa: BLE001 — threads are a hint
+            pass
+    status = np.full(n, STATUS["ok"], np.int8)
+    messages: dict[int, str] = {}
+    out: dict[str, np.ndarray] = {}
+    if task["batched"]:
+        res = sc.batch.fn(dict(fixed), {k: np.asarray(v) for k, v in points.items()})
+        st = res.pop("_status", None)
+        if st is not None:
+            status[:] = st
+        messages.update(res.pop("_messages", {}))
+        for k, v in res.items():
+            if metrics is None or k in metrics:
+                out[k] = np.asarray(v, float)
+    else:
+        for i in range(n):
+            values = {**fixed, **{k: _item(v[i]) for k, v in points.items()}}
+            try:
+                run = sc.simulate_fn(sc.resolve(values))
+            except ParameterError as e:
+                status[i] = STATUS["refused"]
+                messages[i] = str(e)
+                continue
+            except Exception as e:  # noqa: BLE001 — one run's failure is its status, not the sweep's
+                status[i] = STATUS["failed"]
+                messages[i] = f"{type(e).__name__}: {e}"
+                continue
+            if run.status != "ok":
+                status[i] = STATUS["diverged"] if run.status == "diverged" else STATUS["failed"]
+                messages[i] = "; ".join(run.warnings) or run.status
+            for k, v in run.metrics.items():
+                if metrics is not None and k not in metrics:
+                    continue
+                try:
+                    x = float(v)
+                except (TypeError, ValueError):
+                    continue
+                if k not in out:
+                    out[k] = np.full(n, np.nan)
+                out[k][i] = x
+    return {"metrics": out, "status": status, "messages": messages, "seconds": time.perf_counter() - t0,
+            "worker_pid": os.getpid()}
+
+
+# ------------------------------------------------------------------------------------- writers
+
+class ZarrWriter:
+    def __init__(self, path: str, plan: Plan, resume: bool):
+        import xarray as xr
+        import zarr
+
+        self.path, self.plan = path, plan
+        self._xr, self._zarr = xr, zarr
+        spec = plan.spec()
+        if resume and os.path.exists(path):
+            g = zarr.open_group(path, mode="r+")
+            old = dict(g.attrs).get("theoria_sweep")
+            if old is None:
+                raise ParameterError("--resume", path, "is not a theoria sweep (no theoria_sweep attribute)")
+            # the chunking of the file decides; everything else must match
+            plan.chunks = tuple(g["status"].chunks)
+            spec = plan.spec()
+            diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
+            if diff:
+                raise ParameterError("--resume", path, "was written by a different sweep (it differs in: "
+                                     + ", ".join(diff) + "); give another --out or drop --resume")
+            self.group = g
+        else:
+            if os.path.exists(path):
+                if not resume and not _is_sweep_store(path):
+                    raise ParameterError("--out", path, "exists and is not a theoria sweep: choose a new name")
+                shutil.rmtree(path)
+            self._create(spec)
+            self.group = zarr.open_group(path, mode="r+")
+        self.metric_names = [k for k in self.group.array_keys() if k not in ("status",) and k not in
+                             (set(plan.dims) | {a.name for a in plan.random})]
+
+    def _create(self, spec):
+        xr, plan = self._xr, self.plan
+        sc = plan.scenario
+        coords = {}
+        for a in plan.grid:
+            vals = a.values.astype(str) if a.values.dtype == object else a.values
+            coords[a.name] = (a.name, vals, {"units": a.unit or "1", "long_name": a.help})
+        if plan.random:
+            coords[SAMPLE] = (SAMPLE, np.arange(plan.samples), {"long_name": "random sample"})
+            for a in plan.random:
+                coords[a.name] = (SAMPLE, a.values, {"units": a.unit or "1", "long_name": a.help + " (random)"})
+        status = xr.DataArray(np.zeros(plan.shape, np.int8), dims=plan.dims, attrs={
+            "flag_values": list(STATUS.values()), "flag_meanings": " ".join(k.replace(" ", "_") for k in STATUS),
+            "long_name": "run status"})
+        ds = xr.Dataset({"status": status}, coords=coords)
+        ds["status"].encoding = {"chunks": plan.chunks}
+        from .. import __version__
+
+        ds.attrs.update({
+            "scenario": sc.name, "title": sc.title, "section": sc.section, "theoria_version": __version__,
+            "fixed_parameters": {k: {"value": _plain(v), "unit": sc.param(k).unit or "1"} for k, v in plan.fixed.items()},
+            "swept_parameters": {a.name: {"unit": a.unit or "1", "spec": a.spec, "random": a.random}
+                                 for a in plan.grid + plan.random},
+            "theoria_sweep": spec, "messages": {}, "sessions": [],
+            "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        })
+        ds.to_zarr(self.path, mode="w", consolidated=False)
+
+    def done_regions(self, regions) -> set[int]:
+        st = self.group["status"]
+        done = set()
+        for i, r in enumerate(regions):
+            try:
+                if np.all(st[r] != 0):
+                    done.add(i)
+            except Exception:  # noqa: BLE001 — a chunk cut off mid-write is simply not done
+                pass
+        return done
+
+    def add_metrics(self, names):
+        import dask.array as da
+
+        new = [n for n in names if n not in self.metric_names]
+        if not new:
+            return
+        plan = self.plan
+        ds = self._xr.Dataset({n: (plan.dims, da.full(plan.shape, np.nan, chunks=plan.chunks)) for n in new})
+        for n in new:
+            ds[n].attrs["units"] = _unit_of_metric(n)
+        ds.attrs = dict(self.group.attrs)  # appending variables rewrites the group's attributes
+        ds.to_zarr(self.path, mode="a", compute=False, consolidated=False)
+        self.group = self._zarr.open_group(self.path, mode="r+")
+        self.metric_names += new
+
+    def write(self, index, region, result):
+        shape = tuple(s.stop - s.start for s in region)
+        self.add_metrics(list(result["metrics"]))
+        for name in self.metric_names:
+            v = result["metrics"].get(name)
+            if v is None:
+                continue  # stays NaN (the fill value)
+            self.group[name][region] = np.asarray(v, float).reshape(shape)
+        if result["messages"]:
+            attrs = dict(self.group.attrs)
+            msgs = dict(attrs.get("messages", {}))
+            for i, m in result["messages"].items():
+                if len(msgs) >= MAX_MESSAGES:
+                    break
+                idx = np.unravel_index(int(i), shape)
+                key = ",".join(str(s.start + j) for s, j in zip(region, idx))
+                msgs[key] = m
+            self.group.attrs["messages"] = msgs
+        self.group["status"][region] = result["status"].reshape(shape)  # last: the chunk is finished
+
+    def session(self, info):
+        sessions = list(dict(self.group.attrs).get("sessions", []))
+        sessions.append(info)
+        self.group.attrs["sessions"] = sessions
+
+    def finish(self):
+        return None
+
+    def open(self):
+        return self._xr.open_zarr(self.path, consolidated=False)
+
+
+class ParquetWriter:
+    """Chunks as parquet parts in OUT.parts/ (each written whole, then renamed); joined into the
+    one flat table OUT when every chunk is there."""
+
+    def __init__(self, path: str, plan: Plan, resume: bool):
+        self.path, self.plan = path, plan
+        self.parts = path + ".parts"
+        spec = plan.spec()
+        specfile = os.path.join(self.parts, "_sweep.json")
+        if resume and os.path.exists(specfile):
+            with open(specfile) as f:
+                old = json.load(f)
+            plan.chunks = tuple(old["chunks"])
+            spec = plan.spec()
+            diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
+            if diff:
+                raise ParameterError("--resume", path, "was written by a different sweep (it differs in: "
+                                     + ", ".join(diff) + "); give another --out or drop --resume")
+        else:
+            if os.path.exists(self.parts):
+                shutil.rmtree(self.parts)
+            os.makedirs(self.parts)
+            with open(specfile, "w") as f:
+                json.dump(spec, f)
+        self.sessions_file = os.path.join(self.parts, "_sessions.json")
+
+    def _part(self, i):
+        return os.path.join(self.parts, f"part-{i:07d}.parquet")
+
+    def done_regions(self, regions):
+        return {i for i in range(len(regions)) if os.path.exists(self._part(i))}
+
+    def write(self, index, region, result):
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        plan = self.plan
+        pts = plan.points(region)
+        cols = {}
+        for k, v in pts.items():
+            cols[k] = v.astype(str) if v.dtype == object else v
+        if plan.random:
+            cols[SAMPLE] = np.meshgrid(*[np.arange(s.start, s.stop) for s in region], indexing="ij")[-1].ravel()
+        for k, v in result["metrics"].items():
+            cols[k] = np.asarray(v, float)
+        cols["status"] = np.asarray(result["status"], np.int8)
+        n = len(cols["status"])
+        cols["message"] = np.array([result["messages"].get(i, "") for i in range(n)], dtype=object)
+        table = pa.table(cols)
+        tmp = self._part(index) + ".tmp"
+        pq.write_table(table, tmp)
+        os.replace(tmp, self._part(index))
+
+    def session(self, info):
+        sessions = []
+        if os.path.exists(self.sessions_file):
+            with open(self.sessions_file) as f:
+                sessions = json.load(f)
+        sessions.append(info)
+        with open(self.sessions_file, "w") as f:
+            json.dump(sessions, f)
+        self.sessions = sessions
+
+    def finish(self):
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        from .. import __version__
+
+        files = sorted(f for f in os.listdir(self.parts) if f.startswith("part-") and f.endswith(".parquet"))
+        tables = [pq.read_table(os.path.join(self.parts, f)) for f in files]
+        table = pa.concat_tables(tables, promote_options="default")
+        sc = self.plan.scenario
+        meta = {"theoria_sweep": json.dumps(self.plan.spec()), "theoria_version": __version__,
+                "scenario": sc.name,
+                "units": json.dumps({a.name: a.unit or "1" for a in self.plan.grid + self.plan.random}),
+                "sessions": json.dumps(getattr(self, "sessions", []))}
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}), **{k.encode(): v.encode() for k, v in meta.items()}})
+        tmp = self.path + ".tmp"
+        pq.write_table(table, tmp)
+        os.replace(tmp, self.path)
+        shutil.rmtree(self.parts)
+
+    def open(self):
+        import pandas as pd
+
+        return pd.read_parquet(self.path)
+
+
+def _jsonish(x):
+    return json.loads(json.dumps(x, default=_plain))
+
+
+def _is_sweep_store(path):
+    try:
+        with open(os.path.join(path, "zarr.json")) as f:
+            return "theoria_sweep" in json.load(f).get("attributes", {})
+    except (OSError, ValueError):
+        return False
+
+
+_UNIT_SUFFIXES = (("_rad", "rad"), ("_deg", "deg"), ("_s", "s"), ("_per_orbit", "1/orbit"),
+                  ("_per_unit_time", "1/time unit"), ("_J", "J"))
+
+
+def _unit_of_metric(name: str) -> str:
+    for suf, u in _UNIT_SUFFIXES:
+        if name.endswith(suf):
+            return u
+    return "see name"
+
+
+# ------------------------------------------------------------------------------------- running
+
+@dataclass
+class Summary:
+    out: str
+    runs: int
+    chunks: int
+    chunks_done_before: int
+    chunks_computed: int
+    path: str  # "batched" or "single runs"
+    seconds: float
+    statuses: dict[str, int] = field(default_factory=dict)
+    interrupted: bool = False
+    signal: str = ""
+    cluster: str = ""
+
+    def line(self) -> str:
+        st = ", ".join(f"{v} {k}" for k, v in self.statuses.items() if v)
+        return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); computed {self.chunks_computed} chunks "
+                f"now, {self.chunks_done_before} were done before; {self.seconds:.1f} s"
+                + (f"; {st}" if st else "") + (" — interrupted, finished chunks kept" if self.interrupted else "")
+                + f" → {self.out}")
+
+
+class _Stop:
+    """SIGINT/SIGTERM during a sweep set a flag (a second one raises): the main loop stops between
+    two chunk writes, so no chunk is left half written."""
+
+    def __init__(self):
+        self.flag = False
+        self.signum = None
+        self.old = {}
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for s in (signal.SIGINT, signal.SIGTERM):
+                self.old[s] = signal.signal(s, self._handler)
+        return self
+
+    def _handler(self, signum, frame):
+        if self.flag:
+            raise KeyboardInterrupt
+        self.flag, self.signum = True, signum
+
+    def __exit__(self, *exc):
+        for s, h in self.old.items():
+            signal.signal(s, h)
+        return False
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1
+
+
+def _client(cluster, workers):
+    """A dask.distributed Client: a LocalCluster on this machine's cores (bound to 127.0.0.1, no
+    dashboard) by default, or the scheduler at `cluster` (tcp://host:port), or a Client given."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    if cluster is None:
+        n = int(workers or _cores())
+        lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None, silence_logs=logging.ERROR)
+        return Client(lc), lc, f"local cluster, {n} workers"
+    if isinstance(cluster, str):
+        if not re.match(r"^(tcp|tls|inproc|ws|wss)://", cluster):
+            raise ParameterError("--cluster", cluster, "a scheduler address such as tcp://127.0.0.1:8786")
+        try:
+            c = Client(cluster, timeout=10)
+        except (OSError, TimeoutError) as e:
+            raise ParameterError("--cluster", cluster, f"no Dask scheduler answers there ({type(e).__name__})") from None
+        return c, None, f"scheduler {cluster}"
+    return cluster, None, "the given client"
+
+
+def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, resume=False, metrics=None,
+              fixed=None, preset=None, seed=0, chunk=None, workers=None, progress=True,
+              on_chunk=None) -> tuple[Summary, Any]:
+    """Plan, check, run and write a sweep. Returns (Summary, the opened result)."""
+    if out is None:
+        raise ParameterError("--out", None, "a file name ending in .zarr or .parquet")
+    out = os.fspath(out)
+    kind = "zarr" if out.rstrip("/").endswith(".zarr") else "parquet" if out.endswith(".parquet") else None
+    if kind is None:
+        raise ParameterError("--out", out, "a name ending in .zarr (xarray/Zarr) or .parquet (flat table)")
+    parent = os.path.dirname(os.path.abspath(out)) or "."
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
+        raise ParameterError("--out", out, f"its folder {parent} must exist and be writable")
+    nworkers = int(workers) if workers else (_cores() if cluster is None else 1)
+    if workers is not None and (int(workers) < 1 or int(workers) > 256):
+        raise ParameterError("--workers", workers, "from 1 to 256")
+    plan = make_plan(sc, grid, random, samples, fixed, preset, metrics, seed, chunk, nworkers)
+    if kind == "parquet" and not resume and os.path.exists(out):
+        os.remove(out) if os.path.isfile(out) else None
+    writer = ZarrWriter(out, plan, resume) if kind == "zarr" else ParquetWriter(out, plan, resume)
+    regions = plan.chunk_regions()
+    done = writer.done_regions(regions) if resume else set()
+    todo = [i for i in range(len(regions)) if i not in done]
+    t0 = time.perf_counter()
+    summary = Summary(out, plan.size, len(regions), len(done), 0, "batched" if plan.batched else "single runs", 0.0)
+    counts = {k: 0 for k in STATUS if k != "not run"}
+    interrupted = False
+    if todo:
+        client, local, where = _client(cluster, workers)
+        summary.cluster = where
+        threads = 1 if local is not None else None
+        try:
+            with _Stop() as stop, _progress(progress, plan.size, sum(_nruns(regions[i]) for i in done), sc.name) as bar:
+                interrupted = _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, threads, on_chunk)
+                if interrupted:
+                    summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
+        finally:
+            try:
+                client.close()
+                if local is not None:
+                    local.close()
+            except Exception:  # noqa: BLE001 — shutting down after Ctrl-C
+                pass
+    summary.seconds = time.perf_counter() - t0
+    summary.statuses = counts
+    summary.interrupted = interrupted
+    writer.session({"started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                    "chunks_computed": summary.chunks_computed, "chunks_done_before": summary.chunks_done_before,
+                    "path": summary.path, "seconds": round(summary.seconds, 3), "interrupted": interrupted,
+                    "where": summary.cluster})
+    if interrupted:
+        return summary, None
+    if kind == "parquet":
+        writer.finish()
+    return summary, writer.open()
+
+
+def _nruns(region):
+    return int(np.prod([s.stop - s.start for s in region]))
+
+
+def _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, threads, on_chunk) -> bool:
+    from distributed import as_completed
+
+    sc = plan.scenario
+    futures = {}
+    for i in todo:
+        task = {"scenario": sc.name, "fixed": plan.fixed, "points": plan.points(regions[i]),
+                "metrics": plan.metrics, "batched": plan.batched, "threads": threads}
+        fut = client.submit(run_chunk, task, pure=False, key=f"theoria-sweep-{sc.name}-{i}-{os.getpid()}-{time.time_ns()}")
+        futures[fut] = i
+    ac = as_completed(list(futures))
+    checked_metrics = plan.metrics is None
+    try:
+        while True:
+            if stop.flag:
+                return True
+            try:
+                fut = next(_next_with_timeout(ac, 0.2))
+            except StopIteration:
+                return False
+            if fut is None:
+                continue
+            i = futures[fut]
+            res = fut.result()
+            if not checked_metrics:
+                seen = set(res["metrics"])
+                known = set(getattr(getattr(sc, "batch", None), "metrics", ()) or ())
+                missing = [m for m in plan.metrics if m not in seen and m not in known]
+                if missing and np.any(res["status"] == STATUS["ok"]):
+                    raise ParameterError("--metrics", missing[0], "not a metric of " + sc.name + "; its metrics: "
+                                         + ", ".join(sorted(seen)))
+                checked_metrics = True
+            writer.write(i, regions[i], res)
+            summary.chunks_computed += 1
+            for name, code in STATUS.items():
+                if name != "not run":
+                    counts[name] += int(np.count_nonzero(res["status"] == code))
+            bar(_nruns(regions[i]))
+            if on_chunk is not None:
+                on_chunk(i, res)
+    finally:
+        for f in futures:
+            if not f.done():
+                f.cancel()
+
+
+def _next_with_timeout(ac, timeout):
+    """One finished future, or None after `timeout` s (so that a stop flag is seen promptly)."""
+    if ac.is_empty():
+        return iter(())
+    if ac.has_ready():
+        return iter([next(ac)])
+    t_end = time.monotonic() + timeout
+    while time.monotonic() < t_end:
+        if ac.has_ready():
+            return iter([next(ac)])
+        time.sleep(0.02)
+    return iter([None])
+
+
+class _progress:
+    """A rich progress bar on stderr: runs done of the total, runs per second, time left."""
+
+    def __init__(self, enabled, total, done, label):
+        self.enabled, self.total, self.done, self.label = enabled, total, done, label
+        self.p = None
+
+    def __enter__(self):
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TaskProgressColumn, TextColumn,
+                                       TimeElapsedColumn, TimeRemainingColumn)
+
+            class Rate(TextColumn):
+                def render(self, task):
+                    from rich.text import Text
+
+                    sp = task.finished_speed or task.speed
+                    return Text(f"{sp:.3g} runs/s" if sp else "– runs/s")
+
+            self.p = Progress(TextColumn(f"sweep {self.label}"), BarColumn(), MofNCompleteColumn(),
+                              TaskProgressColumn(), Rate(""), TimeElapsedColumn(), TextColumn("left"),
+                              TimeRemainingColumn(), console=Console(stderr=True), transient=False)
+            self.p.__enter__()
+            self.task = self.p.add_task("runs", total=self.total, completed=self.done)
+        return self
+
+    def __call__(self, n):
+        if self.p is not None:
+            self.p.advance(self.task, n)
+
+    def __exit__(self, *exc):
+        if self.p is not None:
+            self.p.__exit__(*exc)
+        return False
+
+
+# ------------------------------------------------------------------------------- reading a map
+
+@dataclass
+class MapData:
+    """What a map of one metric over two swept parameters needs (the app draws it)."""
+
+    values: np.ndarray  # (len(y), len(x)): rows along y, columns along x
+    metric: str
+    metric_unit: str
+    x: str
+    x_unit: str
+    x_values: np.ndarray
+    y: str
+    y_unit: str
+    y_values: np.ndarray
+    scenario: str
+    reduced: str  # how other swept dimensions were reduced ("" if none)
+    status: np.ndarray  # (len(y), len(x)) int codes (STATUS) or the fraction finished when reduced
+    _dataset: Any = field(repr=False, default=None)
+
+    def run_values(self, i: int, j: int, sample: int | None = None) -> dict[str, Any]:
+        """The full parameter values of the run at row i (y), column j (x): to replay it with
+        `th.scenario(map.scenario).simulate(**values)`. With a sample dimension, `sample` picks
+        one draw (default 0); other swept dimensions take their first value."""
+        ds = self._dataset
+        spec = ds.attrs["theoria_sweep"]
+        values = dict(spec["fixed"])
+        for d in spec["dims"]:
+            if d == SAMPLE:
+                k = 0 if sample is None else int(sample)
+                for name in spec["random"]:
+                    values[name] = _item(ds[name].values[k])
+            elif d == self.x:
+                values[d] = _item(ds[d].values[j])
+            elif d == self.y:
+                values[d] = _item(ds[d].values[i])
+            else:
+                values[d] = _item(ds[d].values[0])
+        for k, v in list(values.items()):
+            if isinstance(v, list):
+                values[k] = tuple(v)
+        return values
+
+
+def open_map(path, metric: str, x: str | None = None, y: str | None = None, reduce: str = "mean") -> MapData:
+    """Open a sweep result (Zarr) and return one metric as a 2-D array over two swept parameters
+    (x: columns, y: rows; by default the last two dimensions), with axis names, units and values,
+    and `run_values(i, j)` for the full parameters of any pixel. Any other dimension (e.g. the
+    random `sample`) is reduced with `reduce` ("mean", "median", "max", "min", or "fraction" of
+    runs where the metric is nonzero and finite — a capture probability)."""
+    import xarray as xr
+
+    ds = xr.open_zarr(os.fspath(path), consolidated=False)
+    if "theoria_sweep" not in ds.attrs:
+        raise ParameterError("sweep", path, "a Zarr store written by theoria sweep")
+    if metric not in ds.data_vars or metric == "status":
+        raise ParameterError("metric", metric, "one of " + ", ".join(v for v in ds.data_vars if v != "status"))
+    dims = list(ds[metric].dims)
+    grid_dims = [d for d in dims if d != SAMPLE] or dims
+    if x is None or y is None:
+        pick = grid_dims[-2:] if len(grid_dims) >= 2 else dims[-2:]
+        if len(pick) < 2:
+            if len(dims) == 1:
+                pick = [dims[0], None]
+            else:
+                raise ParameterError("sweep", path, "at least two swept dimensions for a map")
+        y = y or (pick[0] if pick[1] is not None else None)
+        x = x or (pick[1] if pick[1] is not None else pick[0])
+    for name in (x, y):
+        if name is not None and name not in dims:
+            raise ParameterError("axis", name, "one of " + ", ".join(dims))
+    da = ds[metric]
+    st = ds["status"]
+    other = [d for d in dims if d not in (x, y)]
+    if other:
+        if reduce == "fraction":
+            v = da.where(np.isfinite(da))
+            da = (v != 0).where(v.notnull()).mean(other)
+        elif reduce in ("mean", "median", "max", "min"):
+            da = getattr(da, reduce)(other, skipna=True)
+        else:
+            raise ParameterError("reduce", reduce, "one of mean, median, max, min, fraction")
+        st = (st != 0).mean(other)
+    if y is None:
+        vals = np.asarray(da.transpose(x).values)[None, :]
+        stv = np.asarray(st.transpose(x).values)[None, :]
+        yv = np.array([0.0])
+        yu = ""
+    else:
+        vals = np.asarray(da.transpose(y, x).values)
+        stv = np.asarray(st.transpose(y, x).values)
+        yv = np.asarray(ds[y].values)
+        yu = ds[y].attrs.get("units", "")
+    return MapData(vals, metric, ds[metric].attrs.get("units", ""), x, ds[x].attrs.get("units", ""),
+                   np.asarray(ds[x].values), y or "", yu, yv, ds.attrs.get("scenario", ""),
+                   f"{reduce} over {', '.join(other)}" if other else "", stv, ds)
+
+
+# -------------------------------------------------------------------------------- named sweeps
+
+@dataclass(frozen=True)
+class SweepPreset:
+    """A named sweep: scenario, grid, random draws, fixed values, the map it is for."""
+
+    name: str
+    scenario: str
+    description: str
+    grid: tuple[str, ...] = ()
+    random: tuple[str, ...] = ()
+    samples: int | None = None
+    fixed: Mapping[str, Any] = field(default_factory=dict)
+    metric: str = ""
+    reduce: str = "mean"
+    seconds_here: str = ""  # how long it took on the 2-core development machine
+
+
+SWEEP_PRESETS: dict[str, SweepPreset] = {}
+
+
+def register_sweep_preset(p: SweepPreset) -> SweepPreset:
+    SWEEP_PRESETS[p.name] = p
+    return p
+
+
+def sweep_presets() -> dict[str, SweepPreset]:
+    from ..scenarios.base import load_all
+
+    load_all()
+    return dict(SWEEP_PRESETS)
