@@ -7,7 +7,8 @@ every grid point), every other parameter fixed. It is cut into chunks; each chun
 results are written by this process, chunk by chunk, as they arrive:
 
 - Zarr (`out.zarr`): an xarray Dataset, one dimension per swept parameter (coordinates carry their
-  units), one variable per metric, `status` (0 not run yet, 1 ok, 2 diverged, 3 refused, 4 failed),
+  units), one variable per metric, `status` (0 not run yet, 1 ok, 2 diverged, 3 refused, 4 failed,
+  5 flagged: finished with a status of its own such as "tumbles"),
   the fixed parameters, the spec and the theoria version as attributes. A chunk counts as finished
   when its `status` is written, which happens after its metrics: `resume=True` recomputes nothing
   that finished.
@@ -40,7 +41,8 @@ import numpy as np
 
 from ..physics.errors import ParameterError
 
-STATUS = {"not run": 0, "ok": 1, "diverged": 2, "refused": 3, "failed": 4}
+# flagged: the run finished but its status names what it found (e.g. "tumbles": no libration at all)
+STATUS = {"not run": 0, "ok": 1, "diverged": 2, "refused": 3, "failed": 4, "flagged": 5}
 SAMPLE = "sample"
 MAX_MESSAGES = 1000
 
@@ -361,8 +363,8 @@ def run_chunk(task: dict) -> dict:
                 messages[i] = f"{type(e).__name__}: {e}"
                 continue
             if run.status != "ok":
-                status[i] = STATUS["diverged"] if run.status == "diverged" else STATUS["failed"]
-                messages[i] = "; ".join(run.warnings) or run.status
+                status[i] = STATUS["diverged"] if run.status == "diverged" else STATUS["flagged"]
+                messages[i] = f"{run.status}: " + "; ".join(run.warnings)
             for k, v in run.metrics.items():
                 if metrics is not None and k not in metrics:
                     continue

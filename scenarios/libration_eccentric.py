@@ -6,6 +6,7 @@ Check rows E8 (the forced amplitude) and E8.free (the free period).
 from __future__ import annotations
 
 import dataclasses
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -16,10 +17,9 @@ from ..physics.orbits import KeplerOrbit
 from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
-from .base import Comparison, Run, Scenario, register
+from .base import Batch, Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
-from ._libration import planar_moments, stride_for, zeta_of
 from ._ch16_drawing import ORBIT_OPTION, ZETA_OPTION, body_scene, centre_of_force, f_and_zeta
 from . import _validity
 
@@ -28,6 +28,7 @@ from . import _validity
 # leaves the libration within EULER_START_ORBITS orbits
 EULER_AMPLITUDE_TOLERANCE = 0.10
 EULER_START_ORBITS = 10
+from ._libration import batched_planar_runs, planar_moments, stride_for, zeta_of
 
 
 class ForcedSolution:
@@ -69,28 +70,38 @@ def _forced_amplitude_of_run(t, zeta, n, period, free_period):
     return float(np.hypot(coef[1], coef[2]))
 
 
-def _libration_eccentric(values, progress=None):
+def _setup(values, progress=None):
+    """Everything before the integration: the checks, the orbit, the forced (periodic) solution
+    found by shooting, and the start λ₀ − dz, λ̇₀ (shared by the single run and the batched path)."""
     g, e, n = values["asymmetry"], values["eccentricity"], values["orbital_rate"]
     if n < 1e-100:  # as in libration-circular: n² must not underflow
         raise ParameterError("orbital_rate", n, "at least 1e-100 (its square must not underflow), allowed range (0, 100] rad/unit")
-    I = planar_moments(g)
-    gm = n * n
-    orbit = KeplerOrbit(a=1.0, e=e, n=n)
-    N = lib.euler_N(g, gm, 1.0)
     if abs(1.0 - 3.0 * g) < 0.03:
         raise ParameterError("asymmetry", g, "not within 0.01 of 1/3 (resonance A² = 2N: no forced libration)")
     P = 2 * np.pi / n
     duration = values["orbits"] * P
     step = P / values["steps_per_orbit"]
     fs = ForcedSolution(g, e, n, progress=progress)
-    lam0, lamdot0 = fs.lam0, fs.lamdot0
     dz = np.radians(values["free_zeta0_deg"])
-    q0 = quat.from_axis_angle([0, 0, 1], lam0 - dz)  # ζ₀ = f(0) − λ₀ + dz, f(0) = 0
-    om0 = np.array([0.0, 0.0, lamdot0])
     nst = int(np.ceil(duration / step))
-    t, L, q = integrate(I, om0, duration, step, q0=q0, masses=[PointMass(gm, orbit.position)],
-                        scheme="yoshida4", stride=stride_for(nst),
+    return SimpleNamespace(g=g, e=e, n=n, I=planar_moments(g), gm=n * n, orbit=KeplerOrbit(a=1.0, e=e, n=n), P=P,
+                           duration=duration, step=step, fs=fs, dz=dz, n_steps=nst, stride=stride_for(nst),
+                           lam_start=fs.lam0 - dz, lamdot0=fs.lamdot0)
+
+
+def _libration_eccentric(values, progress=None):
+    s = _setup(values, progress)
+    q0 = quat.from_axis_angle([0, 0, 1], s.lam_start)  # ζ₀ = f(0) − λ₀ + dz, f(0) = 0
+    t, L, q = integrate(s.I, np.array([0.0, 0.0, s.lamdot0]), s.duration, s.step, q0=q0,
+                        masses=[PointMass(s.gm, s.orbit.position)], scheme="yoshida4", stride=s.stride,
                         progress=(lambda f: progress(0.1 + 0.9 * f)) if progress is not None else None)
+    return _finish(values, s, t, L, q)
+
+
+def _finish(values, s, t, L, q):
+    """The run from its samples: ζ, its forced and free parts, the metrics and the table."""
+    g, e, n, I, gm, orbit, N, P = s.g, s.e, s.n, s.I, s.gm, s.orbit, lib.euler_N(s.g, s.gm, 1.0), s.P
+    fs, dz, step = s.fs, s.dz, s.step
     pos = orbit.position(t)
     traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
     zeta = zeta_of(q, pos)
@@ -224,6 +235,51 @@ def _draw(run, spec, view):
     return d
 
 
+BATCH_METRICS = ("forced_amplitude_rad", "forced_amplitude_periodic_rad", "forced_amplitude_euler_rad",
+                 "forced_amplitude_rel_error", "forced_second_harmonic_rad", "second_order_euler_rad",
+                 "forced_max_rad", "free_amplitude_rad", "free_period", "free_period_euler",
+                 "free_period_floquet", "free_period_modern", "forced_floquet_half_trace", "euler_start_max_offset_rad")
+
+
+def _batch(values, swept):
+    """The sweep's batched path: each point's forced solution and start as in a single run, then
+    every point sharing an orbit (eccentricity, orbital rate, length, step) integrated together by
+    the planar kernel (the same scheme and kick times as the rigid-body integrator: the samples
+    agree with a single run to round-off), then each point's metrics exactly as a single run."""
+    from ..app.sweep import STATUS
+
+    n = len(next(iter(swept.values())))
+    out = {k: np.full(n, np.nan) for k in BATCH_METRICS}
+    status = np.full(n, STATUS["ok"], np.int8)
+    messages = {}
+    groups: dict[tuple, list] = {}
+    for i in range(n):
+        vals = {**values, **{k: (v[i].item() if hasattr(v[i], "item") else v[i]) for k, v in swept.items()}}
+        try:
+            s = _setup(vals)
+        except ParameterError as e:
+            status[i], messages[i] = STATUS["refused"], str(e)
+            continue
+        key = (s.e, s.n, vals["orbits"], vals["steps_per_orbit"])
+        groups.setdefault(key, []).append((i, vals, s))
+    for members in groups.values():
+        s0 = members[0][2]
+        runs = batched_planar_runs([m[2].lam_start for m in members], [m[2].lamdot0 for m in members],
+                                   [1.5 * m[2].gm * m[2].g for m in members], s0.orbit, s0.duration, s0.step, s0.stride)
+        for (i, vals, s), (t, L, q) in zip(members, runs):
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(L))):
+                status[i], messages[i] = STATUS["diverged"], "non-finite spin in the run"
+                continue
+            run = _finish(vals, s, t, L, q)
+            if run.status != "ok":  # e.g. "tumbles": a finished run whose status says what it found
+                status[i], messages[i] = STATUS["flagged"], f"{run.status}: " + "; ".join(run.warnings)
+            for k in BATCH_METRICS:
+                if k in run.metrics:
+                    out[k][i] = run.metrics[k]
+    out["_status"], out["_messages"] = status, messages
+    return out
+
+
 register(Scenario(
     name="libration-eccentric",
     title="Forced libration in an eccentric orbit (Problem 94)",
@@ -253,6 +309,9 @@ register(Scenario(
         ("Forced swing: e = 0.3, beyond Euler's first order", {"eccentricity": 0.3}),
         ("Forced swing: near the resonance A² = 2N", {"asymmetry": 0.3}),
     ),
+    batch=Batch(_batch,
+                sweepable=("asymmetry", "eccentricity", "orbital_rate", "free_zeta0_deg", "orbits", "steps_per_orbit"),
+                metrics=BATCH_METRICS),
 ))
 
 

@@ -1,0 +1,242 @@
+"""Tidal despinning and capture into spin–orbit resonance (beyond Euler: why Mercury turns three
+times in two orbits and the Moon shows one face).
+
+Euler's §833 libration equation without his approximations, θ̈ = −(ω₀²/2)(a/r)³ sin 2(θ − f),
+plus the tidal torque of a constant time lag, −c (a/r)⁶ (θ̇ − ḟ) (physics.tides: Mignard 1979,
+Hut 1981). A body starts spinning fast; the tide slows it toward the pseudo-synchronous rate
+q(e) > 1; on the way it meets the resonances θ̇ = p n (p = 2, 3/2, 1, …) and is either captured or
+passes through — which, depends on its phase at the encounter. Goldreich & Peale (1966) give the
+probability for this torque: P = 2/(1 + π(p − q)/(2ω₀√H(p, e))) (derived in physics.tides).
+
+Check rows tides.capture-3:2 and tides.capture-1:1: the fraction of 400 starts (the initial angle
+swept over half a turn, all else equal) that end in each resonance, against Goldreich & Peale,
+with the binomial error of 400 draws as the tolerance.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..physics import quaternion as quat
+from ..physics import tides
+from ..physics.orbits import KeplerOrbit
+from ..physics.params import Param, ParameterError
+from ..physics.spin_orbit_batch import planar_batch
+from ..physics.trajectory import Trajectory
+from .base import Batch, Comparison, Run, Scenario, get, register
+from .checks import register_check
+from .drawing import Camera
+from ._libration import planar_moments
+
+MAX_SAMPLES = 6000  # orbit-mean spin rates kept for the plot
+FINAL_ORBITS = 50  # the final spin is the mean over the last this many orbits
+CAPTURE_TOL = 0.01  # |final spin − p| below this (in n): captured into p
+RESONANCES = (3.0, 2.5, 2.0, 1.5, 1.0, 0.5)  # first-order spin–orbit resonances θ̇ = p n
+SCHEME = "blanes-moan4"
+
+
+def _stride_orbits(orbits):
+    return max(1, int(np.ceil(orbits / MAX_SAMPLES)))
+
+
+def _check(values):
+    if values["orbits"] < 2 * FINAL_ORBITS:
+        raise ParameterError("orbits", values["orbits"], f"at least {2 * FINAL_ORBITS} (the final spin is the mean of the last {FINAL_ORBITS})")
+
+
+def _integrate(values_list):
+    """All the runs of `values_list` (same eccentricity, orbits and steps per orbit) in one batch:
+    per run the periapse angle θ every `k` orbits (k = _stride_orbits), unwrapped."""
+    v0 = values_list[0]
+    e, spo, orbits = v0["eccentricity"], int(v0["steps_per_orbit"]), int(round(v0["orbits"]))
+    k = _stride_orbits(orbits)
+    orb = KeplerOrbit(a=1.0, e=e, n=1.0)
+    th0 = np.radians([v["initial_angle_deg"] for v in values_list])
+    out = planar_batch(th0, [v["spin_rate"] for v in values_list], [0.5 * v["omega0"] ** 2 for v in values_list],
+                       orb, 2 * np.pi / spo, orbits * spo, scheme=SCHEME,
+                       tide_rate=[v["tide_rate"] for v in values_list], stride=k * spo)
+    return orb, k, th0, out
+
+
+def _classify(values, theta, theta0, k):
+    """Metrics of one run from its periapse angles every k orbits."""
+    e, w0 = values["eccentricity"], values["omega0"]
+    th = np.concatenate([[theta0], theta])
+    rate = np.diff(th) / (2 * np.pi * k)  # mean spin over each k orbits, in units of n
+    last = max(1, int(np.ceil(FINAL_ORBITS / k)))
+    final = float((th[-1] - th[-1 - last]) / (2 * np.pi * k * last))
+    q = float(tides.pseudo_synchronous_rate(e))
+    captured = next((p for p in RESONANCES if abs(final - p) < CAPTURE_TOL), 0.0)
+    # Goldreich & Peale along the way down: each resonance between the start and q is met in turn
+    # (from above), a body reaches p only if it was not held by one above it
+    start = values["spin_rate"]
+    p_reach, gp = 1.0, {}
+    for p in RESONANCES:
+        if p >= start:
+            continue
+        P = tides.capture_probability(p, e, w0, q)
+        gp[p] = p_reach * P
+        p_reach *= 1.0 - P
+    m = {
+        "final_spin_rate_n": final,
+        "captured_resonance": float(captured),
+        "captured_3_2": float(captured == 1.5),
+        "captured_1_1": float(captured == 1.0),
+        "pseudo_synchronous_rate_n": q,
+        "gp_capture_probability_3_2": gp.get(1.5, 0.0),
+        "gp_capture_probability_1_1": gp.get(1.0, 0.0),
+    }
+    return m, rate
+
+
+def _simulate(values, progress=None):
+    _check(values)
+    orb, k, th0, out = _integrate([values])
+    m, rate = _classify(values, out["theta_samples"][0], th0[0], k)
+    e, w0 = values["eccentricity"], values["omega0"]
+    t = np.concatenate([[0.0], out["t"]])
+    th = np.concatenate([th0, out["theta_samples"][0]])
+    wd = np.concatenate([[values["spin_rate"]], out["thetadot_samples"][0]])
+    I = planar_moments(w0**2 / 3.0)
+    z = np.zeros_like(th)
+    traj = Trajectory(t, np.stack([np.cos(th / 2), z, z, np.sin(th / 2)], 1), np.stack([z, z, I[2] * wd], 1), I,
+                      time_unit="1/n·rad", bodies={"attractor": orb.position(t)})
+    q = m["pseudo_synchronous_rate_n"]
+    final, cap = m["final_spin_rate_n"], m["captured_resonance"]
+    warnings = []
+    if cap == 0.0 and abs(final - q) > 0.02:
+        warnings.append(f"the run ended with the spin still changing or held elsewhere (θ̇/n = {final:.4f}, not a "
+                        f"first-order resonance, and the tidal end state is {q:.4f}): run more orbits, or it sits in a "
+                        "higher-order resonance that Goldreich & Peale's first-order theory leaves out")
+    # Goldreich & Peale's result is the limit of weak tides: the energy lost along the separatrix must be small
+    # against the separatrix's own energy
+    for p in (1.5,):
+        H = abs(tides.resonance_strength(p, e))
+        A = values["tide_rate"] * float(tides.hut_omega(e))
+        ratio = A * (np.pi * abs(p - q) + 2 * w0 * np.sqrt(H)) / (0.5 * w0**2 * H) if H > 0 else np.inf
+        m[f"tide_to_resonance_ratio_{p:g}"] = float(ratio)
+        if ratio > 0.1:
+            warnings.append(f"tides strong against the {p:g} resonance (energy lost per libration {ratio:.2f} × its "
+                            "depth): Goldreich & Peale's probability is the weak-tide limit")
+    what = {1.5: "captured into the 3:2 resonance (Mercury's state)", 1.0: "captured into synchronous rotation (the Moon's state)",
+            0.0: f"not in a first-order resonance at the end (θ̇/n = {final:.4f})"}.get(cap, f"captured into θ̇/n = {cap:g}")
+    comps = [Comparison("pseudo-synchronous spin N(e)/Ω(e) (Hut 1981)", None, final if cap == 0.0 else None, q, "n",
+                        "where the orbit-averaged tide vanishes"),
+             Comparison("probability of capture into 3:2 (Goldreich & Peale 1966)", None, m["captured_3_2"],
+                        m["gp_capture_probability_3_2"], "", "one run is captured (1) or not (0); a sweep over the "
+                        "initial angle measures the probability (theoria check tides.capture-3:2)"),
+             Comparison("probability of ending in 1:1", None, m["captured_1_1"], m["gp_capture_probability_1_1"], "",
+                        "passes 3:2 (and 2:1 if above it), then captured if q lies inside the 1:1 zone")]
+    notes = [f"This run: {what}.",
+             "The tidal rate c is exaggerated so that despinning takes thousands of orbits rather than millions of "
+             "years; the capture probability does not depend on it as long as it is weak (see the warning).",
+             "plot_series spin_rate_orbit_mean_n: the spin averaged over each orbit (exact: the periapse-to-periapse "
+             "turn / 2π), with the resonances and the pseudo-synchronous rate as lines."]
+    n = len(t)
+    series = {"spin_rate_orbit_mean_n": np.concatenate([[values["spin_rate"]], rate]),
+              "resonance_3_2": np.full(n, 1.5), "resonance_1_1": np.full(n, 1.0),
+              "pseudo_synchronous_n": np.full(n, q)}
+    traj.series.update({"spin_rate_orbit_mean_n": series["spin_rate_orbit_mean_n"]})
+    return Run("tidal-capture", values, traj, m, comps, notes, plot_series=series, warnings=warnings)
+
+
+BATCH_METRICS = ("final_spin_rate_n", "captured_resonance", "captured_3_2", "captured_1_1",
+                 "pseudo_synchronous_rate_n", "gp_capture_probability_3_2", "gp_capture_probability_1_1")
+
+
+def _batch(values, swept):
+    """All points sharing an orbit (eccentricity, orbits, steps per orbit) in one kernel call; each
+    body's arithmetic is independent of the batch, so the metrics are those of single runs, bit for bit."""
+    n = len(next(iter(swept.values())))
+    pts = [{**values, **{k: (v[i].item() if hasattr(v[i], "item") else v[i]) for k, v in swept.items()}} for i in range(n)]
+    for v in pts:
+        _check(v)
+    out = {k: np.full(n, np.nan) for k in BATCH_METRICS}
+    groups: dict[tuple, list[int]] = {}
+    for i, v in enumerate(pts):
+        groups.setdefault((v["eccentricity"], v["orbits"], v["steps_per_orbit"]), []).append(i)
+    for idx in groups.values():
+        _, k, th0, res = _integrate([pts[i] for i in idx])
+        for j, i in enumerate(idx):
+            m, _ = _classify(pts[i], res["theta_samples"][j], th0[j], k)
+            for name in BATCH_METRICS:
+                out[name][i] = m[name]
+    return out
+
+
+register(Scenario(
+    name="tidal-capture",
+    title="Tidal despinning and capture into resonance (Mercury's 3:2, the Moon's 1:1)",
+    section="§833 (beyond Euler)",
+    group="ch. 16",
+    summary=("A body on an eccentric orbit starts spinning fast. Tides raised on it by the planet act as a "
+            "brake (a constant time lag): the spin slows toward a rate a little faster than the orbit. On the "
+            "way down it meets the spin–orbit resonances — the 3:2 where Mercury turns three times in two "
+            "orbits, then the 1:1 where the Moon always shows one face. At each it is either captured, held "
+            "for good by the pull on its long axis (Euler's §833 torque), or passes through: which, depends "
+            "on the body's orientation when it arrives. Change the initial angle and watch the outcome flip; "
+            "Goldreich & Peale (1966) give the odds."),
+    params=(
+        Param("eccentricity", 0.07, 0.0, 0.5, "", "orbital eccentricity e (Mercury 0.2056)"),
+        Param("omega0", 0.1, 0.0, 1.0, "", "ω₀ = √(3(B−A)/C), the body's out-of-roundness (Mercury ≈ 0.019)",
+              exclusive_min=True),
+        Param("tide_rate", 2e-5, 0.0, 1e-3, "n", "tidal rate c in θ̈ = −c (a/r)⁶ (θ̇ − ḟ) (exaggerated; physics.tides)",
+              exclusive_min=True),
+        Param("spin_rate", 1.8, 0.2, 4.0, "n", "initial spin θ̇/n at periapse"),
+        Param("initial_angle_deg", 0.0, -180.0, 180.0, "deg", "initial angle of the long axis from the periapse line"),
+        Param("orbits", 20000.0, 100.0, 1e6, "", "orbits to simulate"),
+        Param("steps_per_orbit", 48, 16, 2048, "", "integrator steps per orbit (4th-order Blanes–Moan)", kind="int"),
+    ),
+    camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
+    simulate_fn=_simulate,
+    check=_check,
+    euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f) − c (a/r)⁶ (θ̇ − ḟ)\n"
+                   "capture into θ̇ = p n: P = 2 / (1 + π(p − q) / (2ω₀√H(p, e)))  (Goldreich & Peale 1966)"),
+    presets=(
+        ("Tides: captured into 3:2 on the way down", {"initial_angle_deg": 0.0}),
+        ("Tides: through 3:2, then synchronous", {"initial_angle_deg": 45.0}),
+        ("Mercury-like orbit (e = 0.2056): never synchronous", {"eccentricity": 0.2056, "spin_rate": 1.7}),
+    ),
+    batch=Batch(_batch, sweepable=("eccentricity", "omega0", "tide_rate", "spin_rate", "initial_angle_deg", "orbits",
+                                   "steps_per_orbit"), metrics=BATCH_METRICS),
+))
+
+
+N_PHASES = 400  # starts in the check's sweep over the initial angle
+
+
+def _capture_sweep():
+    sc = get("tidal-capture")
+    values = sc.defaults
+    angles = np.linspace(0.0, 180.0, N_PHASES, endpoint=False)
+    return values, sc.batch.fn(values, {"initial_angle_deg": angles})
+
+
+_SWEEP_CACHE: dict = {}
+
+
+def _row(p, metric, gp_metric):
+    if "r" not in _SWEEP_CACHE:
+        _SWEEP_CACHE["r"] = _capture_sweep()
+    values, out = _SWEEP_CACHE["r"]
+    P_sim = float(np.mean(out[metric]))
+    P_gp = float(out[gp_metric][0])
+    sigma = float(np.sqrt(max(P_gp * (1 - P_gp), 1e-12) / N_PHASES))
+    other = float(np.mean(out["captured_resonance"] == 0))
+    return {"euler": None, "simulated": P_sim, "modern": P_gp, "rel_error": abs(P_sim - P_gp) / P_gp,
+            "tolerance": 3 * sigma / P_gp, "unit": "",
+            "note": (f"e = {values['eccentricity']}, ω₀ = {values['omega0']}, tide c = {values['tide_rate']:g}, "
+                     f"start θ̇ = {values['spin_rate']} n; {N_PHASES} initial angles over half a turn; binomial σ = "
+                     f"{sigma:.3f}, tolerance 3σ; {other:.1%} of the starts end outside the first-order resonances "
+                     "(higher-order ones, absent from Goldreich & Peale's theory)")}
+
+
+@register_check("tides.capture-3:2", "capture into the 3:2 spin–orbit resonance: Goldreich & Peale's probability",
+                "§833 (beyond Euler)")
+def capture_3_2():
+    return _row(1.5, "captured_3_2", "gp_capture_probability_3_2")
+
+
+@register_check("tides.capture-1:1", "ending in synchronous rotation after passing 3:2: (1 − P₃:₂) · P₁:₁",
+                "§833 (beyond Euler)")
+def capture_1_1():
+    return _row(1.0, "captured_1_1", "gp_capture_probability_1_1")

@@ -1,0 +1,218 @@
+"""`theoria sweep` and `Scenario.sweep`: the grid spec refused before any work, a sweep killed midway
+and resumed without recomputing its finished chunks, the same sweep on a separately started Dask
+scheduler with two workers (loopback only), Parquet out, the map a class clicks, `run --out`."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import theoria as th
+from theoria.app import sweep as sw
+
+ROOT = Path(__file__).resolve().parents[1]
+BIN = Path(sys.executable).parent
+THEORIA = [sys.executable, "-m", "theoria.app.cli"]
+# libration-eccentric made cheap: one orbit at 50 steps (the forced-solution search dominates)
+CHEAP = ["--set", "orbits=1", "--set", "steps_per_orbit=50", "--set", "free_zeta0_deg=1"]
+
+
+def cli(*args, timeout=600, **kw):
+    return subprocess.run([*THEORIA, *args], capture_output=True, text=True, timeout=timeout, cwd=ROOT, **kw)
+
+
+# ----------------------------------------------------------------------- refused before any work
+
+@pytest.mark.parametrize("spec, names", [
+    ("nonsense=0:1:3", ["nonsense", "unknown parameter", "eccentricity"]),
+    ("eccentricity=0:0.9:3", ["eccentricity", "0.9", "[0, 0.5]"]),
+    ("eccentricity=0:0.5:0", ["--grid", "count must be at least 1"]),
+    ("eccentricity=0:0.5", ["--grid", "name=start:stop:count"]),
+    ("eccentricity=a:b:3", ["--grid", "name=start:stop:count"]),
+    ("eccentricity=0:0.5:2.5", ["--grid", "whole number"]),
+    ("eccentricity", ["--grid", "name=start:stop:count"]),
+    ("steps_per_orbit=50:60:4", ["steps_per_orbit", "whole numbers"]),
+])
+def test_bad_grid_exits_2_with_one_line_before_any_work(tmp_path, spec, names):
+    out = tmp_path / "m.zarr"
+    r = cli("sweep", "libration-eccentric", "--grid", spec, "--out", str(out), timeout=120)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("theoria: error: "), r.stderr
+    for n in names:
+        assert n in lines[0], (n, lines[0])
+    assert not out.exists()  # nothing was written: no work began
+
+
+def test_bad_specs_from_python_and_the_names_the_scenario_uses():
+    sc = th.scenario("libration-eccentric")
+    # the issue's `e=` is accepted as the unique beginning of the scenario's `eccentricity`
+    plan = sw.make_plan(sc, grid=["e=0:0.5:64", "asymmetry=0.01:0.3:64"])
+    assert plan.dims == ("eccentricity", "asymmetry") and plan.shape == (64, 64)
+    assert np.allclose(plan.grid[0].values, np.linspace(0, 0.5, 64))
+    assert plan.batched  # both may vary across one batch of libration-eccentric
+    with pytest.raises(th.ParameterError, match="more than one parameter begins so"):
+        sw.make_plan(sc, grid=["o=1:2:2"])  # orbital_rate or orbits
+    with pytest.raises(th.ParameterError, match="swept twice"):
+        sw.make_plan(sc, grid=["e=0:0.1:2", "eccentricity=0:0.2:2"])
+    with pytest.raises(th.ParameterError, match="is swept"):
+        sw.make_plan(sc, grid={"eccentricity": (0, 0.1, 2)}, fixed={"eccentricity": 0.2})
+    with pytest.raises(th.ParameterError, match="--samples"):
+        sw.make_plan(sc, random={"free_zeta0_deg": (-5, 5)})
+    with pytest.raises(th.ParameterError, match="free_zeta0_deg"):
+        sw.make_plan(sc, random={"free_zeta0_deg": (-5, 500)}, samples=4)
+    with pytest.raises(th.ParameterError, match="--out"):
+        sc.sweep(grid={"eccentricity": (0, 0.1, 2)}, out="x.nc")
+    # grid × random: a sample dimension with the same draws at every grid point
+    plan = sw.make_plan(sc, grid={"eccentricity": (0, 0.1, 3)}, random={"free_zeta0_deg": (-5, 5)}, samples=10, seed=3)
+    assert plan.dims == ("eccentricity", "sample") and plan.shape == (3, 10)
+    z = plan.random[0].values
+    assert np.all((z >= -5) & (z <= 5)) and len(np.unique(z)) == 10
+    pts = plan.points((slice(1, 3), slice(0, 10)))
+    assert np.allclose(pts["free_zeta0_deg"], np.tile(z, 2)) and np.allclose(pts["eccentricity"], np.repeat([0.05, 0.1], 10))
+
+
+# ----------------------------------------------------------------------------- the done criteria
+
+def _finished_chunks(path):
+    import zarr
+
+    try:
+        st = zarr.open_group(str(path), mode="r")["status"]
+    except Exception:  # noqa: BLE001 — not created yet
+        return None, None
+    plan_chunks = st.chunks
+    a = st[...]
+    done = 0
+    for idx in np.ndindex(*[-(-n // c) for n, c in zip(a.shape, plan_chunks)]):
+        reg = tuple(slice(i * c, (i + 1) * c) for i, c in zip(idx, plan_chunks))
+        done += bool(np.all(a[reg] != 0))
+    return done, int(np.prod([-(-n // c) for n, c in zip(a.shape, plan_chunks)]))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_path, sig):
+    out = tmp_path / "m.zarr"
+    args = ["sweep", "libration-eccentric", "--grid", "e=0:0.2:4", "--grid", "asymmetry=0.01:0.3:4",
+            "--out", str(out), "--chunk", "2", "--workers", "2", *CHEAP]
+    p = subprocess.Popen([*THEORIA, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    t_end = time.monotonic() + 400
+    done = None
+    while time.monotonic() < t_end and p.poll() is None:
+        done, total = _finished_chunks(out)
+        if done is not None and done >= 2:
+            break
+        time.sleep(0.2)
+    assert p.poll() is None, "the sweep finished before it could be interrupted: " + p.stderr.read()
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == (130 if sig == signal.SIGINT else 143), err
+    assert "Traceback" not in err
+    done, total = _finished_chunks(out)
+    assert total == 8 and 2 <= done < total, (done, total)
+    import xarray as xr
+
+    before = xr.open_zarr(out, consolidated=False).load()
+    kept = before["status"].values != 0
+    # resume: only the unfinished chunks are computed (counted by the sweep and recorded in the store)
+    r = cli(*args, "--resume", "--json", "--quiet")
+    assert r.returncode == 0, r.stderr
+    s = json.loads(r.stdout)
+    assert s["chunks_done_before"] == done and s["chunks_computed"] == total - done, s
+    ds = xr.open_zarr(out, consolidated=False)
+    sessions = ds.attrs["sessions"]
+    assert [x["chunks_computed"] for x in sessions] == [done, total - done]
+    assert sessions[0]["interrupted"] and not sessions[1]["interrupted"]
+    # the finished chunks are untouched, the rest filled
+    for name in ("forced_amplitude_rad", "status"):
+        assert np.array_equal(ds[name].values[kept], before[name].values[kept])
+    assert np.all(ds["status"].values == sw.STATUS["ok"])
+    # named dimensions, units, the fixed parameters and the version
+    assert ds["forced_amplitude_rad"].dims == ("eccentricity", "asymmetry")
+    assert ds["eccentricity"].attrs["units"] == "1" and "eccentricity" in ds["eccentricity"].attrs["long_name"]
+    assert ds.attrs["fixed_parameters"]["orbital_rate"] == {"value": 1.0, "unit": "rad/unit"}
+    assert ds.attrs["theoria_version"] == th.__version__
+    # a resume of a complete sweep computes nothing
+    r = cli(*args, "--resume", "--json", "--quiet")
+    assert json.loads(r.stdout)["chunks_computed"] == 0
+    # the values are the scenario's own, run by run (one point, recomputed here)
+    sc = th.scenario("libration-eccentric")
+    i, j = 2, 3
+    m = sc.simulate(eccentricity=float(ds.eccentricity[i]), asymmetry=float(ds.asymmetry[j]), orbits=1,
+                    steps_per_orbit=50, free_zeta0_deg=1).metrics
+    assert ds["forced_amplitude_rad"].values[i, j] == pytest.approx(m["forced_amplitude_rad"], rel=1e-9)
+    # a resume of another sweep into the same file is refused, naming what differs
+    r = cli("sweep", "libration-eccentric", "--grid", "e=0:0.3:4", "--grid", "asymmetry=0.01:0.3:4",
+            "--out", str(out), "--resume", *CHEAP)
+    assert r.returncode == 2 and "different sweep" in r.stderr and "grid" in r.stderr
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.slow
+def test_the_same_sweep_on_a_separately_started_scheduler_with_two_workers(tmp_path):
+    port = _free_port()
+    addr = f"tcp://127.0.0.1:{port}"
+    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
+    procs = [subprocess.Popen([str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                               "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
+    try:
+        for _ in range(2):
+            procs.append(subprocess.Popen([str(BIN / "dask"), "worker", addr, "--nthreads", "1", "--host", "127.0.0.1",
+                                           "--no-dashboard", "--name", f"w{len(procs)}"],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+        from distributed import Client
+
+        t_end = time.monotonic() + 120
+        while True:
+            try:
+                with Client(addr, timeout=5) as c:
+                    if len(c.scheduler_info()["workers"]) == 2:
+                        break
+            except OSError:
+                pass
+            assert time.monotonic() < t_end, "the scheduler and two workers did not come up"
+            time.sleep(1)
+        out = tmp_path / "m.zarr"
+        r = cli("sweep", "libration-eccentric", "--grid", "e=0:0.2:3", "--grid", "asymmetry=0.01:0.3:2",
+                "--out", str(out), "--cluster", addr, "--chunk", "2", "--json", "--quiet", *CHEAP)
+        assert r.returncode == 0, r.stderr
+        s = json.loads(r.stdout)
+        assert s["cluster"] == f"scheduler {addr}" and s["chunks_computed"] == 3
+        import xarray as xr
+
+        ds = xr.open_zarr(out, consolidated=False)
+        assert np.all(ds.status.values == sw.STATUS["ok"])
+        # both workers took part (each chunk records nothing about its worker; the scheduler does)
+        with Client(addr, timeout=5) as c:
+            assert len(c.scheduler_info()["workers"]) == 2
+        # the same numbers as a local single run
+        m = th.scenario("libration-eccentric").simulate(eccentricity=0.1, asymmetry=0.3, orbits=1, steps_per_orbit=50,
+                                                        free_zeta0_deg=1).metrics
+        assert float(ds.forced_amplitude_rad.sel(eccentricity=0.1, asymmetry=0.3)) == pytest.approx(
+            m["forced_amplitude_rad"], rel=1e-9)
+        # and a bad address is one line, exit 2
+        r = cli("sweep", "libration-eccentric", "--grid", "e=0:0.2:2", "--out", str(tmp_path / "x.zarr"),
+                "--cluster", "tcp://127.0.0.1:1", *CHEAP, timeout=120)
+        assert r.returncode == 2 and "--cluster" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
