@@ -18,8 +18,9 @@ from ..physics.integrator import PointMass, integrate
 from ..physics.orbits import KeplerOrbit
 from ..physics.trajectory import Trajectory
 from ..physics.params import Param
+from ..physics.spin_orbit_batch import planar_batch
 from .drawing import Camera
-from .base import Comparison, Run, Scenario, register
+from .base import Batch, Comparison, Run, Scenario, register
 from .checks import register_check
 from . import _validity
 from ._libration import planar_moments, zeta_of
@@ -38,6 +39,19 @@ def ensemble_starts(n_starts, max_rate=3.0):
     th = np.concatenate([np.zeros(k), np.full(n_starts - k, 0.5 * np.pi)])
     wd = np.concatenate([w, np.linspace(max_rate / (n_starts - k), max_rate, n_starts - k)])
     return th, wd
+
+
+def probe_lyapunov(theta_deg, rate, e, omega0, n_orbits, steps_per_orbit):
+    """Largest Lyapunov exponent (per unit time, n = 1) of starts at periapse (θ in degrees, θ̇/n),
+    each with its own ω₀, on one orbit: the batched planar kernel (physics.spin_orbit_batch,
+    Blanes & Moan's 4th-order scheme, the tangent map renormalised every orbit). A body's result
+    does not depend on the rest of the batch: a sweep's map and a single run agree bit for bit."""
+    orb = KeplerOrbit(a=1.0, e=e, n=1.0)
+    w0 = np.asarray(omega0, float)
+    out = planar_batch(np.radians(np.asarray(theta_deg, float)), rate, 0.5 * w0**2, orb, 2 * np.pi / steps_per_orbit,
+                       int(n_orbits) * int(steps_per_orbit), scheme="blanes-moan4", lyapunov=True,
+                       renorm=int(steps_per_orbit))
+    return out["lyapunov"]
 
 
 def _hyperion(values, progress=None):
@@ -60,8 +74,8 @@ def _hyperion(values, progress=None):
     pos = orbit.position(t)
     traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
     zeta = zeta_of(q, pos)
-    _, _, lp = lib.spin_orbit_section([values["probe_theta_deg"] * np.pi / 180], [values["probe_rate"]], e, w0,
-                                      max(no, 100), values["steps_per_orbit"], lyapunov=True)
+    lp = probe_lyapunov([values["probe_theta_deg"]], [values["probe_rate"]], e, [w0], max(no, 100),
+                        values["steps_per_orbit"])
     m = {
         "lyapunov_probe_per_unit_time": float(lp[0]),
         "lyapunov_probe_per_orbit": float(lp[0] * P),
@@ -188,6 +202,41 @@ def _section(d, run):
     return p
 
 
+BATCH_METRICS = ("lyapunov_probe_per_unit_time", "lyapunov_probe_per_orbit") + tuple(
+    f"gp_half_width_{p:g}" for p in RESONANCES) + tuple(f"gp_series_half_width_{p:g}" for p in RESONANCES) + (
+    "overlap_1_and_1.5",)
+
+
+def _batch(values, swept):
+    """A chaos map: the probe's Lyapunov exponent for every point, the points sharing an orbit
+    (eccentricity, steps per orbit, passages) integrated together. The ensemble's surface of
+    section and the islands of a single run are not recomputed per point (ask for those metrics
+    and the sweep maps single runs)."""
+    n = len(next(iter(swept.values())))
+    pts = [{**values, **{k: (v[i].item() if hasattr(v[i], "item") else v[i]) for k, v in swept.items()}} for i in range(n)]
+    out = {k: np.full(n, np.nan) for k in BATCH_METRICS}
+    groups: dict[tuple, list[int]] = {}
+    for i, v in enumerate(pts):
+        groups.setdefault((v["eccentricity"], v["steps_per_orbit"], max(v["n_orbits"], 100)), []).append(i)
+    for (e, spo, no), idx in groups.items():
+        lp = probe_lyapunov([pts[i]["probe_theta_deg"] for i in idx], [pts[i]["probe_rate"] for i in idx], e,
+                            [pts[i]["omega0"] for i in idx], no, spo)
+        for j, i in enumerate(idx):
+            out["lyapunov_probe_per_unit_time"][i] = float(lp[j])
+            out["lyapunov_probe_per_orbit"][i] = float(lp[j] * 2 * np.pi)
+    widths: dict[tuple, float] = {}  # the same numbers as a single run's, computed once per (p, e, ω₀)
+    for i, v in enumerate(pts):
+        e, w0 = v["eccentricity"], v["omega0"]
+        for p in RESONANCES:
+            key = (p, e, w0)
+            if key not in widths:
+                widths[key] = (float(lib.resonance_half_width(p, e, w0)),
+                               float(w0 * np.sqrt(abs(hansen.goldreich_peale_series(p, e)))))
+            out[f"gp_half_width_{p:g}"][i], out[f"gp_series_half_width_{p:g}"][i] = widths[key]
+        out["overlap_1_and_1.5"][i] = (out["gp_half_width_1"][i] + out["gp_half_width_1.5"][i]) / 0.5
+    return out
+
+
 register(Scenario(
     name="hyperion",
     title="Hyperion: chaotic tumbling (spin–orbit surface of section)",
@@ -221,6 +270,8 @@ register(Scenario(
         ("Nearly circular orbit: mostly regular", {"eccentricity": 0.01}),
         ("Hyperion: a probe in the synchronous island", {"probe_rate": 1.0}),
     ),
+    batch=Batch(_batch, sweepable=("eccentricity", "omega0", "steps_per_orbit", "n_orbits", "probe_theta_deg",
+                                   "probe_rate", "n_starts", "probe_orbits"), metrics=BATCH_METRICS),
 ))
 
 

@@ -183,7 +183,7 @@ register(Scenario(
               exclusive_min=True),
         Param("spin_rate", 1.8, 0.2, 4.0, "n", "initial spin θ̇/n at periapse"),
         Param("initial_angle_deg", 0.0, -180.0, 180.0, "deg", "initial angle of the long axis from the periapse line"),
-        Param("orbits", 20000.0, 100.0, 1e6, "", "orbits to simulate"),
+        Param("orbits", 50000.0, 100.0, 1e6, "", "orbits to simulate"),
         Param("steps_per_orbit", 48, 16, 2048, "", "integrator steps per orbit (4th-order Blanes–Moan)", kind="int"),
     ),
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
@@ -192,8 +192,8 @@ register(Scenario(
     euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f) − c (a/r)⁶ (θ̇ − ḟ)\n"
                    "capture into θ̇ = p n: P = 2 / (1 + π(p − q) / (2ω₀√H(p, e)))  (Goldreich & Peale 1966)"),
     presets=(
-        ("Tides: captured into 3:2 on the way down", {"initial_angle_deg": 0.0}),
-        ("Tides: through 3:2, then synchronous", {"initial_angle_deg": 45.0}),
+        ("Tides: through 3:2, then synchronous (the Moon's way)", {"initial_angle_deg": 0.0}),
+        ("Tides: captured into 3:2 on the way down (Mercury's way)", {"initial_angle_deg": 15.0}),
         ("Mercury-like orbit (e = 0.2056): never synchronous", {"eccentricity": 0.2056, "spin_rate": 1.7}),
     ),
     batch=Batch(_batch, sweepable=("eccentricity", "omega0", "tide_rate", "spin_rate", "initial_angle_deg", "orbits",
