@@ -214,14 +214,18 @@ def cmd_bench(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from theoria.app.sweep import run_sweep
+    from theoria.app.sweep import SWEEP_PRESETS, preset_kwargs, run_sweep
     from theoria.scenarios import get
 
-    sc = get(args.name)
-    summary, _ = run_sweep(sc, grid=args.grid, random=args.random, samples=args.samples, out=args.out,
-                           cluster=args.cluster, resume=args.resume, metrics=args.metrics, fixed=_parse_sets(args.set),
+    kw = {"grid": args.grid, "random": args.random, "samples": args.samples, "fixed": _parse_sets(args.set)}
+    name = args.name
+    if name in SWEEP_PRESETS:  # a named sweep: its scenario, grid and fixed values (the flags add or override)
+        kw = preset_kwargs(name, **kw)
+        name = SWEEP_PRESETS[name].scenario
+    sc = get(name)
+    summary, _ = run_sweep(sc, out=args.out, cluster=args.cluster, resume=args.resume, metrics=args.metrics,
                            preset=args.preset, seed=args.seed, chunk=args.chunk, workers=args.workers,
-                           progress=not args.quiet)
+                           progress=not args.quiet, **kw)
     sys.stderr.write(summary.line() + "\n")
     if args.json:
         import dataclasses
@@ -313,7 +317,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=cmd_replay)
 
     s = sub.add_parser("sweep", help="many runs on Dask, written chunk by chunk to Zarr or Parquet (docs/sweeps.md)")
-    s.add_argument("name")
+    s.add_argument("name", help="a scenario, or a named sweep (hyperion-chaos-map, mercury-capture)")
     s.add_argument("--grid", action="append", metavar="NAME=START:STOP:COUNT",
                    help="a swept parameter (COUNT values, both ends included), or NAME=V1,V2,…; repeat for more")
     s.add_argument("--random", action="append", metavar="NAME=LO:HI",

@@ -949,7 +949,9 @@ def open_map(path, metric: str, x: str | None = None, y: str | None = None, redu
 
 @dataclass(frozen=True)
 class SweepPreset:
-    """A named sweep: scenario, grid, random draws, fixed values, the map it is for."""
+    """A named sweep: scenario, grid, random draws, fixed values, and the map it is for
+    (`open_map(out, metric, reduce=…)`). `theoria sweep NAME --out F.zarr` runs it; --grid, --set,
+    --random override or add to it."""
 
     name: str
     scenario: str
@@ -960,19 +962,33 @@ class SweepPreset:
     fixed: Mapping[str, Any] = field(default_factory=dict)
     metric: str = ""
     reduce: str = "mean"
-    seconds_here: str = ""  # how long it took on the 2-core development machine
 
 
-SWEEP_PRESETS: dict[str, SweepPreset] = {}
+SWEEP_PRESETS: dict[str, SweepPreset] = {p.name: p for p in (
+    SweepPreset(
+        "hyperion-chaos-map", "hyperion",
+        "Hyperion's chaos map (Wisdom, Peale & Mignard 1984): the largest Lyapunov exponent per orbit of a start "
+        "at periapse with the long axis toward Saturn, over the eccentricity and the starting spin θ̇/n, ω₀ = 0.89. "
+        "Dark: regular (the 1:2, 1:1, 3:2, 2:1 islands); bright: the chaotic sea that opens as e grows.",
+        grid=("eccentricity=0:0.3:128", "probe_rate=0.2:3:256"),
+        fixed={"omega0": 0.89, "probe_theta_deg": 0.0, "n_orbits": 300, "steps_per_orbit": 48},
+        metric="lyapunov_probe_per_orbit"),
+    SweepPreset(
+        "mercury-capture", "tidal-capture",
+        "Mercury's capture into the 3:2 resonance against the eccentricity: a Mercury-like body (ω₀ = 0.019, "
+        "(B − A)/C = 1.2e-4) despun by a constant-time-lag tide from θ̇ = 1.7 n, 128 starting angles per "
+        "eccentricity; the fraction captured beside Goldreich & Peale's probability (metric "
+        "gp_capture_probability_3_2). At e = 0.2056 both are ≈ 7–8 %.",
+        grid=("eccentricity=0.05:0.25:21", "initial_angle_deg=0:177.1875:128"),
+        fixed={"omega0": 0.019, "tide_rate": 1e-6, "spin_rate": 1.7, "orbits": 80000.0, "steps_per_orbit": 48},
+        metric="captured_3_2", reduce="mean"),
+)}
 
 
-def register_sweep_preset(p: SweepPreset) -> SweepPreset:
-    SWEEP_PRESETS[p.name] = p
-    return p
-
-
-def sweep_presets() -> dict[str, SweepPreset]:
-    from ..scenarios.base import load_all
-
-    load_all()
-    return dict(SWEEP_PRESETS)
+def preset_kwargs(name: str, grid=None, random=None, samples=None, fixed=None) -> dict:
+    """The arguments of `run_sweep` for sweep preset `name`, with extra or overriding specs."""
+    p = SWEEP_PRESETS[name]
+    gnames = {g.split("=", 1)[0] for g in (grid or [])}
+    g = [x for x in p.grid if x.split("=", 1)[0] not in gnames] + list(grid or [])
+    return {"grid": g, "random": list(p.random) + list(random or []), "samples": samples or p.samples,
+            "fixed": {**{k: v for k, v in p.fixed.items() if k not in gnames}, **dict(fixed or {})}}

@@ -216,3 +216,54 @@ def test_the_same_sweep_on_a_separately_started_scheduler_with_two_workers(tmp_p
                 p.wait(timeout=30)
             except subprocess.TimeoutExpired:
                 p.kill()
+
+
+# ------------------------------------------------------------------ Python, Parquet, the map
+
+@pytest.mark.slow
+def test_python_sweep_batched_to_zarr_and_parquet_and_the_map_replays_a_pixel(tmp_path):
+    from distributed import Client, LocalCluster
+
+    sc = th.scenario("hyperion")
+    fixed = dict(n_starts=4, n_orbits=100, probe_orbits=1)
+    grid = {"eccentricity": (0.0, 0.2, 3), "probe_rate": [0.5, 1.0, 1.45, 2.5]}
+    with LocalCluster(n_workers=1, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as lc, Client(lc) as c:
+        ds = sc.sweep(grid=grid, out=tmp_path / "h.zarr", cluster=c, **fixed)
+        df = sc.sweep(grid=grid, out=tmp_path / "h.parquet", cluster=c, **fixed)
+    assert ds.attrs["sessions"][0]["path"] == "batched"
+    assert ds["lyapunov_probe_per_orbit"].dims == ("eccentricity", "probe_rate")
+    assert ds["probe_rate"].attrs["units"] == "n"
+    # the flat table: one row per run, the same numbers
+    assert len(df) == 12 and set(df.columns) >= {"eccentricity", "probe_rate", "status", "lyapunov_probe_per_orbit"}
+    for _, row in df.iterrows():
+        v = float(ds["lyapunov_probe_per_orbit"].sel(eccentricity=row.eccentricity, probe_rate=row.probe_rate))
+        assert v == row.lyapunov_probe_per_orbit
+    assert not (tmp_path / "h.parquet.parts").exists()
+    # the map: 2-D over the two swept parameters, axes with names and units, any pixel replayable
+    m = sw.open_map(tmp_path / "h.zarr", "lyapunov_probe_per_orbit")
+    assert m.values.shape == (3, 4) and (m.y, m.x) == ("eccentricity", "probe_rate")
+    assert m.x_unit == "n" and m.metric_unit == "1/orbit" and np.allclose(m.y_values, [0, 0.1, 0.2])
+    vals = m.run_values(2, 2)
+    assert vals["eccentricity"] == 0.2 and vals["probe_rate"] == 1.45 and vals["n_orbits"] == 100
+    r = sc.simulate(**vals)
+    assert r.metrics["lyapunov_probe_per_orbit"] == m.values[2, 2]
+    # e = 0: no chaos anywhere; e = 0.2 between the 1:1 and 3:2 islands: chaotic (WPM 1984)
+    assert np.all(m.values[0] < 0.05) and m.values[2, 2] > 0.1
+    with pytest.raises(th.ParameterError, match="metric"):
+        sw.open_map(tmp_path / "h.zarr", "nonsense")
+
+
+def test_run_out_writes_the_samples_as_parquet_and_csv(tmp_path):
+    import pandas as pd
+
+    for ext in ("parquet", "csv"):
+        out = tmp_path / f"r.{ext}"
+        r = cli("run", "libration-circular", "--set", "periods=1", "--set", "steps_per_period=100", "--out", str(out),
+                timeout=300)
+        assert r.returncode == 0, r.stderr
+        df = pd.read_parquet(out) if ext == "parquet" else pd.read_csv(out)
+        ref = th.scenario("libration-circular").simulate(periods=1, steps_per_period=100).to_dataframe()
+        assert list(df.columns) == list(ref.columns) and len(df) == len(ref)
+        assert np.allclose(df["zeta_rad"], ref["zeta_rad"], rtol=1e-15, atol=1e-15)
+    r = cli("run", "libration-circular", "--out", str(tmp_path / "r.txt"), timeout=120)
+    assert r.returncode == 2 and "--out" in r.stderr and ".parquet or .csv" in r.stderr
