@@ -214,7 +214,7 @@ def cmd_bench(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from theoria.app.sweep import SWEEP_PRESETS, preset_kwargs, run_sweep
+    from theoria.app.sweep import SWEEP_PRESETS, SweepError, preset_kwargs, run_sweep
     from theoria.scenarios import get
 
     kw = {"grid": args.grid, "random": args.random, "samples": args.samples, "fixed": _parse_sets(args.set)}
@@ -223,9 +223,13 @@ def cmd_sweep(args) -> int:
         kw = preset_kwargs(name, **kw)
         name = SWEEP_PRESETS[name].scenario
     sc = get(name)
-    summary, _ = run_sweep(sc, out=args.out, cluster=args.cluster, resume=args.resume, metrics=args.metrics,
-                           preset=args.preset, seed=args.seed, chunk=args.chunk, workers=args.workers,
-                           progress=not args.quiet, **kw)
+    try:
+        summary, _ = run_sweep(sc, out=args.out, cluster=args.cluster, resume=args.resume, metrics=args.metrics,
+                               preset=args.preset, seed=args.seed, chunk=args.chunk, workers=args.workers,
+                               progress=not args.quiet, **kw)
+    except SweepError as e:
+        sys.stderr.write(f"theoria: error: {e}\n")
+        return 1
     sys.stderr.write(summary.line() + "\n")
     if args.json:
         import dataclasses

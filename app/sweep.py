@@ -41,6 +41,10 @@ import numpy as np
 
 from ..physics.errors import ParameterError
 
+class SweepError(RuntimeError):
+    """A sweep that cannot go on (a chunk's task failed as a whole): one line, exit status 1."""
+
+
 # flagged: the run finished but its status names what it found (e.g. "tumbles": no libration at all)
 STATUS = {"not run": 0, "ok": 1, "diverged": 2, "refused": 3, "failed": 4, "flagged": 5}
 SAMPLE = "sample"
@@ -296,9 +300,9 @@ def _item(v):
 
 
 def _chunk_shape(plan: Plan, chunk, workers) -> tuple[int, ...]:
-    """Runs per chunk: `chunk` if given; else up to 256 for the batched path (one shared orbit per
-    batch: whole rows of the last dimensions) and up to 16 for single runs, with at least ~4 chunks
-    per worker. Filled from the last dimension backwards."""
+    """Runs per chunk: `chunk` if given; else what the scenario's batch asks for (`Batch.chunk`:
+    whole rows of the last dimensions share an orbit) or up to 16 single runs, with at least ~4
+    chunks per worker. Filled from the last dimension backwards."""
     total = plan.size
     if chunk is not None:
         try:
@@ -308,7 +312,7 @@ def _chunk_shape(plan: Plan, chunk, workers) -> tuple[int, ...]:
         if target < 1:
             raise ParameterError("--chunk", chunk, "a whole number of runs ≥ 1")
     else:
-        cap = 256 if plan.batched else 16
+        cap = int(plan.scenario.batch.chunk) if plan.batched else 16
         target = max(1, min(cap, total // max(1, 4 * workers)))
     out = []
     left = target
@@ -773,7 +777,11 @@ def _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, thre
             if fut is None:
                 continue
             i = futures[fut]
-            res = fut.result()
+            try:
+                res = fut.result()
+            except Exception as e:  # noqa: BLE001 — a task that failed as a whole (a worker died, an import failed)
+                raise SweepError(f"chunk {i} failed on a worker ({type(e).__name__}: {e}); the finished chunks "
+                                 f"are kept in {writer.path}, --resume continues") from None
             if not checked_metrics:
                 seen = set(res["metrics"])
                 known = set(getattr(getattr(sc, "batch", None), "metrics", ()) or ())

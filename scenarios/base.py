@@ -280,11 +280,14 @@ class Batch:
       "_messages" (index → sentence) for points it refuses.
     - `sweepable`: the parameters that may vary across one batch (a sweep over any other one maps
       single runs);
-    - `metrics`: the metrics `fn` computes (a sweep asking for others maps single runs)."""
+    - `metrics`: the metrics `fn` computes (a sweep asking for others maps single runs);
+    - `chunk`: runs per chunk that suit it (few where each point has costly set-up of its own, many
+      where the kernel is all the work)."""
 
     fn: Callable[[dict[str, Any], dict[str, np.ndarray]], dict[str, np.ndarray]]
     sweepable: tuple[str, ...]
     metrics: tuple[str, ...]
+    chunk: int = 256
 
 
 RESERVED = ("progress", "preset")  # keywords of Scenario.simulate: no parameter may be called so

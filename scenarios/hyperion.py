@@ -271,7 +271,7 @@ register(Scenario(
         ("Hyperion: a probe in the synchronous island", {"probe_rate": 1.0}),
     ),
     batch=Batch(_batch, sweepable=("eccentricity", "omega0", "steps_per_orbit", "n_orbits", "probe_theta_deg",
-                                   "probe_rate", "n_starts", "probe_orbits"), metrics=BATCH_METRICS),
+                                   "probe_rate", "n_starts", "probe_orbits"), metrics=BATCH_METRICS, chunk=2048),
 ))
 
 

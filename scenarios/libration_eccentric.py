@@ -311,7 +311,7 @@ register(Scenario(
     ),
     batch=Batch(_batch,
                 sweepable=("asymmetry", "eccentricity", "orbital_rate", "free_zeta0_deg", "orbits", "steps_per_orbit"),
-                metrics=BATCH_METRICS),
+                metrics=BATCH_METRICS, chunk=16),
 ))
 
 
