@@ -681,7 +681,7 @@ def _client(cluster, workers):
         n = int(workers or _cores())
         lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                           dashboard_address=None, silence_logs=logging.ERROR)
-        return Client(lc), lc, f"local cluster, {n} workers"
+        return Client(lc), lc, f"local cluster, {n} workers", True
     if isinstance(cluster, str):
         if not re.match(r"^(tcp|tls|inproc|ws|wss)://", cluster):
             raise ParameterError("--cluster", cluster, "a scheduler address such as tcp://127.0.0.1:8786")
@@ -689,8 +689,8 @@ def _client(cluster, workers):
             c = Client(cluster, timeout=10)
         except (OSError, TimeoutError) as e:
             raise ParameterError("--cluster", cluster, f"no Dask scheduler answers there ({type(e).__name__})") from None
-        return c, None, f"scheduler {cluster}"
-    return cluster, None, "the given client"
+        return c, None, f"scheduler {cluster}", True
+    return cluster, None, "the given client", False  # the caller's: left open
 
 
 def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, resume=False, metrics=None,
@@ -721,7 +721,7 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     counts = {k: 0 for k in STATUS if k != "not run"}
     interrupted = False
     if todo:
-        client, local, where = _client(cluster, workers)
+        client, local, where, owned = _client(cluster, workers)
         summary.cluster = where
         threads = 1 if local is not None else None
         try:
@@ -731,7 +731,8 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
                     summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
         finally:
             try:
-                client.close()
+                if owned:
+                    client.close()
                 if local is not None:
                     local.close()
             except Exception:  # noqa: BLE001 — shutting down after Ctrl-C
@@ -899,12 +900,13 @@ class MapData:
         return values
 
 
-def open_map(path, metric: str, x: str | None = None, y: str | None = None, reduce: str = "mean") -> MapData:
+def open_map(path, metric: str, x: str | None = None, y: str | bool | None = None, reduce: str = "mean") -> MapData:
     """Open a sweep result (Zarr) and return one metric as a 2-D array over two swept parameters
-    (x: columns, y: rows; by default the last two dimensions), with axis names, units and values,
-    and `run_values(i, j)` for the full parameters of any pixel. Any other dimension (e.g. the
-    random `sample`) is reduced with `reduce` ("mean", "median", "max", "min", or "fraction" of
-    runs where the metric is nonzero and finite — a capture probability)."""
+    (x: columns, y: rows; by default the last two swept parameters), with axis names, units and
+    values, and `run_values(i, j)` for the full parameters of any pixel. `y=False` gives a profile
+    along x (one row). Any other dimension (e.g. the random `sample`, or the starting angle of a
+    capture sweep) is reduced with `reduce` ("mean", "median", "max", "min", or "fraction" of runs
+    where the metric is nonzero — a capture probability)."""
     import xarray as xr
 
     ds = xr.open_zarr(os.fspath(path), consolidated=False)
@@ -914,18 +916,19 @@ def open_map(path, metric: str, x: str | None = None, y: str | None = None, redu
         raise ParameterError("metric", metric, "one of " + ", ".join(v for v in ds.data_vars if v != "status"))
     dims = list(ds[metric].dims)
     grid_dims = [d for d in dims if d != SAMPLE] or dims
-    if x is None or y is None:
-        pick = grid_dims[-2:] if len(grid_dims) >= 2 else dims[-2:]
-        if len(pick) < 2:
-            if len(dims) == 1:
-                pick = [dims[0], None]
-            else:
-                raise ParameterError("sweep", path, "at least two swept dimensions for a map")
-        y = y or (pick[0] if pick[1] is not None else None)
-        x = x or (pick[1] if pick[1] is not None else pick[0])
+    if x is None and y is None:  # the last two swept parameters (the first of them along y)
+        x = grid_dims[-1]
+        y = grid_dims[-2] if len(grid_dims) >= 2 else False
+    elif x is None:
+        x = next((d for d in reversed(grid_dims) if d != y), None)
+    elif y is None:
+        y = next((d for d in reversed(grid_dims) if d != x), False)
+    y = y or None  # y=False: a profile along x (every other dimension reduced)
     for name in (x, y):
         if name is not None and name not in dims:
             raise ParameterError("axis", name, "one of " + ", ".join(dims))
+    if x is None or x == y:
+        raise ParameterError("axis", x, "two different swept parameters (or y=False for a profile along x)")
     da = ds[metric]
     st = ds["status"]
     other = [d for d in dims if d not in (x, y)]
