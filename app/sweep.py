@@ -679,8 +679,16 @@ def _client(cluster, workers):
 
     if cluster is None:
         n = int(workers or _cores())
-        lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                          dashboard_address=None, silence_logs=logging.ERROR)
+        # a terminal's Ctrl-C goes to the whole process group: the workers are started with SIGINT
+        # ignored (inherited), so that only this process sees it and stops the sweep cleanly
+        main = threading.current_thread() is threading.main_thread()
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+        try:
+            lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                              dashboard_address=None, silence_logs=logging.ERROR)
+        finally:
+            if main:
+                signal.signal(signal.SIGINT, old)
         return Client(lc), lc, f"local cluster, {n} workers", True
     if isinstance(cluster, str):
         if not re.match(r"^(tcp|tls|inproc|ws|wss)://", cluster):

@@ -99,12 +99,15 @@ def _finished_chunks(path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, "ctrl-c"])
 def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_path, sig):
+    """SIGINT or SIGTERM to the sweep, or SIGINT to its whole process group as a terminal's Ctrl-C
+    sends it (the local cluster's workers too: they ignore it, the sweep stops them)."""
     out = tmp_path / "m.zarr"
     args = ["sweep", "libration-eccentric", "--grid", "e=0:0.2:4", "--grid", "asymmetry=0.01:0.3:4",
             "--out", str(out), "--chunk", "2", "--workers", "2", *CHEAP]
-    p = subprocess.Popen([*THEORIA, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    p = subprocess.Popen([*THEORIA, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+                         start_new_session=True)
     t_end = time.monotonic() + 400
     done = None
     while time.monotonic() < t_end and p.poll() is None:
@@ -113,9 +116,12 @@ def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_pat
             break
         time.sleep(0.2)
     assert p.poll() is None, "the sweep finished before it could be interrupted: " + p.stderr.read()
-    p.send_signal(sig)
+    if sig == "ctrl-c":
+        os.killpg(p.pid, signal.SIGINT)
+    else:
+        p.send_signal(sig)
     _, err = p.communicate(timeout=120)
-    assert p.returncode == (130 if sig == signal.SIGINT else 143), err
+    assert p.returncode == (143 if sig == signal.SIGTERM else 130), err
     assert "Traceback" not in err and "runs/s" in err  # the progress bar: runs done, rate, time left
     done, total = _finished_chunks(out)
     assert total == 8 and 2 <= done < total, (done, total)
