@@ -187,6 +187,7 @@ register(Scenario(
         ("Tides: captured into 3:2 on the way down (Mercury's way)", {"initial_angle_deg": 15.0}),
         ("Mercury-like orbit (e = 0.2056): never synchronous", {"eccentricity": 0.2056, "spin_rate": 1.7}),
     ),
+    preview={"orbits": 2000.0},
     batch=Batch(_batch, sweepable=("eccentricity", "omega0", "tide_rate", "spin_rate", "initial_angle_deg", "orbits",
                                    "steps_per_orbit"), metrics=BATCH_METRICS, chunk=256),
 ))
