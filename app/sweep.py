@@ -998,8 +998,8 @@ SWEEP_PRESETS: dict[str, SweepPreset] = {p.name: p for p in (
         "(B − A)/C = 1.2e-4) despun by a constant-time-lag tide from θ̇ = 1.7 n, 128 starting angles per "
         "eccentricity; the fraction captured beside Goldreich & Peale's probability (metric "
         "gp_capture_probability_3_2). At e = 0.2056 both are ≈ 7–8 %.",
-        grid=("eccentricity=0.05:0.25:21", "initial_angle_deg=0:177.1875:128"),
-        fixed={"omega0": 0.019, "tide_rate": 1e-6, "spin_rate": 1.7, "orbits": 80000.0, "steps_per_orbit": 48},
+        grid=("eccentricity=0.1:0.25:16", "initial_angle_deg=0:177.1875:128"),
+        fixed={"omega0": 0.019, "tide_rate": 2e-6, "spin_rate": 1.7, "orbits": 100000.0, "steps_per_orbit": 48},
         metric="captured_3_2", reduce="mean"),
 )}
 

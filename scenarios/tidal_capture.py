@@ -71,11 +71,22 @@ def _classify(values, theta, theta0, k):
         P = tides.capture_probability(p, e, w0, q)
         gp[p] = p_reach * P
         p_reach *= 1.0 - P
+    # decided: held in a resonance, or settled at q, or already below p (passed through); a spin still
+    # above p and on its way down is undecided for p (NaN: a sweep's mean over starts leaves it out)
+    settled = captured != 0.0 or abs(final - q) < 0.02
+
+    def outcome(p):
+        if captured == p:
+            return 1.0
+        if settled or final < p - CAPTURE_TOL:
+            return 0.0
+        return float("nan")
+
     m = {
         "final_spin_rate_n": final,
         "captured_resonance": float(captured),
-        "captured_3_2": float(captured == 1.5),
-        "captured_1_1": float(captured == 1.0),
+        "captured_3_2": outcome(1.5),
+        "captured_1_1": outcome(1.0),
         "pseudo_synchronous_rate_n": q,
         "gp_capture_probability_3_2": gp.get(1.5, 0.0),
         "gp_capture_probability_1_1": gp.get(1.0, 0.0),
@@ -210,6 +221,7 @@ def _row(p, metric, gp_metric):
     if "r" not in _SWEEP_CACHE:
         _SWEEP_CACHE["r"] = _capture_sweep()
     values, out = _SWEEP_CACHE["r"]
+    assert np.all(np.isfinite(out[metric])), "every start must be decided: run more orbits"
     P_sim = float(np.mean(out[metric]))
     P_gp = float(out[gp_metric][0])
     sigma = float(np.sqrt(max(P_gp * (1 - P_gp), 1e-12) / N_PHASES))
