@@ -73,7 +73,12 @@ def _classify(values, theta, theta0, k):
         p_reach *= 1.0 - P
     # decided: held in a resonance, or settled at q, or already below p (passed through); a spin still
     # above p and on its way down is undecided for p (NaN: a sweep's mean over starts leaves it out)
-    settled = captured != 0.0 or abs(final - q) < 0.02
+    # held anywhere (also in a higher-order resonance such as 5:4): over the last two windows the
+    # spin changed by less than a fifth of what the tide alone would have changed it
+    before = (th[-1 - last] - th[-1 - 2 * last]) / (2 * np.pi * k * last) if len(th) > 2 * last else np.nan
+    expected = values["tide_rate"] * float(tides.hut_omega(e)) * abs(final - q) * 2 * np.pi * k * last
+    held = bool(np.isfinite(before) and abs(final - before) < 0.2 * expected)
+    settled = captured != 0.0 or abs(final - q) < 0.02 or held
 
     def outcome(p):
         if captured == p:
