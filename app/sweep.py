@@ -685,7 +685,8 @@ def _client(cluster, workers):
         old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
         try:
             lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                              dashboard_address=None, silence_logs=logging.ERROR)
+                              dashboard_address="127.0.0.1:0", worker_dashboard_address="127.0.0.1:0",
+                              silence_logs=logging.CRITICAL)
         finally:
             if main:
                 signal.signal(signal.SIGINT, old)
@@ -729,6 +730,7 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     counts = {k: 0 for k in STATUS if k != "not run"}
     interrupted = False
     if todo:
+        interrupted = False
         client, local, where, owned = _client(cluster, workers)
         summary.cluster = where
         threads = 1 if local is not None else None
@@ -739,10 +741,12 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
                     summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
         finally:
             try:
+                if interrupted and local is not None:
+                    _stop_workers(local)  # a worker deep in a long chunk would hold the exit for minutes
                 if owned:
                     client.close()
                 if local is not None:
-                    local.close()
+                    local.close(timeout=20)
             except Exception:  # noqa: BLE001 — shutting down after Ctrl-C
                 pass
     summary.seconds = time.perf_counter() - t0
@@ -757,6 +761,18 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if kind == "parquet":
         writer.finish()
     return summary, writer.open()
+
+
+def _stop_workers(local):
+    """SIGTERM to the local cluster's worker processes (this process started them), so that an
+    interrupted sweep exits at once instead of waiting for the chunks in flight."""
+    for nanny in list(getattr(local, "workers", {}).values()):
+        try:
+            pid = nanny.pid
+            if pid:
+                os.kill(pid, signal.SIGTERM)
+        except Exception:  # noqa: BLE001 — already gone
+            pass
 
 
 def _nruns(region):

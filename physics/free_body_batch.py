@@ -16,7 +16,7 @@ from .inertia import validate_moments
 from .integrator import SCHEMES, _run
 
 
-@nb.njit(parallel=True, cache=True)
+@nb.njit(parallel=True, cache=True, nogil=True)
 def _batch(L, q, I, h, n_steps, stride, kick, drift_c, out_L, out_q):
     n = L.shape[0]
     tq = np.zeros(3)

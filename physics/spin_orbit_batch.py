@@ -25,7 +25,8 @@ minimax kernels on [−π/4, π/4] after a Cody–Waite reduction by π/2, error
 result's scale), and θ is kept reduced modulo π (with the count of half turns beside it) so the
 phase keeps full precision over millions of turns. A body's arithmetic never depends on the
 other bodies of the batch: a batch of one and a batch of a thousand give bit-identical results
-(the batch is padded to whole blocks so every body runs the same vector code).
+(the batch is padded to whole blocks so every body runs the same vector code). The compiled loop
+releases the GIL, so a Dask worker stays responsive (heartbeats) through a long chunk.
 """
 from __future__ import annotations
 
@@ -129,7 +130,7 @@ def _stage_tide(tw, wv, a, bb, kb, cb, tf, g, g6, fd, dl, d, lyap_on):
 
 
 
-@nb.njit(parallel=True, fastmath=True, cache=True)
+@nb.njit(parallel=True, fastmath=True, cache=True, nogil=True)
 def _kernel(th_w, nwrap, w, kstr, ctide, two_f, r3, r6, fdot, m, s0, ck, dk, h, n_steps, k0, stride,
             out_th, out_w, lyap_on, tide_on, dth, dw, lsum, renorm):
     """Advance every body n_steps steps (global step numbers k0 … k0 + n_steps − 1).
