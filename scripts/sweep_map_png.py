@@ -110,10 +110,16 @@ def main():
     ap.add_argument("--vmin", type=float)
     ap.add_argument("--vmax", type=float)
     ap.add_argument("--title", default="")
+    ap.add_argument("--xmax", type=float, help="leave out the columns beyond this x")
     a = ap.parse_args()
     if a.profile:
         m = open_map(a.path, a.metric, x=a.x, y=False, reduce=a.reduce)
         also = open_map(a.path, a.also, x=a.x, y=False, reduce="mean") if a.also else None
+        if a.xmax is not None:
+            for mm in (m, also):
+                if mm is not None:
+                    keep = mm.x_values <= a.xmax + 1e-12
+                    mm.x_values, mm.values = mm.x_values[keep], mm.values[:, keep]
         draw_profile(m, a.out, also, a.title)
     else:
         draw_map(open_map(a.path, a.metric, x=a.x, y=a.y, reduce=a.reduce), a.out, a.vmin, a.vmax, a.title)
