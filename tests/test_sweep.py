@@ -148,7 +148,7 @@ def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_pat
     assert sessions[0]["interrupted"] and not sessions[1]["interrupted"]
     # the finished chunks are untouched, the rest filled
     for name in ("forced_amplitude_rad", "status"):
-        assert np.array_equal(ds[name].values[kept], before[name].values[kept])
+        assert np.array_equal(ds[name].values[kept], before[name].values[kept], equal_nan=True)
     st = ds["status"].values
     # every run finished: ok, and refused (with why) where (B − A)/C = 0.333
     assert np.all(st[:, :3] == sw.STATUS["ok"]) and np.all(st[:, 3] == sw.STATUS["refused"])
