@@ -68,18 +68,12 @@ def pseudo_synchronous_rate(e):
     return hut_N(e) / hut_omega(e)
 
 
-def resonance_strength(p, e, n_points=4096):
-    """Goldreich & Peale's H(p, e) = ⟨(a/r)³ cos(2f − 2pM)⟩ over the mean anomaly M, by the
-    trapezoidal rule on an even grid of M (exponentially convergent for this periodic integrand;
-    4096 points give round-off for e ≤ 0.9). Its series 1 − 5e²/2, 7e/2 − 123e³/16, … is
-    `physics.libration.goldreich_peale_H`."""
-    from .orbits import KeplerOrbit
+def resonance_strength(p, e):
+    """Goldreich & Peale's H(p, e) = ⟨(a/r)³ cos(2f − 2pM)⟩ over the mean anomaly, exact (the
+    Hansen coefficient X^{−3,2}_{2p}(e) by quadrature: `physics.hansen.hansen_H`)."""
+    from .hansen import hansen_H
 
-    if not (0 <= e < 1):
-        raise ParameterError("eccentricity", e, "allowed range [0, 1)")
-    M = 2 * np.pi * np.arange(n_points) / n_points
-    f, r = KeplerOrbit(a=1.0, e=e, n=1.0).anomalies(M)
-    return float(np.mean(r ** -3 * np.cos(2 * f - 2 * p * M)))
+    return float(hansen_H(p, e))
 
 
 def capture_probability(p, e, omega0, q=None):
