@@ -13,6 +13,7 @@ import numpy as np
 
 from .errors import ParameterError
 from .inertia import validate_moments
+from .free_flow import prepare
 from .integrator import SCHEMES, _run
 
 
@@ -22,11 +23,15 @@ def _batch(L, q, I, h, n_steps, stride, kick, drift_c, out_L, out_q):
     tq = np.zeros(3)
     pos = np.zeros((1, 1, 1, 3))
     gm = np.zeros(0)
+    c3 = np.zeros(7)
     for i in nb.prange(n):
-        Li, qi = _run(L[i].copy(), q[i].copy(), I[i].copy(), h, n_steps, stride, kick, drift_c, tq, False, pos, gm,
-                      out_L[i], out_q[i])
-        L[i] = Li
-        q[i] = qi
+        Li0, Ii = L[i].copy(), I[i].copy()
+        ip, c, tab = prepare(Li0, Ii, h)  # the free orbit's constants from the first state, as the integrator
+        last = np.empty(7)
+        _run(Li0, q[i].copy(), Ii, h, n_steps, stride, kick, drift_c, tq, False, pos, gm, c3, 0.0,
+             out_L[i], out_q[i], last, ip, c, tab)
+        L[i] = last[:3]
+        q[i] = last[3:]
 
 
 def free_body_batch(inertia, omega0, q0, duration, step, stride=1):
