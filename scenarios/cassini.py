@@ -26,7 +26,7 @@ from ..physics import moon
 from ..physics import quaternion as quat
 from ..physics.constants import ARCSEC_RAD, JULIAN_YEAR_DAYS
 from ..physics.integrator import PointMass, integrate
-from ..physics.params import Param
+from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, get, register
 from .checks import register_check
@@ -82,7 +82,12 @@ def peale(values) -> float:
     I = moon.moments(values["beta"], values["gamma"])
     k_e = CS.torque_coefficient(moon.GM_EARTH_KM3_DAY2, 1.0 / (a ** 3 * (1 - e * e) ** 1.5), N_MONTH)
     k_s = CS.torque_coefficient(GM_SUN_KM3_DAY2, C.AU_KM ** -3.0, N_MONTH) if values["sun_torque"] == "on" else 0.0
-    return math.degrees(CS.peale_obliquity(inc, g, k_e, k_s, I))
+    I_state = CS.peale_obliquity(inc, g, k_e, k_s, I)
+    if I_state is None:
+        raise ParameterError("beta", values["beta"], "large enough for a Cassini state 2 at this node period "
+                             f"({values['node_period_yr']:g} yr) and inclination (raise beta or gamma, or "
+                             "lengthen node_period_yr)")
+    return math.degrees(I_state)
 
 
 def _cassini(values, progress=None):
