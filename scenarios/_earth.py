@@ -17,7 +17,7 @@ MIN_STEPS = 20  # integrator steps in the shortest run
 REBOUND_STEPS_PER_DAY = 4.0
 # the Moon's osculating elements calibrated once per process (EP.calibrated_moon_elements, cached):
 # three REBOUND runs of four years
-CALIBRATION_STEPS = 3 * 4 * 365.25 * REBOUND_STEPS_PER_DAY
+CALIBRATION_STEPS = 3 * 4 * JULIAN_YEAR_DAYS * REBOUND_STEPS_PER_DAY
 
 
 def rotation_run(duration_days: float, step_days: float, sample_days: float) -> tuple[float, float]:

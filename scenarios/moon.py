@@ -581,9 +581,9 @@ def _draw(run, spec, view):
 def _cost(values):
     """The run over `years` at step_days (yoshida4), twice when it is long enough for the free
     period (a companion run); the Earth's position and eight libration series per sample."""
-    duration = values["years"] * 365.25
+    duration = values["years"] * JULIAN_YEAR_DAYS
     n = step_count(duration, values["step_days"])
-    runs = 1 if duration < 3 * 365.25 else 2
+    runs = 1 if duration < 3 * JULIAN_YEAR_DAYS else 2
     samples = samples_kept(n, max(1, int(np.ceil(n / 6000)))) if np.isfinite(n) else 6001
     return Cost(runs * n, samples, trajectory_bytes(samples, bodies=1, series=8))
 
