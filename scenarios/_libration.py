@@ -52,3 +52,8 @@ def batched_planar_runs(lam0, lamdot0, strength, orbit, duration, step, stride, 
         L = np.stack([z, z, C * wd], axis=1)
         runs.append((t, L, q))
     return runs
+def run_samples(n_steps: float) -> float:
+    """States kept by a run of n_steps steps at `stride_for(n_steps)` (physics.integrator)."""
+    from ..physics.integrator import samples_kept
+
+    return samples_kept(n_steps, stride_for(n_steps)) if np.isfinite(n_steps) else MAX_SAMPLES + 1
