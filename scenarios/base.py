@@ -270,6 +270,27 @@ def _rename_error(e: ParameterError, params, values) -> ParameterError:
     return ParameterError("parameters", "these values", str(e))
 
 
+@dataclass(frozen=True)
+class Batch:
+    """A scenario's batched path for sweeps: many runs advanced together (one shared orbit, a
+    compiled kernel over the batch) instead of one after another.
+
+    - `fn(values, swept)`: `values` the fixed parameters (validated), `swept` name → (n,) arrays of
+      the swept ones; returns name → (n,) metric arrays (the same names and values, to round-off,
+      as `simulate` gives for each point), optionally "_status" (codes of app.sweep.STATUS) and
+      "_messages" (index → sentence) for points it refuses.
+    - `sweepable`: the parameters that may vary across one batch (a sweep over any other one maps
+      single runs);
+    - `metrics`: the metrics `fn` computes (a sweep asking for others maps single runs);
+    - `chunk`: runs per chunk that suit it (few where each point has costly set-up of its own, many
+      where the kernel is all the work)."""
+
+    fn: Callable[[dict[str, Any], dict[str, np.ndarray]], dict[str, np.ndarray]]
+    sweepable: tuple[str, ...]
+    metrics: tuple[str, ...]
+    chunk: int = 256
+
+
 RESERVED = ("progress", "preset", "max_steps", "max_memory")  # keywords of Scenario.simulate: no parameter may be called so
 
 

@@ -22,6 +22,7 @@ from ..physics.orbits import KeplerOrbit
 from ..physics.params import Param, ParameterError
 from ..physics.spin_orbit_batch import planar_batch
 from ..physics.trajectory import Trajectory
+from .budget import Cost, trajectory_bytes
 from .base import Batch, Comparison, Run, Scenario, get, register
 from .checks import register_check
 from .drawing import Camera
@@ -50,6 +51,16 @@ def _integrate(values_list):
                        orb, 2 * np.pi / spo, orbits * spo, scheme=SCHEME,
                        tide_rate=[v["tide_rate"] for v in values_list], stride=k * spo)
     return orb, k, th0, out
+
+
+def _cost(values):
+    """orbits × steps_per_orbit steps of the planar kernel; kept: a state every k orbits with the
+    attractor's position and four series (the orbit-mean spin, shared with the trajectory's series,
+    and the three lines of the plot)."""
+    orbits = int(round(values["orbits"]))
+    samples = 1 + orbits // _stride_orbits(orbits)
+    return Cost(float(orbits * int(values["steps_per_orbit"])), samples,
+                trajectory_bytes(samples, bodies=1, series=4))
 
 
 def _classify(values, theta, theta0, k):
@@ -196,6 +207,7 @@ register(Scenario(
     ),
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
     simulate_fn=_simulate,
+    cost_fn=_cost,
     euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f) − c (a/r)⁶ (θ̇ − ḟ)\n"
                    "capture into θ̇ = p n: P = 2 / (1 + π(p − q) / (2ω₀√H(p, e)))  (Goldreich & Peale 1966)"),
     presets=(

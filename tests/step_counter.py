@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import contextlib
 
+import numpy as np
+
 
 @contextlib.contextmanager
 def count_steps():
@@ -21,11 +23,23 @@ def count_steps():
     from theoria.physics import integrator, libration
     from theoria.physics.three_body import lunar_elements
 
-    counts = {"rigid": 0, "rk4": 0, "ensemble": 0, "scipy": 0, "rebound": 0}
+    from theoria.physics import spin_orbit_batch
+    from theoria.scenarios import hyperion, tidal_capture
+
+    counts = {"rigid": 0, "rk4": 0, "ensemble": 0, "scipy": 0, "rebound": 0, "planar": 0}
     saved = [(integrator, "_run", integrator._run), (lunar_elements, "_rk4", lunar_elements._rk4),
              (libration, "_section_run", libration._section_run), (RungeKutta, "_step_impl", RungeKutta._step_impl),
              (rebound.Simulation, "integrate", rebound.Simulation.integrate)]
-    run, rk4, section, step_impl, reb = (s[2] for s in saved)
+    # the planar batch, wherever a module took its name
+    batch_owners = [m for m in (spin_orbit_batch, hyperion, tidal_capture) if hasattr(m, "planar_batch")]
+    saved += [(m, "planar_batch", m.planar_batch) for m in batch_owners]
+    run, rk4, section, step_impl, reb = (s[2] for s in saved[:5])
+    planar = spin_orbit_batch.planar_batch
+
+    def planar_(theta0, thetadot0, strength, orbit, h, n_steps, *a, **kw):
+        counts["planar"] += int(np.atleast_1d(theta0).shape[0]) * int(n_steps)
+        return planar(theta0, thetadot0, strength, orbit, h, n_steps, *a, **kw)
+
 
     def run_(L, q, I, h, n, *a):
         counts["rigid"] += int(n)
@@ -52,6 +66,8 @@ def count_steps():
 
     integrator._run, lunar_elements._rk4, libration._section_run = run_, rk4_, section_
     RungeKutta._step_impl, rebound.Simulation.integrate = step_impl_, reb_
+    for m in batch_owners:
+        m.planar_batch = planar_
     try:
         yield counts
     finally:
