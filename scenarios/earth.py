@@ -370,13 +370,14 @@ register(Scenario(
             "obliquity with the Moon's node, 1.3″ twice a year, 0.2″ twice a month. The table puts "
             "each term beside the IAU value and Euler's."),
     params=(
-        Param("years", 100.0, 0.0, 400.0, "yr", "length of the run from J2000", exclusive_min=True, step=1.0),
+        Param("years", 100.0, 0.0, 400.0, "yr", "length of the run from J2000", exclusive_min=True, step=1.0,
+              label="Length of the run"),
         Param("step_days", 0.5, 0.0, 3.0, "day", "integrator step (the spin is solved exactly; resolve the month)",
-              exclusive_min=True, step=0.1),
+              exclusive_min=True, step=0.1, label="Integrator step", advanced=True),
         Param("H", EARTH_DYNAMICAL_ELLIPTICITY, 0.0, 0.05, "1", "dynamical ellipticity (C − A)/C (IAU 2000: 0.0032737949)",
-              exclusive_min=True),
+              exclusive_min=True, label="Dynamical ellipticity H"),
         Param("obliquity_deg", math.degrees(OBLIQUITY_J2000_RAD), 0.0, 89.0, "deg", "obliquity at J2000 (IAU 2006: 23.4392794°)",
-              exclusive_min=True),
+              exclusive_min=True, label="Obliquity at J2000"),
     ),
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
     preview={'years': 10.0, 'step_days': 1.0},

@@ -590,25 +590,32 @@ register(Scenario(
             "sky: started from JPL's DE421 Moon and pulled by DE421's Earth and Sun, the model stays "
             "within a few arcseconds of DE421's Moon for years (time plot: difference from DE421)."),
     params=(
-        Param("years", 6.0, 0.2, 40.0, "yr", "time span"),
-        Param("start_year", 2025.0, 1900.0, 2190.0, "yr", "start epoch (TDB, years; DE421 covers 1900.01–2200.09)"),
-        Param("step_days", 0.25, 0.01, 2.0, "day", "integrator step"),
-        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)"),
-        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (LLR: 227.7e-6)"),
-        Param("equator_inclination_deg", C.MOON_EQUATOR_INCLINATION_DEG, 0.0, 10.0, "deg", "lunar equator to ecliptic (1.54242°)"),
+        Param("years", 6.0, 0.2, 40.0, "yr", "time span", label="Time span"),
+        Param("start_year", 2025.0, 1900.0, 2190.0, "yr", "start epoch (TDB, years; DE421 covers 1900.01–2200.09)",
+              label="Start year"),
+        Param("step_days", 0.25, 0.01, 2.0, "day", "integrator step", label="Integrator step", advanced=True),
+        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)", label="β = (C − A)/B"),
+        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (LLR: 227.7e-6)", label="γ = (B − A)/C"),
+        Param("equator_inclination_deg", C.MOON_EQUATOR_INCLINATION_DEG, 0.0, 10.0, "deg", "lunar equator to ecliptic (1.54242°)",
+              label="Equator to ecliptic"),
         Param("start", "de421", kind="choice", choices=("de421", "forced", "uniform"),
               help="'de421': DE421's attitude and spin (the real Moon); 'forced': the mean Cassini frame plus "
                    "Euler's forced libration (small free libration); 'uniform': the mean frame rotating "
-                   "uniformly (a large free libration, period ~2.9 yr)"),
+                   "uniformly (a large free libration, period ~2.9 yr)",
+                   label="Start", choice_labels=("on the forced libration", 'turning uniformly (free libration)')),
         Param("ephemeris", "de421", kind="choice", choices=("de421", "lunar-theory"),
               help="where the Earth and the Sun are: JPL DE421, or the main terms of the lunar theory (Meeus ch. 47) "
-                   "with the Sun on its mean ellipse"),
+                   "with the Sun on its mean ellipse",
+                   label="Where the Earth and the Sun are", choice_labels=("JPL DE421", 'lunar theory (main terms)')),
         Param("field", "degree-3", kind="choice", choices=("degree-3", "quadrupole"),
               help="the Moon's gravity field the torques act on: quadrupole (β, γ; Euler's §815) or with DE421's "
-                   "degree-3 harmonics"),
-        Param("sun_torque", "on", kind="choice", choices=("on", "off"), help="the Sun's torque on the Moon's figure"),
+                   "degree-3 harmonics",
+                   label="The Moon's gravity field",
+                   choice_labels=("with DE421's degree-3 terms", 'quadrupole only (Euler)')),
+        Param("sun_torque", "on", kind="choice", choices=("on", "off"), help="the Sun's torque on the Moon's figure",
+              label="The Sun's torque", choice_labels=("on", "off")),
         Param("core_fraction", C.MOON_CORE_MOMENT_FRACTION_DE421, 0.0, 0.05, "", "fluid core's share of C, not turning "
-              "with the mantle (DE421: 0.0007; 0: rigid)"),
+              "with the mantle (DE421: 0.0007; 0: rigid)", label="Fluid core's share of C"),
     ),
     camera=Camera((4.2, -3.6, 2.4), (0.0, 0.0, 0.0)),
     preview={'years': 1.0},

@@ -136,16 +136,24 @@ def _syzygy_params():
 
     return (
         Param("side", "conjunction", kind="choice", choices=("conjunction", "opposition"),
-              help="Moon between Earth and Sun (§7) or beyond the Earth (§9)"),
-        Param("amplitude_deg", 0.05, 0.0, 20.0, "deg", "A: amplitude of η, the Moon's angle from the Sun line"),
+              help="Moon between Earth and Sun (§7) or beyond the Earth (§9)",
+              label="Side",
+              choice_labels=("conjunction: Moon between Earth and Sun", "opposition: Moon beyond the Earth")),
+        Param("amplitude_deg", 0.05, 0.0, 20.0, "deg", "A: amplitude of η, the Moon's angle from the Sun line",
+              label="Swing amplitude A"),
         Param("start", "linear-mode", kind="choice", choices=("euler", "linear-mode"),
-              help="Euler's first-order solution at ω = 0, or the exact linear centre mode"),
-        Param("escape_seed", 0.0, 0.0, 0.1, "b", "extra displacement along the unstable direction"),
-        Param("duration_yr", 1.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)"),
+              help="Euler's first-order solution at ω = 0, or the exact linear centre mode",
+              label="Start", choice_labels=("Euler's first-order start", "exact small-swing mode")),
+        Param("escape_seed", 0.0, 0.0, 0.1, "b", "extra displacement along the unstable direction",
+              label="Push along the escape direction"),
+        Param("duration_yr", 1.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)",
+              label="Length of the run"),
         Param("mass_ratio", sz.EARTH_SUN_MASS_RATIO, 1e-9, 1.0, "1",
-              "m = M_earth/M_sun (IAU 2009: 3.0035e-6); Euler's n²c³/a³ is m/(1 + m)"),
+              "m = M_earth/M_sun (IAU 2009: 3.0035e-6); Euler's n²c³/a³ is m/(1 + m)",
+              label="Earth/Sun mass ratio m", advanced=True),
         Param("moon_revolutions_per_year", sz.MOON_REVOLUTIONS_PER_YEAR, 1.0, 100.0, "1/yr",
-              "n: sidereal months per sidereal year (13.369; Euler: √175 = 13.23); sets the lunar unit"),
+              "n: sidereal months per sidereal year (13.369; Euler: √175 = 13.23); sets the lunar unit",
+              label="Months per year n", advanced=True),
     )
 
 
