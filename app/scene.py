@@ -128,6 +128,7 @@ class SceneView:
         self.scene = scene
         self.root = root
         self.grow_trails = grow_trails
+        self.label_scale = 1.0  # text size of labels (presenter mode: larger)
         self.drawing: Drawing | None = None
         self.overlays: dict[str, bool] = {}
         self.frame = 0
@@ -294,7 +295,10 @@ class SceneView:
     def _draw_label(self, it: Label, name, anim):
         text = str(self._static_value(it.text, "text" in anim))
         pos = _tuple(self._static_value(it.position, "position" in anim))
-        return [self._node(name, lambda: self.scene.add_label(name, text, position=pos), text=text, position=pos)]
+        anchor, scale = getattr(it, "anchor", "top-left"), float(self.label_scale)
+        return [self._node(name, lambda: self.scene.add_label(name, text, position=pos, anchor=anchor,
+                                                              font_screen_scale=scale),
+                           sig=(anchor, scale), text=text, position=pos)]
 
     def _draw_light(self, it: Light, name, anim):
         pos = _tuple(self._static_value(it.position, "position" in anim))
@@ -317,8 +321,9 @@ class SceneView:
                 f"{name}/arrow", np.zeros((1, 2, 3), np.float32), col, **style), sig=tuple(style.values()))
             label = None
             if it.labels:
-                label = self._node(f"{name}/label", lambda: self.scene.add_label(f"{name}/label", str(it.labels[0])),
-                                   text=str(it.labels[0]))
+                scale = float(self.label_scale)
+                label = self._node(f"{name}/label", lambda: self.scene.add_label(
+                    f"{name}/label", str(it.labels[0]), font_screen_scale=scale), sig=(scale,), text=str(it.labels[0]))
             self._vectors[it.name] = [frame, arrow, label, -1.0, poses]
             return [frame, arrow, label]
         vec = _f32(self._static_value(it.vectors, "vectors" in anim))
@@ -327,8 +332,10 @@ class SceneView:
                           points=pts)]
         for j, text in enumerate(it.labels):
             pos = _tuple(1.08 * pts[j, 1])
+            scale = float(self.label_scale)
             out.append(self._node(f"{name}/label_{j}", lambda text=text, pos=pos, j=j: self.scene.add_label(
-                f"{name}/label_{j}", str(text), position=pos), text=str(text), position=pos))
+                f"{name}/label_{j}", str(text), position=pos, font_screen_scale=scale), sig=(scale,), text=str(text),
+                position=pos))
         return out
 
     def _draw_path(self, it: Path, name, anim):

@@ -154,12 +154,19 @@ class Arrows(Item):
     STATIC_NDIM: ClassVar[dict] = {"vectors": 2}
 
 
+LABEL_ANCHORS = ("top-left", "top-center", "top-right", "center-left", "center-center", "center-right",
+                 "bottom-left", "bottom-center", "bottom-right")
+
+
 @dataclass(kw_only=True)
 class Label(Item):
-    """Text at a point: fixed, or a string per frame (a read-out)."""
+    """Text at a point: fixed, or a string per frame (a read-out). `anchor` says which point of the
+    text box sits on `position` ("top-left": the text runs right of and below the point,
+    "center-right": it ends left of the point, ...; LABEL_ANCHORS)."""
 
     text: Any  # str, or F strings
     position: np.ndarray = (0.0, 0.0, 0.0)
+    anchor: str = "top-left"
     STATIC_NDIM: ClassVar[dict] = {"text": 0, "position": 1}
 
 
