@@ -115,13 +115,16 @@ class ParamControls:
         self._values = dict(vals)
         main = [p for p in spec.params if not p.advanced]
         extra = [p for p in spec.params if p.advanced]
+        self._top = True
         self._add(main, vals)
         if extra:
             if advanced is None:
                 advanced = gui.add_folder("Numerical settings", expand_by_default=False, order=self._next())
                 self._containers.append(advanced)
+                self._top = False  # its elements go with the folder
             with advanced:
                 self._add(extra, vals)
+        self._top = True
 
     def _next(self) -> float | None:
         if self._order is None:
@@ -142,7 +145,7 @@ class ParamControls:
                                  initial_value=p.choice_text(value), hint=hint, order=self._next())
             h.on_update(lambda e, name=name: self._taken(name, self.handles[name].value, False))
             self.kinds[name] = "choice"
-            self._containers.append(h)
+            self._keep(h)
         elif (rng := slider_range(p, presets)) is not None:
             lo, hi, step = rng
             v = min(max(value, lo), hi)
@@ -150,7 +153,7 @@ class ParamControls:
                                initial_value=int(v) if p.kind == "int" else float(v), hint=hint, order=self._next())
             h.on_update(lambda e, name=name: self._taken(name, self.handles[name].value, True))
             self.kinds[name] = "slider"
-            self._containers.append(h)
+            self._keep(h)
         else:
             form = gui.add_form(None, order=self._next())
             with form:
@@ -158,8 +161,12 @@ class ParamControls:
             form.on_submit(lambda e, name=name: self._submitted(name))
             self.forms[name] = form
             self.kinds[name] = "text"
-            self._containers.append(form)
+            self._keep(form)
         self.handles[name] = h
+
+    def _keep(self, h) -> None:
+        if self._top:
+            self._containers.append(h)
 
     # ---- values in -------------------------------------------------------------------------
     def _taken(self, name: str, shown, debounce: bool) -> None:

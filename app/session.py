@@ -421,6 +421,8 @@ class ClientSession:
 
     # ---- playback controls -----------------------------------------------------------------------
     def _on_playback(self, which: str) -> None:
+        if self._guard:
+            return
         if which in (PLAY, PAUSE):
             self._toggle_play()
         elif which == RESET:
@@ -432,10 +434,13 @@ class ClientSession:
 
     def _set_playing(self, on: bool) -> None:
         self.playing = bool(on)
+        self._guard = True
         try:
             self.playback.options = [PAUSE if self.playing else PLAY, RESET, BACK, FORWARD]
         except Exception:
             pass
+        finally:
+            self._guard = False
 
     def _toggle_play(self) -> None:
         self._set_playing(not self.playing)
