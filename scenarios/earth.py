@@ -235,8 +235,8 @@ def _earth(values, progress=None):
 
     comps = [
         Comparison("luni-solar precession", eul, sim(rate), LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY / 100, "arcsec/yr",
-                   "modern: IAU 2006 ψ_A (fixed ecliptic; includes 0.019″/yr geodesic precession). "
-                   f"General precession p_A = {GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100:.5f}″/yr adds the ecliptic's motion (planets, not modelled). "
+                   "modern: IAU 2006 ψA (fixed ecliptic; includes 0.019″/yr geodesic precession). "
+                   f"General precession pA = {GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100:.5f}″/yr adds the ecliptic's motion (planets, not modelled). "
                    "Euler: Σ N cos n, circles in the ecliptic, A for C in N"),
         Comparison("  solar part", -mod["euler_sun"] / ARCSEC_RAD * YR, sim(parts["sun"]), -mod["sun"] / ARCSEC_RAD * YR, "arcsec/yr",
                    "modern: orbit-averaged formula (e☉ = 0.0167)"),
@@ -281,7 +281,7 @@ def _earth(values, progress=None):
         f"Solar part {parts['sun']:.3f}″/yr, lunar part {parts['moon']:.3f}″/yr (each from a run with that body alone); "
         f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr." if lunar_ok else
         f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr.",
-        "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψ_A, not the general precession p_A.",
+        "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψA, not the general precession pA.",
         "Moon's orbit: the osculating a, e, i at J2000 are calibrated so that the integrated mean month, e and i equal "
         "the observed ones; the node then regresses " + (f"with period {node_period:.3f} yr" if long_enough else "")
         + f" (observed {NODE_PERIOD_SIDEREAL_YR:.4f} yr against the fixed ecliptic, {NODE_PERIOD_YR:.3f} yr from the "
