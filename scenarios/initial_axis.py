@@ -10,7 +10,7 @@ from ..physics.euler_ch15 import initial_axis
 from ..physics.inertia import validate_moments
 from ..physics.integrator import integrate
 from ..physics.params import Param, ParameterError
-from .drawing import Camera
+from .drawing import Arrows, Camera, Label, Segments, standard
 from .base import Comparison, Run, Scenario, register
 from . import _validity
 from scipy.integrate import solve_ivp
@@ -62,6 +62,32 @@ def _initial_axis(values, progress=None):
                   plot_series={"|ω|": np.linalg.norm(traj.omega_body, axis=1)})
 
 
+TORQUE_COLOR = (200, 40, 120)
+EULER_AXIS_COLOR = (20, 20, 20)
+
+
+def _draw(run, spec, view):
+    """The body and Poinsot's picture, with what §806 is about, both fixed in the body: the torque
+    (P, Q, R) as an arrow, and the axis Euler predicts the body starts to turn about (cosines
+    ∝ P/A : Q/B : R/C) as a line through the centre. At the start ω (orange) lies on Euler's axis,
+    not on the torque; then it wanders off as the body gains speed."""
+    d = standard(run, spec, view)
+    tr = run.trajectory
+    tau = np.asarray(run.params["torque"], float)
+    t_hat = tau / np.linalg.norm(tau)
+    axis, _ = initial_axis(tau, tr.inertia)
+    axis = axis / np.linalg.norm(axis)
+    reach = 1.7
+    d.add(Arrows(name="body/torque", origins=np.zeros((1, 3)), vectors=(1.45 * t_hat)[None], colors=(TORQUE_COLOR,),
+                 shaft_radius=0.03, head_radius=0.075, head_length=0.14),
+          Label(name="body/torque/label", text="torque (P, Q, R)", position=1.58 * t_hat, anchor="center-left"),
+          Segments(name="body/euler_axis", points=np.array([[-reach * axis, reach * axis]], np.float32),
+                   colors=EULER_AXIS_COLOR, thickness=0.02),
+          Label(name="body/euler_axis/label", text="Euler's axis: P/A : Q/B : R/C (§806)",
+                position=(reach + 0.05) * axis, anchor="bottom-left"))
+    return d
+
+
 register(Scenario(
     name="initial-axis",
     title="A body at rest set turning",
@@ -86,6 +112,7 @@ register(Scenario(
     ),
     camera=Camera((2.6, 2.6, 1.9), (0.0, 0.0, 0.0)),
     simulate_fn=_initial_axis,
+    draw=_draw,
     check=_check_initial,
     euler_formula=("cos α : cos β : cos γ = P/aa : Q/bb : R/cc (§806)\n"
                    "α, β, γ: angles of the starting axis with the principal axes; aa, bb, cc: the moments A, B, C"),

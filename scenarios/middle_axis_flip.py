@@ -10,7 +10,7 @@ from ..physics.euler_ch15 import flip_interval_808
 from ..physics.inertia import validate_moments
 from ..physics.params import Param, ParameterError
 from ..physics.torque_free_exact import free_motion
-from .drawing import Camera
+from .drawing import Camera, standard
 from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
@@ -62,13 +62,16 @@ register(Scenario(
     title="Brick: the flip about the middle axis",
     section="§805, §808",
     group="ch. 15",
-    summary=("Spin a brick (or a tennis racket) about the axis of its middle moment B and it cannot "
+    summary=("Spin a brick (here 3 : 2 : 1, drawn with the proportions its moments give) about the axis "
+            "of its middle moment B and it cannot "
             "stay there: after a quiet while it turns over, then again, at regular intervals (the "
             "Dzhanibekov or tennis-racket effect). Watch the body flip while L stays fixed. The time "
             "between flips follows from Euler's quadrature of §808 (in modern terms 2K(k)/λ, with "
             "Jacobi's complete elliptic integral K); the smaller the first nudge, the longer the wait."),
     params=(
-        Param("inertia", (1.0, 2.0, 3.0), **INERTIA_PARAM),
+        # a homogeneous 3 : 2 : 1 brick: A = m(b² + c²)/12 and its cyclic versions, ∝ 5 : 10 : 13
+        # ((1, 2, 3) would be a flat plate, A + B = C)
+        Param("inertia", (5.0, 10.0, 13.0), **INERTIA_PARAM),
         Param("spin", 6.0, -50.0, 50.0, "rad/s", "initial rate about the middle axis", step=0.1,
               label="Spin rate about the middle axis"),
         Param("perturbation", 0.01, 1e-15, 0.5, "1",
@@ -81,6 +84,7 @@ register(Scenario(
     ),
     camera=Camera((3.4, 1.2, 1.6), (0.0, 0.0, 0.0)),  # B (green) axis across the view: the flip is seen
     simulate_fn=_middle_axis_flip,
+    draw=lambda run, spec, view: standard(run, spec, view, shape="box"),
     check=_check_flip,
     euler_formula=("dt = −𝔄 dx √(𝔅ℭ) / [ √(𝔄xx − 𝔄a² + 𝔅b²) · √(𝔄xx − 𝔄a² + ℭc²) ] (§808)"),
     presets=(

@@ -17,7 +17,7 @@ from . import _validity
 from .base import get
 from .checks import register_check
 from ._precession import MAX_SAMPLES
-from .drawing import Label, Option, Path, Segments, Sphere, segments, unit
+from .drawing import Label, Option, Path, Segments, Sphere, segments, unit, wire_sphere
 from ._ch16_drawing import (WIGGLE_COLOR, body_scene, centre_line, centre_of_force, magnified_about_start, nice_step,
                             path_samples)
 
@@ -127,6 +127,10 @@ def _draw(run, spec, view):
         d.add(Path(name="body/pole_path", points=path[idx], color=WIGGLE_COLOR, thickness=0.02, at=at),
               Sphere(name="body/pole_now", radius=0.04, color=WIGGLE_COLOR, position=path[d.frames]))
         _pole_scale(d, u[0], float(np.degrees(np.max(np.arccos(np.clip(u @ u[0], -1, 1))))), k)
+        # the sphere the path is drawn on, fixed in the body: parallels about A and meridians through it,
+        # so that the path is seen on the turning body rather than floating in space
+        grid = wire_sphere(POLE_RADIUS, n_lat=5, n_lon=6)[..., [2, 0, 1]]
+        d.add(Segments(name="body/pole_sphere", points=grid, colors=(175, 175, 190), thickness=0.003))
     centre_line(d, run, spec, view)
     return d
 
