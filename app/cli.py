@@ -188,6 +188,7 @@ def cmd_record(args) -> int:
 
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     record(sc.name, args.out, values)
+    _wrote(args.out, f"a rerun recording of {sc.name}", "theoria replay")
     return 0
 
 
@@ -196,7 +197,26 @@ def cmd_export(args) -> int:
 
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     export(sc.name, args.out, values)
+    _wrote(args.out, f"an HTML replay of {sc.name}", "open it in a browser, or theoria replay")
     return 0
+
+
+def human_size(n: int) -> str:
+    """A file size as a person reads it: "840 KB", "1.2 MB"."""
+    for unit, k in (("GB", 1e9), ("MB", 1e6), ("KB", 1e3)):
+        if n >= k:
+            v = n / k
+            return f"{v:.1f} {unit}" if v < 10 else f"{v:.0f} {unit}"
+    return f"{n} bytes"
+
+
+def _wrote(path: str, what: str, how: str) -> None:
+    """Say where the file went and how big it is (a silent success looked like a failure)."""
+    import os
+
+    full = os.path.abspath(path)
+    size = os.path.getsize(full)
+    print(f"theoria: wrote {what} to {full} ({human_size(size)}); {how} {path}", flush=True)
 
 
 def cmd_replay(args) -> int:

@@ -113,10 +113,10 @@ def test_session_typed_values_reset_step_and_presenter_mode(monkeypatch):
     from test_gallery import _session, _wait
 
     with _session("middle-axis-flip") as (s, client):
-        _wait(lambda: s.updates >= 1)
+        _wait(lambda: s.updates >= 1, 300)
         n = s.updates
         s.controls.enter("perturbation", "1e-3")
-        _wait(lambda: s.updates > n)
+        _wait(lambda: s.updates > n, 300)
         assert s.good_values["perturbation"] == 1e-3
         # a value out of range is refused with the allowed range; the field shows the last good value
         s.controls.enter("perturbation", "7")
@@ -146,7 +146,7 @@ def test_session_restores_a_link(monkeypatch):
     q = "s=middle-axis-flip&p.spin=4.5&p.perturbation=0.002&t=10&play=0&cam=4,1,2,0,0,0&v.axes=0"
     monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: "http://127.0.0.1:1/?" + q)
     with _session("free-tumble") as (s, client):
-        _wait(lambda: s.updates >= 1)
+        _wait(lambda: s.updates >= 1, 300)
         assert s.spec.name == spec.name and s.good_values["spin"] == 4.5 and s.good_values["perturbation"] == 0.002
         assert not s.playing and client.camera.position == (4.0, 1.0, 2.0)
         t = s.drawing.times[s.view.frame]
@@ -154,3 +154,14 @@ def test_session_restores_a_link(monkeypatch):
         assert s.toggles["axes"].value is False
         st = s.link_state()
         assert st.params["spin"] == "4.5" and st.camera[:3] == (4.0, 1.0, 2.0) and st.overlays == {"axes": False}
+
+
+def test_export_says_where_the_file_went_and_its_size(tmp_path, capsys):
+    from theoria.app.cli import main
+
+    out = tmp_path / "flip.html"
+    assert main(["export", "middle-axis-flip", "--set", "duration=2", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert str(out) in text and out.exists()
+    size = out.stat().st_size
+    assert f"{size / 1e6:.1f} MB" in text or f"{size / 1e3:.0f} KB" in text or f"{size / 1e6:.0f} MB" in text
