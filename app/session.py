@@ -54,7 +54,7 @@ PLAY_HZ = 60.0  # playback tick for one browser (messages go out each 1/60 s)
 PLAY_BUDGET = 360.0
 PLAY_HZ_MIN = 12.0
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
-SLIDER_DEBOUNCE_S = 0.15  # a dragged slider is simulated at its last value after this quiet time
+SLIDER_DEBOUNCE_S = 0.15  # slider moves closer than this are a drag: only its last value is simulated
 STEP_FRACTION = 0.01  # ← / → move the clock by this fraction of the run
 LINK_EVERY_S = 0.5  # the address bar follows the view at most this often (1 s while playing)
 PRESENT_LABEL_SCALE = 1.6  # labels in the scene in presenter mode
@@ -130,6 +130,7 @@ class ClientSession:
         self._view_lock = threading.RLock()  # the worker rebuilds while the player animates
         self._closed = False
         self._debounce: threading.Timer | None = None
+        self._slider_at = -1e9  # when a slider last moved (perf_counter)
         self._link_sent = None
         self._link_time = 0.0
         self._class_key = None
@@ -348,12 +349,18 @@ class ClientSession:
         if self._debounce is not None:
             self._debounce.cancel()
             self._debounce = None
-        if debounce:  # a slider being dragged: the last value wins, nothing queues
+        now = time.perf_counter()
+        if debounce and now - self._slider_at < SLIDER_DEBOUNCE_S:
+            # a slider being dragged: its first value ran at once; the values in between are dropped
+            # and the last one runs when the drag pauses (the last value wins, nothing queues)
+            self._slider_at = now
             self._debounce = threading.Timer(SLIDER_DEBOUNCE_S, lambda: self._safe(self.request))
             self._debounce.daemon = True
             self._debounce.start()
-        else:
-            self.request()
+            return
+        if debounce:
+            self._slider_at = now
+        self.request()
 
     # ---- messages ----------------------------------------------------------------------------
     def notify(self, title: str, body: str, color: str = "red") -> None:

@@ -20,7 +20,7 @@ when the batch holding the new scene arrives -- the path point clouds of the new
 sent in one `client.atomic()` batch after the re-simulation). The page's own drawing time is
 not included (measured separately in Chromium by `app-slider-latency`).
 
-Each client is a student: it waits for the first scene, then moves the "perturbation" slider
+Each client is a student: it waits for the first scene, then moves the "Spin rate" slider
 of middle-axis-flip (6001-sample re-simulation) to a random value, waits for the redraw, thinks
 for 1–4 s, and moves it again, until the soak ends. Memory: the server's RSS sampled every
 2 s; "flat" is judged from the last half of the soak (slope in MB/min) and first/last values.
@@ -45,7 +45,7 @@ from . import register_bench
 
 N_CLIENTS = 30
 SCENARIO = "middle-axis-flip"
-SLIDER = "perturbation"
+SLIDER = "Spin rate"  # the label of middle-axis-flip's spin slider starts so
 REDRAW_TIMEOUT_S = 30.0
 THINK_S = (1.0, 4.0)
 
@@ -231,7 +231,7 @@ async def _student(i: int, url: str, t_end: float, lat: list, failures: list, re
                 break
             value = last
             while value == last:  # viser calls no callback for an unchanged value: always a new one
-                value = round(rng.uniform(0.005, 0.3), 3)
+                value = round(rng.uniform(2.0, 10.0), 1)
             last = value
             dt = await c.move_slider(SLIDER, value)
             if dt is None:

@@ -78,7 +78,7 @@ def test_concurrent_clients_each_get_their_own_redraw(server):
             await c.connect()
         for c in cs:
             assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
-        lat = await asyncio.gather(*(c.move_slider("perturbation", 0.02 * (i + 1), timeout=300) for i, c in enumerate(cs)))
+        lat = await asyncio.gather(*(c.move_slider("Spin rate", 6.0 + 0.1 * (i + 1), timeout=300) for i, c in enumerate(cs)))
         for c in cs:
             await c.close()
         return lat
