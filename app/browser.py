@@ -20,13 +20,15 @@ from viser import _messages
 #   Re-run on resize, on panel changes and every half second (the panel can be folded).
 # - focusout on a text field inside a form submits the form: a typed value is taken on Enter or
 #   when the field loses focus, never per keystroke.
-# - present(on): presenter mode's large type (the panel's font and width scaled).
+# - present(on): presenter mode's large type (the panel scaled about its top right corner).
 SETUP = r"""
 (() => {
   if (window.theoria) return;
   const T = window.theoria = {};
+  // viser's control panel: the Mantine Paper that holds a scroll area (notifications are Papers too)
+  T.PANEL = '.mantine-Paper-root:has(.mantine-ScrollArea-root)';
   T.panel = () => {
-    const el = document.querySelector('.mantine-Paper-root');
+    const el = document.querySelector(T.PANEL);
     return el && el.getBoundingClientRect().width > 0 ? el : null;
   };
   T.covered = () => {
@@ -66,7 +68,8 @@ SETUP = r"""
     if (on && !s) {
       s = document.createElement('style');
       s.id = 'theoria-present';
-      s.textContent = '.mantine-Paper-root{zoom:1.45}';
+      // scaled about its top right corner: the panel stays where it floats (zoom moved it off screen)
+      s.textContent = T.PANEL + '{transform:scale(1.45);transform-origin:top right}';
       document.head.appendChild(s);
     } else if (!on && s) s.remove();
     setTimeout(T.frame, 50);
