@@ -25,7 +25,7 @@ import numpy as np
 from ..physics.errors import Diverged, ParameterError
 from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
-from .drawing import Camera, Drawing, Option, View, standard
+from .drawing import Camera, Drawing, Option, View, declutter_labels, standard
 
 
 @dataclass(frozen=True)
@@ -381,7 +381,9 @@ class Scenario:
     def drawing(self, run: Run, view: View | None = None) -> Drawing:
         """What `run` draws (the one list the app, the recording and the HTML replay render)."""
         view = view or View()
-        return (self.draw or standard)(run, self, view)
+        d = (self.draw or standard)(run, self, view)
+        declutter_labels(d)  # labels that stay put turned so that none covers another
+        return d
 
     def param(self, name: str) -> Param:
         for p in self.params:

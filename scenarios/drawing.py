@@ -649,6 +649,89 @@ def other_bodies(d: Drawing, run, bodies: Mapping[str, np.ndarray] | None = None
     return k
 
 
+# ---- labels that do not overlap -----------------------------------------------------------------
+
+LABEL_PX_PER_CHAR, LABEL_PX_HEIGHT, LABEL_PAD_PX = 7.2, 18.0, 4.0  # viser's label at 1280×800
+ANCHOR_TRIES = ("top-left", "bottom-left", "center-left", "top-right", "bottom-right", "center-right",
+                "bottom-center", "top-center")
+
+
+def _project(points, camera: Camera, width: float = 1280.0, height: float = 800.0):
+    """Pixel coordinates (x right, y down) and depth of scene points seen from `camera`."""
+    P, L = np.asarray(camera.position, float), np.asarray(camera.look_at, float)
+    f = unit(L - P)
+    r = unit(np.cross(f, np.asarray(camera.up, float)))
+    u = np.cross(r, f)
+    v = np.atleast_2d(points) - P
+    depth = v @ f
+    t = np.tan(np.radians(camera.fov_deg if camera.fov_deg is not None else 75.0) / 2)
+    x = (v @ r) / np.maximum(depth, 1e-9) / (t * width / height)
+    y = (v @ u) / np.maximum(depth, 1e-9) / t
+    return np.stack([(x + 1) * width / 2, (1 - y) * height / 2], 1), depth
+
+
+def _box(xy, text: str, anchor: str) -> tuple[float, float, float, float]:
+    w = LABEL_PX_PER_CHAR * len(text) + 2 * LABEL_PAD_PX
+    h = LABEL_PX_HEIGHT
+    vert, horiz = anchor.split("-")
+    x0 = {"left": xy[0], "center": xy[0] - w / 2, "right": xy[0] - w}[horiz]
+    y0 = {"top": xy[1], "center": xy[1] - h / 2, "bottom": xy[1] - h}[vert]
+    return x0, y0, x0 + w, y0 + h
+
+
+def _overlap(a, b) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def _static_world(d: Drawing, it: Item) -> np.ndarray | None:
+    """The scene position of a label that does not move (its frames static too), else None."""
+    if it.animated():
+        return None
+    pos = np.asarray(it.position, float)
+    parts = it.name.split("/")
+    for k in range(len(parts) - 1, 0, -1):
+        try:
+            fr = d.item("/".join(parts[:k]))
+        except KeyError:
+            continue
+        if not isinstance(fr, Frame):
+            continue
+        if fr.animated():
+            return None
+        from ..physics import quaternion as quat
+
+        pos = quat.rotate(np.asarray(fr.wxyz, float), pos) + np.asarray(fr.position, float)
+    return pos
+
+
+def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -> int:
+    """Labels that stay put are seen from the drawing's camera; one that would cover an earlier
+    one is turned to another side of its point (its `anchor`; the point stays where the physics
+    puts it). Moving labels (on a turning body, a read-out that follows a body) are left as they
+    are. Returns how many labels were turned."""
+    placed, turned = [], 0
+    for it in d.items:
+        if not isinstance(it, Label) or not isinstance(it.text, str):
+            continue
+        pos = _static_world(d, it)
+        if pos is None:
+            continue
+        xy, depth = _project(pos, d.camera, width, height)
+        if depth[0] <= 0:
+            continue
+        for anchor in (it.anchor,) + tuple(a for a in ANCHOR_TRIES if a != it.anchor):
+            box = _box(xy[0], it.text, anchor)
+            if not any(_overlap(box, b) for b in placed):
+                if anchor != it.anchor:
+                    it.anchor = anchor
+                    turned += 1
+                break
+        else:
+            box = _box(xy[0], it.text, it.anchor)
+        placed.append(box)
+    return turned
+
+
 def standard(run, spec, view: View, shape: str = "ellipsoid") -> Drawing:
     """The drawing of a scenario that declares none of its own: Poinsot's construction for a
     rotation scene (the body an ellipsoid, or a box with `shape="box"`), and the other bodies."""

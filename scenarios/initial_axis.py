@@ -10,7 +10,7 @@ from ..physics.euler_ch15 import initial_axis
 from ..physics.inertia import validate_moments
 from ..physics.integrator import integrate
 from ..physics.params import Param, ParameterError
-from .drawing import Arrows, Camera, Label, Segments, standard
+from .drawing import Arrows, Camera, Label, Segments, _project, standard
 from .base import Comparison, Run, Scenario, register
 from . import _validity
 from scipy.integrate import solve_ivp
@@ -62,8 +62,8 @@ def _initial_axis(values, progress=None):
                   plot_series={"|ω|": np.linalg.norm(traj.omega_body, axis=1)})
 
 
-TORQUE_COLOR = (200, 40, 120)
-EULER_AXIS_COLOR = (20, 20, 20)
+TORQUE_COLOR = (45, 45, 45)  # apart from ω (orange) and L (purple), which starts along the torque
+EULER_AXIS_COLOR = (0, 150, 140)
 
 
 def _draw(run, spec, view):
@@ -78,13 +78,17 @@ def _draw(run, spec, view):
     axis, _ = initial_axis(tau, tr.inertia)
     axis = axis / np.linalg.norm(axis)
     reach = 1.7
+    # name the axis at the end the camera sees farther from the body, its text running outward
+    ends, _ = _project(np.array([reach * axis, -reach * axis, np.zeros(3)]), d.camera)
+    far = 0 if np.linalg.norm(ends[0] - ends[2]) >= np.linalg.norm(ends[1] - ends[2]) else 1
+    tip = (reach + 0.05) * axis * (1 if far == 0 else -1)
+    side = "center-left" if ends[far][0] >= ends[2][0] else "center-right"
     d.add(Arrows(name="body/torque", origins=np.zeros((1, 3)), vectors=(1.45 * t_hat)[None], colors=(TORQUE_COLOR,),
                  shaft_radius=0.03, head_radius=0.075, head_length=0.14),
           Label(name="body/torque/label", text="torque (P, Q, R)", position=1.58 * t_hat, anchor="center-left"),
           Segments(name="body/euler_axis", points=np.array([[-reach * axis, reach * axis]], np.float32),
                    colors=EULER_AXIS_COLOR, thickness=0.02),
-          Label(name="body/euler_axis/label", text="Euler's axis: P/A : Q/B : R/C (§806)",
-                position=(reach + 0.05) * axis, anchor="bottom-left"))
+          Label(name="body/euler_axis/label", text="Euler's axis: P/A : Q/B : R/C (§806)", position=tip, anchor=side))
     return d
 
 
