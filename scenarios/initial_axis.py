@@ -85,7 +85,7 @@ def _draw(run, spec, view):
     side = "center-left" if ends[far][0] >= ends[2][0] else "center-right"
     d.add(Arrows(name="body/torque", origins=np.zeros((1, 3)), vectors=(1.45 * t_hat)[None], colors=(TORQUE_COLOR,),
                  shaft_radius=0.03, head_radius=0.075, head_length=0.14),
-          Label(name="body/torque/label", text="torque (P, Q, R)", position=1.58 * t_hat, anchor="center-left"),
+          Label(name="body/torque/label", text="torque (P, Q, R)", position=1.58 * t_hat, anchor="bottom-right"),
           Segments(name="body/euler_axis", points=np.array([[-reach * axis, reach * axis]], np.float32),
                    colors=EULER_AXIS_COLOR, thickness=0.02),
           Label(name="body/euler_axis/label", text="Euler's axis: P/A : Q/B : R/C (§806)", position=tip, anchor=side))

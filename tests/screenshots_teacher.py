@@ -58,9 +58,12 @@ def main(names: list[str]) -> None:
                 shown = time.time() - t0
                 time.sleep(LABEL_WAIT_S)
                 page.evaluate(DISMISS_JS)
-                time.sleep(0.5)
-                page.screenshot(path=str(OUT / f"{spec.name}.png"))
+                # paused a moment into the run: in software WebGL the labels of a fast-turning body
+                # trail it while it plays
                 page.mouse.click(200, 700)
+                page.keyboard.press("Space")
+                time.sleep(5)
+                page.screenshot(path=str(OUT / f"{spec.name}.png"))
                 page.keyboard.press("p")
                 page.set_viewport_size({"width": 1920, "height": 1080})
                 time.sleep(LABEL_WAIT_S)
