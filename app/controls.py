@@ -12,8 +12,8 @@
 - A choice → a dropdown of the choices' words (`Param.choice_labels`).
 
 Labels are `Param.display()` ("Spin rate about the middle axis (rad/s)"), never the keys.
-Numerical settings (`Param.advanced`: steps, sample spacings) go into a separate container the
-session keeps folded.
+Numerical settings and modelling details (`Param.advanced`: steps, sample spacings, which
+ephemeris) go into a folder kept folded ("More settings").
 """
 from __future__ import annotations
 
@@ -119,7 +119,7 @@ class ParamControls:
         self._add(main, vals)
         if extra:
             if advanced is None:
-                advanced = gui.add_folder("Numerical settings", expand_by_default=False, order=self._next())
+                advanced = gui.add_folder("More settings", expand_by_default=False, order=self._next())
                 self._containers.append(advanced)
                 self._top = False  # its elements go with the folder
             with advanced:

@@ -19,7 +19,8 @@ class Param:
     `name` is the key scripts and the command line use (`--set spin=6`); `label` is what a person
     reads in the app ("Spin rate"), shown with its unit by `display()` ("Spin rate (rad/s)");
     `choice_labels` are the words shown for `choices` (same order); `advanced` marks a numerical
-    setting (a step, a sample spacing) that the app keeps out of the first screen.
+    setting or modelling detail (a step, a sample spacing, an ephemeris) that the app keeps out of
+    the first screen.
 """
 
     name: str

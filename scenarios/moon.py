@@ -650,16 +650,16 @@ register(Scenario(
         Param("ephemeris", "de421", kind="choice", choices=("de421", "lunar-theory"),
               help="where the Earth and the Sun are: JPL DE421, or the main terms of the lunar theory (Meeus ch. 47) "
                    "with the Sun on its mean ellipse",
-                   label="Where the Earth and the Sun are", choice_labels=("JPL DE421", 'lunar theory (main terms)')),
+                   label="Where the Earth and the Sun are", advanced=True, choice_labels=("JPL DE421", 'lunar theory (main terms)')),
         Param("field", "degree-3", kind="choice", choices=("degree-3", "quadrupole"),
               help="the Moon's gravity field the torques act on: quadrupole (β, γ; Euler's §815) or with DE421's "
                    "degree-3 harmonics",
-                   label="The Moon's gravity field",
+                   label="The Moon's gravity field", advanced=True,
                    choice_labels=("with DE421's degree-3 terms", 'quadrupole only (Euler)')),
         Param("sun_torque", "on", kind="choice", choices=("on", "off"), help="the Sun's torque on the Moon's figure",
-              label="The Sun's torque", choice_labels=("on", "off")),
+              label="The Sun's torque", advanced=True, choice_labels=("on", "off")),
         Param("core_fraction", C.MOON_CORE_MOMENT_FRACTION_DE421, 0.0, 0.05, "", "fluid core's share of C, not turning "
-              "with the mantle (DE421: 0.0007; 0: rigid)", label="Fluid core's share of C"),
+              "with the mantle (DE421: 0.0007; 0: rigid)", label="Fluid core's share of C", advanced=True),
     ),
     camera=Camera((4.2, -3.6, 2.4), (0.0, 0.0, 0.0)),
     preview={'years': 1.0},
