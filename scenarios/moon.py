@@ -646,7 +646,7 @@ register(Scenario(
               help="'de421': DE421's attitude and spin (the real Moon); 'forced': the mean Cassini frame plus "
                    "Euler's forced libration (small free libration); 'uniform': the mean frame rotating "
                    "uniformly (a large free libration, period ~2.9 yr)",
-                   label="Start", choice_labels=("on the forced libration", 'turning uniformly (free libration)')),
+                   label="Start", choice_labels=("as DE421 has it", "on the forced libration", "turning uniformly (free libration)")),
         Param("ephemeris", "de421", kind="choice", choices=("de421", "lunar-theory"),
               help="where the Earth and the Sun are: JPL DE421, or the main terms of the lunar theory (Meeus ch. 47) "
                    "with the Sun on its mean ellipse",
