@@ -39,6 +39,7 @@ from numba import njit
 from .. import constants as C
 from .. import kepler
 from ..constants import JULIAN_YEAR_DAYS
+from ..rebound_run import integrate_to
 
 KM_PER_UNIT = C.EARTH_MOON_DISTANCE_KM  # the length unit: the Moon's mean distance
 
@@ -392,7 +393,7 @@ def rebound_three_body(el0, sun, mu, mus, duration_days: float, sample_days: flo
     vv = np.empty((n, 3))
     buf = np.empty((3, 3))
     for k, tk in enumerate(t):
-        sim.integrate(float(tk), exact_finish_time=1)
+        integrate_to(sim, float(tk))
         sim.serialize_particle_data(xyz=buf)
         rr[k] = buf[2] - buf[1]
         sim.serialize_particle_data(vxvyvz=buf)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from ..rebound_run import integrate_to
 
 
 def _accelerations(pos: np.ndarray, masses: np.ndarray, G: float) -> np.ndarray:
@@ -58,7 +59,7 @@ def integrate_rebound(masses, pos0, vel0, t_eval, G: float = 1.0, integrator: st
     V = np.empty((len(t_eval), n, 3))
     buf = np.empty((n, 3))
     for k, t in enumerate(t_eval):
-        sim.integrate(float(t), exact_finish_time=1)
+        integrate_to(sim, float(t))
         sim.serialize_particle_data(xyz=buf)
         P[k] = buf
         sim.serialize_particle_data(vxvyvz=buf)
