@@ -22,6 +22,7 @@ from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
 from .checks import register_check
 from . import _validity
+from .budget import Cost, trajectory_bytes
 from ._libration import planar_moments, zeta_of
 from .drawing import Label, Option, Points, Segments
 from ._ch16_drawing import (ORBIT_OPTION, PANEL_COLOR, ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force,
@@ -188,6 +189,27 @@ def _section(d, run):
     return p
 
 
+# the periodic orbits followed from small ω₀: per resonance and per ω₀ step of 0.05, Newton on the
+# one-orbit map at 128 steps per orbit (1 + 4 runs per iteration) and the map's trace; measured
+# 2850 steps per resonance and ω₀ step on the defaults and presets
+ISLAND_STEPS_PER_W0_STEP = 2900
+
+
+def _cost(values):
+    """The ensemble (n_starts × n_orbits × steps_per_orbit member-steps), the drawn probe and its
+    Lyapunov run, the islands' continuation; kept: n_starts × n_orbits + 1 states of the probe with
+    F's position and ζ, the section (θ mod π, θ̇, start index, exponent per point)."""
+    ns, no, spo = values["n_starts"], values["n_orbits"], values["steps_per_orbit"]
+    S = ns * no
+    probe = S * max(1, int(np.ceil(64 * values["probe_orbits"] / S)))
+    lyap = max(no, 100) * spo
+    islands = len(RESONANCES[:4]) * (len(np.arange(0.05, values["omega0"], 0.05)) + 1) * ISLAND_STEPS_PER_W0_STEP
+    samples = S + 1
+    euler_curve = 1 if abs(1 - values["omega0"] ** 2) > 1e-9 else 0
+    return Cost(float(S * spo + probe + lyap + islands), samples,
+                trajectory_bytes(samples, bodies=1, series=1 + euler_curve, extra=4 * 8 * S + 3 * 8 * ns))
+
+
 register(Scenario(
     name="hyperion",
     title="Hyperion: chaotic tumbling (spin–orbit surface of section)",
@@ -214,6 +236,7 @@ register(Scenario(
     simulate_fn=_hyperion,
     draw=_draw,
     options={**ZETA_OPTION, **ORBIT_OPTION, "section": Option("surface of section + resonance zones")},
+    cost_fn=_cost,
     euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f)\n"
                    "θ: the body's long axis, f: the moon's direction seen from the planet, r: its distance"),
     presets=(
