@@ -32,8 +32,9 @@ if TYPE_CHECKING:
 # ensemble ~3.6e6 member-steps/s. 2e7 steps are 2 min of a free body and ~20 min of the slowest kernel;
 # the longest preset (earth-long-view, 25,800 years) takes 4.7e6.
 MAX_STEPS = 20_000_000
-# Arrays a finished run holds. The largest preset holds ~10 MB; the peak during a run is measured at
-# 1.3-2.6x what the run keeps (docs/robustness.md), so 1 GB kept is ~2.6 GB at most at the peak.
+# Arrays a finished run holds. The largest preset keeps ~10 MB; the peak during a run was measured at
+# 1.3-3.4x what the run keeps (1.7x for earth-long-view keeping 108 MB), plus at most ~40 MB of work per
+# chunk of steps (docs/robustness.md): 1 GB kept is at most ~3.5 GB at the peak.
 MAX_MEMORY = 1_000_000_000  # bytes
 
 # one stored state of a rigid body (physics.trajectory.Trajectory): t (1), attitude (4) and L (3)
