@@ -17,6 +17,7 @@ clean-up runs as for Ctrl-C (a recording's temporary file is removed, the target
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
 import _thread
@@ -101,8 +102,9 @@ def cli_signals():
 @contextlib.contextmanager
 def sigterm_raises():
     """SIGTERM raises Terminated while the block runs, if nothing else handles it (a script or a
-    notebook calling `Run.record`): the block's clean-up then runs instead of the process dying
-    half-way. Main thread only; a handler already installed (the command line's) is kept."""
+    notebook calling `Run.record`): the block's clean-up runs, then the process ends by SIGTERM
+    as it would have, instead of dying half-way. Main thread only; a handler already installed
+    (the command line's) is kept."""
     if (threading.current_thread() is not threading.main_thread()
             or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
         yield
@@ -111,6 +113,10 @@ def sigterm_raises():
     _state["active"] += 1
     try:
         yield
+    except Terminated:  # the block has cleaned up: now end as SIGTERM would have ended the process
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        raise
     finally:
         _state["active"] -= 1
         signal.signal(signal.SIGTERM, signal.SIG_DFL)

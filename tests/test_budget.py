@@ -10,10 +10,6 @@ parameter driving the cost and a value that fits.
 """
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
 import theoria as th
@@ -23,9 +19,8 @@ from theoria.physics.errors import BudgetExceeded, ParameterError
 from theoria.scenarios.base import all_scenarios, get
 from theoria.scenarios.budget import MAX_MEMORY, MAX_STEPS, held_bytes
 
+from conftest import run_theoria
 from step_counter import count_steps
-
-ROOT = Path(__file__).resolve().parent.parent
 
 # stated accuracy of the estimates (docs/robustness.md)
 UNDER = 1.25  # an estimate is never below the real value divided by this
@@ -199,9 +194,9 @@ def test_record_and_export_refuse_before_running(cmd, suffix, tmp_path, capsys, 
     assert code == 2 and "integrator steps" in err and not out.exists()
 
 
+@pytest.mark.slow
 def test_cli_subprocess_refusal_is_one_line():
     """The installed path: exit 2, one line, the number of steps, nothing else on stderr."""
-    p = subprocess.run([sys.executable, "-m", "theoria.app.cli", "run", "earth-long-view", "--set", "step_days=0.01"],
-                       capture_output=True, text=True, cwd=ROOT, timeout=600)
+    p = run_theoria("run", "earth-long-view", "--set", "step_days=0.01")
     assert p.returncode == 2 and p.stdout == "" and p.stderr.count("\n") == 1
     assert "step_days=0.01" in p.stderr and "9.42e+08 integrator steps" in p.stderr, p.stderr
