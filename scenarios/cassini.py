@@ -25,10 +25,11 @@ from ..physics import kepler
 from ..physics import moon
 from ..physics import quaternion as quat
 from ..physics.constants import ARCSEC_RAD, JULIAN_YEAR_DAYS
-from ..physics.integrator import PointMass, integrate
+from ..physics.integrator import PointMass, integrate, samples_kept, step_count
 from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, get, register
+from .budget import Cost, trajectory_bytes
 from .checks import register_check
 from .drawing import Arrows, Camera, Label, Option, Path, Segments, unit
 from ._ch16_drawing import body_scene
@@ -170,6 +171,15 @@ def _cassini(values, progress=None):
     return Run("cassini", values, traj, m, comps, notes, plot_series=plot, extras=extras)
 
 
+def _cost(values):
+    """One run over `years` at step_days (yoshida4, the Earth and the Sun), ~8,000 states kept;
+    per state the Earth's position, three directions (orbit normal, spin axis, node line) and
+    three plotted series."""
+    n = step_count(values["years"] * JULIAN_YEAR_DAYS, values["step_days"])
+    samples = samples_kept(n, max(1, int(math.ceil(n / 8000)))) if math.isfinite(n) else 8001
+    return Cost(n, samples, trajectory_bytes(samples, bodies=4, series=3))
+
+
 ECLIPTIC_COLOR, ORBIT_COLOR, SPIN_COLOR, NODE_COLOR = (200, 160, 0), (40, 120, 220), (220, 50, 47), (90, 90, 90)
 NORMAL_LENGTH = 1.9
 
@@ -278,6 +288,7 @@ register(Scenario(
     camera=Camera((3.2, -3.4, 2.6), (0.0, 0.0, 0.5)),
     preview={"years": 19.0, "step_days": 1.0},
     simulate_fn=_cassini,
+    cost_fn=_cost,
     draw=_draw,
     options={"magnify": Option(f"magnify the normals' angles ×{MAGNIFY:g}")},
     overlays={"axes": False, "vectors": False, "axis_trail": False, "polhode": False},
