@@ -238,7 +238,14 @@ def cmd_serve(args) -> int:
         from theoria.scenarios import get
 
         get(args.scenario)  # unknown name: exit 2 before the server starts
-    serve(port=args.port, host=args.host, scenario=args.scenario)
+    from theoria.app.server import Limits
+
+    for flag, v in (("--max-clients", args.max_clients), ("--max-per-address", args.max_per_address)):
+        if v < 1:
+            raise ParameterError(flag, v, "a whole number ≥ 1")
+    serve(port=args.port, host=args.host, scenario=args.scenario,
+          limits=Limits(max_connections=args.max_clients, max_per_address=args.max_per_address),
+          precompute=not args.no_precompute)
     return 0
 
 
@@ -291,6 +298,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--port", type=int, default=8080)
     s.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1; 0.0.0.0 for a classroom)")
     s.add_argument("--scenario", default=None)
+    s.add_argument("--max-clients", type=int, default=200, metavar="N",
+                   help="browsers connected at once (default 200); more are refused")
+    s.add_argument("--max-per-address", type=int, default=10, metavar="N",
+                   help="browsers from one network address (default 10)")
+    s.add_argument("--no-precompute", action="store_true",
+                   help="do not prepare every scenario's defaults and presets in the background")
     s.set_defaults(fn=cmd_serve)
 
     s = sub.add_parser("list", help="scenarios, one line each")

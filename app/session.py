@@ -22,12 +22,12 @@ from theoria.physics.errors import ParameterError
 from theoria.scenarios import all_scenarios, get
 from theoria.scenarios.drawing import OVERLAYS, View, palette
 
-from . import gallery
+from . import gallery, page
 from .controls import ParamControls
 from .export_html import configure_scene
 from .panel import UPLOT_POINTS, comparison_markdown, info_markdown, y_axis_px
 from .scene import SceneView
-from .worker import SimulationWorker
+from .worker import SimulationWorker, drawing_of
 
 PLAY_HZ = 60.0  # playback tick for one browser (messages go out each 1/60 s)
 # Pose updates per second shared by all browsers: the server runs on one core (the GIL), and 30
@@ -69,6 +69,8 @@ class ClientSession:
         self._closed = False
         self.updates = 0  # scene rebuilds done (tests and bench read it)
         self._build_gui()
+        page.set_title(client, self.spec.name)
+        page.set_loading(client, f"theoria — preparing {self.spec.name}…")
         self.worker = SimulationWorker(f"sim-{client.client_id}", self._apply, self._failed, self._show_progress)
         self._player = threading.Thread(target=self._play, daemon=True, name=f"play-{client.client_id}")
         self._player.start()
@@ -282,6 +284,8 @@ class ClientSession:
                 self.progress.visible = True
             if text:
                 self._status(text)
+                if self.updates == 0:  # nothing drawn yet: the line over the page says what is happening
+                    page.set_loading(self.client, "theoria — " + text)
         except Exception:
             pass
 
@@ -297,9 +301,10 @@ class ClientSession:
         with self._view_lock, self.client.atomic():
             if not self.worker.current(req) or spec.name != self.spec.name:
                 return  # a newer request, or another scenario chosen meanwhile
-            drawing = spec.drawing(result, self.view_opts)
+            drawing = drawing_of(spec, result, self.view_opts)
             new_scenario = self.drawing_spec != spec.name
             if new_scenario:  # the scenario's own overlay defaults and camera
+                page.set_title(self.client, spec.name)
                 overlays = dict(drawing.overlays)
                 if self.drawing_spec is not None:
                     self._set_camera(spec)
@@ -320,16 +325,22 @@ class ClientSession:
             self.view.set_frame(self._frame_index())
             self._follow_camera()
             req.stamps["shown"] = time.perf_counter()
+            if self.updates == 0:
+                page.set_loading(self.client, None)
             self.updates += 1
-            self._status(f"simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
-                         f"(update #{self.updates})")
+            if getattr(req, "preview", False):
+                self._status(f"quick preview ({len(result.trajectory.t)} samples); computing the full run… "
+                             f"(update #{self.updates})")
+            else:
+                self._status(f"simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
+                             f"(update #{self.updates})")
 
     def _redraw(self) -> None:
         """The same run drawn again (a scene option or the shape exaggeration changed)."""
         if self.result is None:
             return
         with self._view_lock, self.client.atomic():
-            self.drawing = self.spec.drawing(self.result, self.view_opts)
+            self.drawing = drawing_of(self.spec, self.result, self.view_opts)
             self.view.show(self.drawing, {k: bool(cb.value) for k, cb in self.toggles.items()})
             self._update_plot()
             self.view.set_frame(self._frame_index())

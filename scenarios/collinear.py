@@ -46,7 +46,7 @@ def _collinear(values, progress=None):
     motion = values["motion"]
     nsamp = N_SAMPLES
     if motion == "restricted":
-        return _restricted(values, alpha)
+        return _restricted(values, alpha, progress)
     if motion == "rotating":
         Om = col.rotation_rate(A, B, C, alpha, 1.0)
         vel0 = np.zeros((3, 3))
@@ -67,7 +67,7 @@ def _collinear(values, progress=None):
         vel0 = np.zeros((3, 3))
         vel0[:, 0] = x * math.sqrt(2 * (E + K / 1.0)) / 1.0  # v_i = x_i ṗ/p, p = 1
     t_asked = t
-    t, P, V = integrate_dop853([A, B, C], pos0, vel0, t)
+    t, P, V = integrate_dop853([A, B, C], pos0, vel0, t, progress=progress)
     # DOP853 gives up when its step underflows (found by tests/test_fuzz.py: masses 125846, 1e-6, 1e-6
     # expanding, 13 of 600 samples): keep the part it did and say so, like a diverged run
     stopped = len(t) < len(t_asked)
@@ -150,7 +150,7 @@ def _collinear(values, progress=None):
     return result
 
 
-def _restricted(values, alpha):
+def _restricted(values, alpha, progress=None):
     """Primary, secondary (mass_ratio) and a massless satellite released at rest in the turning
     frame at one Lagrange point; markers L1–L5 turn with the primaries (inertial frame, unit
     distance). L1–L3 are unstable: the satellite drifts off after a few turns; L4/L5 hold for
@@ -163,7 +163,7 @@ def _restricted(values, alpha):
     vel = np.zeros((3, 3))
     vel[:, 0], vel[:, 1] = -pos[:, 1], pos[:, 0]  # rate 1 about z
     t = np.linspace(0.0, values["turns"] * 2 * math.pi, N_SAMPLES_RESTRICTED)
-    t, P, V = integrate_dop853([1 - mu, mu, 0.0], pos, vel, t)
+    t, P, V = integrate_dop853([1 - mu, mu, 0.0], pos, vel, t, progress=progress)
     c, s = np.cos(t), np.sin(t)
     bodies = {"primary": P[:, 0], "secondary": P[:, 1], "satellite": P[:, 2]}
     for k, (x, y) in pts.items():

@@ -45,7 +45,9 @@ def _hyperion(values, progress=None):
     e, w0 = values["eccentricity"], values["omega0"]
     ns, no = values["n_starts"], values["n_orbits"]
     th0, wd0 = ensemble_starts(ns)
-    T, W, lyap = lib.spin_orbit_section(th0, wd0, e, w0, no, steps_per_orbit=values["steps_per_orbit"], lyapunov=True)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    T, W, lyap = lib.spin_orbit_section(th0, wd0, e, w0, no, steps_per_orbit=values["steps_per_orbit"], lyapunov=True,
+                                        progress=part(0.0, 0.6))
     # the probe start, as a full rigid body (the integrator of physics.integrator)
     gamma = w0**2 / 3.0
     I = planar_moments(gamma)
@@ -57,12 +59,12 @@ def _hyperion(values, progress=None):
     t, L, q = integrate(I, [0, 0, values["probe_rate"]], probe_orbits * P, probe_orbits * P / n_steps,
                         q0=quat.from_axis_angle([0, 0, 1], values["probe_theta_deg"] * np.pi / 180),
                         masses=[PointMass(1.0, orbit.position)], scheme="yoshida4",
-                        stride=n_steps // S, progress=progress)
+                        stride=n_steps // S, progress=part(0.6, 0.8))
     pos = orbit.position(t)
     traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
     zeta = zeta_of(q, pos)
     _, _, lp = lib.spin_orbit_section([values["probe_theta_deg"] * np.pi / 180], [values["probe_rate"]], e, w0,
-                                      max(no, 100), values["steps_per_orbit"], lyapunov=True)
+                                      max(no, 100), values["steps_per_orbit"], lyapunov=True, progress=part(0.8, 0.9))
     m = {
         "lyapunov_probe_per_unit_time": float(lp[0]),
         "lyapunov_probe_per_orbit": float(lp[0] * P),

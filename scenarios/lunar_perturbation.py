@@ -38,11 +38,13 @@ def _lunar(values, progress=None):
     days = values["duration_yr"] * JULIAN_YEAR_DAYS
     h, ds = values["step_days"], values["sample_days"]
     series = values["solar_force"] == "euler-series"
-    t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series, progress=part(0.1, 0.5))
     if progress:
         progress(0.5)
     r0, v0 = le.elements_to_cartesian(el0, mu)
-    _, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), days, h, ds, mu, mus, sun)
+    _, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), days, h, ds, mu, mus, sun,
+                            progress=part(0.5, 0.9))
     if progress:
         progress(0.9)
     P = le.elements_to_position(E)

@@ -45,14 +45,15 @@ def _syzygy(values, progress=None):
     modes = sz.linear_modes(m, side)
     # the displayed run: Euler's start (or the exact linear mode) + optional seed of the escape
     s0 = sz.initial_state(m, A, side, values["start"], values["escape_seed"])
-    t, S, _ = sz.integrate(m, s0, 2 * math.pi * values["duration_yr"], n_samples=N_SAMPLES)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    t, S, _ = sz.integrate(m, s0, 2 * math.pi * values["duration_yr"], n_samples=N_SAMPLES, progress=part(0.0, 0.5))
     eta, v = sz.eta_and_distance(S, side)
     left = t[-1] < 2 * math.pi * values["duration_yr"] * (1 - 1e-9)
     # a clean measurement: the exact linear mode at a tiny amplitude plus a tinier seed of the
     # escape; fit η = a cos ωt + b sin ωt + c e^{λt} + d e^{−λt} in the linear regime
     A_meas = 1e-6
     tm, Sm, _ = sz.integrate(m, sz.initial_state(m, A_meas, side, "linear-mode", 1e-9), 2 * math.pi * 2.0,
-                             n_samples=8000)
+                             n_samples=8000, progress=part(0.5, 1.0))
     etam, _ = sz.eta_and_distance(Sm, side)
     w_meas, lam_meas, fit_res = sz.fit_swing_and_escape(tm, etam, A_meas,
                                                          guess=(modes["frequency"], modes["escape_exponent"]))

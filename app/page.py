@@ -1,0 +1,119 @@
+"""The page a browser loads, and what the server sets on it.
+
+viser serves one self-contained `index.html` (its client inlined). theoria serves a copy with:
+
+- the tab titled "theoria" from the first byte (then "theoria — <scenario>", `set_title`);
+- a visible line ("theoria — connecting…") in the page's root until viser's client replaces it,
+  so the page is never blank while the client starts and the first scene is prepared;
+- CSS that hides viser's own chrome a class has no use for from the first frame.
+
+The copy is written once per viser version into theoria's cache directory (a temporary
+directory when that is not writable) and used as viser's HTTP root while a server is built
+(`themed_client`).
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import tempfile
+import threading
+from pathlib import Path
+
+import viser
+from viser import _messages as vm
+from viser import infra
+
+from .worker import cache_root
+
+TITLE = "theoria"
+LOADING = "theoria — connecting…"
+# Shown over the page from its first frame until the first scene is drawn (session: hide_loading).
+CSS = """
+#theoria-loading{position:fixed;left:16px;top:12px;z-index:10000;font:15px/1.4 system-ui,sans-serif;
+  color:#333;background:rgba(255,255,255,.92);padding:6px 12px;border-radius:6px;pointer-events:none}
+"""
+LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div>'
+
+_lock = threading.Lock()
+_root: Path | None = None
+
+
+def _viser_index() -> Path:
+    return Path(viser.__file__).resolve().parent / "client" / "build" / "index.html"
+
+
+def themed_index(html: str) -> str:
+    html = html.replace("<title>Viser</title>", f"<title>{TITLE}</title>", 1)
+    html = html.replace('content="Viser client"', f'content="{TITLE}"', 1)
+    html = html.replace("</head>", f"<style>{CSS}</style></head>", 1)
+    html = html.replace("<body>", "<body>" + LOADING_HTML, 1)
+    return html
+
+
+def client_root() -> Path:
+    """A directory holding theoria's copy of viser's index.html."""
+    global _root
+    with _lock:
+        if _root is not None and (_root / "index.html").exists():
+            return _root
+        src = _viser_index()
+        html = themed_index(src.read_text(encoding="utf-8"))
+        digest = hashlib.blake2b(html.encode(), digest_size=8).hexdigest()
+        for base in (cache_root() / "client", Path(tempfile.gettempdir()) / "theoria-client"):
+            d = base / f"{viser.__version__}-{digest}"
+            try:
+                if not (d / "index.html").exists():
+                    d.mkdir(parents=True, exist_ok=True)
+                    tmp = d / "index.html.tmp"
+                    tmp.write_text(html, encoding="utf-8")
+                    tmp.replace(d / "index.html")
+                _root = d
+                return d
+            except OSError:
+                continue
+        return src.parent
+
+
+_build_lock = threading.Lock()
+
+
+@contextlib.contextmanager
+def themed_client():
+    """While a ViserServer is built inside this block, its HTTP root is theoria's page."""
+    root = client_root()
+    cls = infra.WebsockServer
+    with _build_lock:
+        original = cls.__init__
+
+        def init(self, *args, **kwargs):
+            if kwargs.get("http_server_root") is not None:
+                kwargs["http_server_root"] = root
+            original(self, *args, **kwargs)
+
+        cls.__init__ = init
+        try:
+            yield
+        finally:
+            cls.__init__ = original
+
+
+def run_js(client, source: str) -> None:
+    """Run a line of JavaScript in one browser (the tab title, the loading line)."""
+    try:
+        client._websock_connection.queue_message(vm.RunJavascriptMessage(source=source))
+    except Exception:
+        pass
+
+
+def set_title(client, scenario: str) -> None:
+    run_js(client, f"document.title = {json.dumps(f'{TITLE} — {scenario}')};")
+
+
+def set_loading(client, text: str | None) -> None:
+    """The line over the page: `text`, or gone (None)."""
+    if text is None:
+        run_js(client, "var e=document.getElementById('theoria-loading'); if(e){e.remove();}")
+    else:
+        run_js(client, "var e=document.getElementById('theoria-loading'); if(!e){e=document.createElement('div');"
+                       "e.id='theoria-loading';document.body.appendChild(e);} e.textContent=" + json.dumps(text) + ";")
