@@ -22,25 +22,22 @@ from theoria.physics.errors import ParameterError
 from theoria.scenarios import all_scenarios, get
 from theoria.scenarios.drawing import OVERLAYS, View, palette
 
-from . import gallery, page
+from . import gallery, page, playback
 from .controls import ParamControls
 from .export_html import configure_scene
 from .panel import UPLOT_POINTS, comparison_markdown, info_markdown, y_axis_px
 from .scene import SceneView
 from .worker import SimulationWorker, drawing_of
 
-PLAY_HZ = 60.0  # playback tick for one browser (messages go out each 1/60 s)
-# Pose updates per second shared by all browsers: the server runs on one core (the GIL), and 30
-# sessions at 60 Hz alone took 75% of it (docs/robustness.md), so with many browsers each plays
-# back at a lower rate and slider changes stay quick.
-PLAY_BUDGET = 360.0
-PLAY_HZ_MIN = 12.0
+# Playback: one thread for every browser within a share of a core (app/playback.py); with many
+# browsers each plays back at a lower rate and slider changes stay quick.
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
+CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubber while playing
 
 
 def playback_hz(active_sessions: int) -> float:
-    """Playback rate of each session when `active_sessions` browsers are connected."""
-    return max(PLAY_HZ_MIN, min(PLAY_HZ, PLAY_BUDGET / max(1, active_sessions)))
+    """Playback rate of each session when `active_sessions` browsers are playing."""
+    return playback.ticker().rate(active_sessions)
 
 
 class ClientSession:
@@ -72,8 +69,9 @@ class ClientSession:
         page.set_title(client, self.spec.name)
         page.set_loading(client, f"theoria — preparing {self.spec.name}…")
         self.worker = SimulationWorker(f"sim-{client.client_id}", self._apply, self._failed, self._show_progress)
-        self._player = threading.Thread(target=self._play, daemon=True, name=f"play-{client.client_id}")
-        self._player.start()
+        self._last_tick = None
+        self._last_gui = 0.0
+        playback.ticker().add(self)
         if run is not None and run.scenario == self.spec.name:
             self.controls.set_values(run.params)
             self._apply(self.worker.adopt(self.spec, run.params), run, 0.0)
@@ -404,33 +402,34 @@ class ClientSession:
                 self.view.set_frame(i)
                 self._follow_camera()
 
-    def _play(self) -> None:
-        last = time.perf_counter()
-        last_gui = 0.0
-        while not self._closed:
-            now = time.perf_counter()
-            dt, last = now - last, now
+    def wants_ticks(self) -> bool:
+        """Playing a finished run (the playback thread skips a paused session)."""
+        if not (self.playing and self.result is not None and not self._closed):
+            self._last_tick = None
+            return False
+        return True
+
+    def _tick(self, now: float) -> None:
+        """One frame of playback (called by app/playback.py's thread): the clock advances by the
+        real time since the last frame, so fewer frames a second never slow the run down."""
+        last, self._last_tick = self._last_tick, now
+        if last is None or self._closed:
+            return
+        self.clock = (self.clock + (now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
+        self._show_clock()
+        if now - self._last_gui > CLOCK_TEXT_EVERY:
+            self._last_gui = now
+            d = self.drawing
+            self._guard = True
             try:
-                if self.playing and self.result is not None:
-                    self.clock = (self.clock + dt * float(self.speed.value) / RUN_SECONDS) % 1.0
-                    self._show_clock()
-                    if now - last_gui > 0.25:
-                        last_gui = now
-                        d = self.drawing
-                        self._guard = True
-                        try:
-                            self.scrub.value = round(100 * self.clock, 1)
-                        finally:
-                            self._guard = False
-                        self.time_md.content = f"t = {d.times[self.view.frame]:.4g} {d.time_unit}"
-            except Exception:
-                if self._closed:
-                    return
-                traceback.print_exc()
-            time.sleep(max(0.0, 1.0 / playback_hz(ClientSession.active) - (time.perf_counter() - now)))
+                self.scrub.value = round(100 * self.clock, 1)
+            finally:
+                self._guard = False
+            self.time_md.content = f"t = {d.times[self.view.frame]:.4g} {d.time_unit}"
 
     def close(self) -> None:
         if not self._closed:
             ClientSession.active = max(0, ClientSession.active - 1)
         self._closed = True
+        playback.ticker().remove(self)
         self.worker.close()

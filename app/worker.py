@@ -699,6 +699,9 @@ class SimPool:
         self._queue: list[Job] = []
         self._seconds: dict[str, float] = {}  # scenario → seconds of its last full run
         self._apply = ThreadPoolExecutor(max_workers=4, thread_name_prefix="theoria-apply")
+        self._timers: list = []
+        self._timer_cv = threading.Condition()
+        self._timer_thread = None
         self.slots = [_Slot(self, i, True, use_processes) for i in range(self.slots_n)]
         self.nojit: _Slot | None = None
         self.stats = {"jobs": 0, "coalesced": 0, "cache_hits": 0, "store_hits": 0, "cancelled": 0, "failed": 0}
@@ -939,6 +942,37 @@ class SimPool:
         for w in self._finish(job):
             w._job_failed(job, err)
 
+    def call_later(self, delay: float, fn: Callable) -> None:
+        """`fn()` after `delay` seconds on the pool's timer thread (kept short: it only posts)."""
+        import heapq
+
+        with self._timer_cv:
+            heapq.heappush(self._timers, (time.perf_counter() + delay, next(_ids), fn))
+            if self._timer_thread is None:
+                self._timer_thread = threading.Thread(target=self._timer_loop, daemon=True, name="theoria-timers")
+                self._timer_thread.start()
+            self._timer_cv.notify()
+
+    def _timer_loop(self) -> None:
+        import heapq
+
+        while not self.closed:
+            with self._timer_cv:
+                while not self._timers and not self.closed:
+                    self._timer_cv.wait(1.0)
+                if self.closed:
+                    return
+                when = self._timers[0][0]
+                now = time.perf_counter()
+                if when > now:
+                    self._timer_cv.wait(when - now)
+                    continue
+                _, _, fn = heapq.heappop(self._timers)
+            try:
+                fn()
+            except Exception:
+                self.logger.line("theoria: timer error:\n" + traceback.format_exc())
+
     def submit_apply(self, fn: Callable, *args) -> None:
         try:
             self._apply.submit(fn, *args)
@@ -1036,7 +1070,21 @@ class SimulationWorker:
                 self._preview(spec, req)
             job = self.pool.job_for(spec, req.values, self)
             self._jobs[job.id] = (job, req)
+        self.pool.call_later(PROGRESS_SHOW_AFTER, lambda: self._still_running(req))
         return req
+
+    def _still_running(self, req: Request) -> None:
+        """A run still going after PROGRESS_SHOW_AFTER that has reported nothing yet (a set-up
+        phase, a compile) shows the bar at 0."""
+        with self._lock:
+            waiting = self.current(req) and any(r is req for _, r in self._jobs.values())
+            if not waiting or self._shown["pct"] >= 0:
+                return
+            self._shown.update(t=time.perf_counter(), pct=0.0)
+        try:
+            self.on_progress(0.0, f"simulating {req.spec.name}…")
+        except Exception:
+            pass
 
     def _preview(self, spec, req: Request) -> None:
         """The coarse first picture of a slow run: the preview values over the given ones, from
