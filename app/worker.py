@@ -69,6 +69,7 @@ KILL_GRACE_S = 5.0  # beyond the run limit, a child that never calls progress is
 NOJIT_SECONDS_LIMIT = 20.0
 COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes to a compiling one  # a pure-Python run longer than this goes back to a compiling child
 PREVIEW_AFTER_S = 1.0  # a run expected to take longer shows its scenario's preview first
+SLOW_JOB_S = 1.0  # a job expected to take longer (or never timed here) may not take the last free slot
 CACHE_BYTES = 400e6  # finished runs kept in memory by the server (LRU)
 MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
 CHILD_NICE = 5  # children run below the server: the event loop and the pose stream come first
@@ -687,7 +688,8 @@ class SimPool:
                  cache_bytes: float = CACHE_BYTES):
         if use_processes is None:
             use_processes = os.name == "posix" and os.environ.get("THEORIA_SIM_PROCESSES", "1") != "0"
-        self.slots_n = slots or max(1, min(4, os.cpu_count() or 1))
+        # at least two: one compiling child stays free for quick runs while another does a slow one
+        self.slots_n = slots or max(2, min(4, os.cpu_count() or 1))
         self.use_processes = use_processes
         self.cache = RunCache(cache_bytes)
         self.store = RunStore() if store else None
@@ -733,14 +735,14 @@ class SimPool:
             hit = self.store.get(key)
             if hit is not None:
                 self.cache.put(key, hit[0], hit[1])
-                self._seconds.setdefault(name, hit[1])
+                self._seconds.setdefault((name, False), hit[1])
                 self.stats["store_hits"] += 1
         elif hit is not None:
             self.stats["cache_hits"] += 1
         return hit
 
-    def expected_seconds(self, name: str) -> float | None:
-        return self._seconds.get(name)
+    def expected_seconds(self, name: str, preview: bool = False) -> float | None:
+        return self._seconds.get((name, preview))
 
     def job_for(self, spec, values: dict, waiter, preview: bool = False) -> Job:
         """The job computing these values (an existing one is shared), with `waiter` attached."""
@@ -857,9 +859,18 @@ class SimPool:
         return (self.use_processes and not job.background and not job.local and not job.nojit_tried
                 and job.spec.name not in self.warm)
 
+    def _slow(self, job: Job) -> bool:
+        t = self._seconds.get((job.spec.name, job.preview))
+        return t is None or t > SLOW_JOB_S
+
     def _eligible(self, slot: _Slot, job: Job) -> bool:
         if not slot.jit:
             return self._cold(job)
+        if self._slow(job):  # slow runs leave one compiling child to the quick ones (a slider on a quick scene)
+            running_slow = sum(1 for s in self.slots if s.job is not None and s.job.state == "running"
+                               and self._slow(s.job))
+            if running_slow >= max(1, len(self.slots) - 1):
+                return False
         # compiling children leave a cold job to the idle pure-Python child (they warm the
         # scenario with a background job meanwhile)
         nj = self.nojit
@@ -873,12 +884,13 @@ class SimPool:
                 if self.closed:
                     return None
                 # browsers' jobs first, oldest first; then background jobs (the cache, warming)
-                best = None
+                best, best_key = None, None
                 for job in self._queue:
                     if not self._eligible(slot, job):
                         continue
-                    if best is None or (job.background, job.created) < (best.background, best.created):
-                        best = job
+                    key = (job.background, self._slow(job), job.created)  # quick jobs before slow ones
+                    if best is None or key < best_key:
+                        best, best_key = job, key
                 if best is not None:
                     self._queue.remove(best)
                     best.state, best.slot, best.started = "running", slot, time.perf_counter()
@@ -911,8 +923,8 @@ class SimPool:
         run.spec = job.spec
         if slot.jit and slot.use_process and not job.local:
             self.warm.add(job.spec.name)
-        if not job.preview:
-            self._seconds[job.spec.name] = seconds if slot.jit else min(seconds, self._seconds.get(job.spec.name, seconds))
+        if slot.jit:  # a pure-Python time says nothing about the compiled run
+            self._seconds[(job.spec.name, job.preview)] = seconds
         self.cache.put(job.cache_key, run, seconds)
         if job.background and self.store is not None and not job.local:
             self.store.put(job.cache_key, run, seconds)

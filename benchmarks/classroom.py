@@ -226,16 +226,22 @@ class ViserProtocolClient:
     async def send_gui(self, uuid: str, value) -> None:
         await self.send_raw({"type": "GuiUpdateMessage", "uuid": uuid, "updates": {"value": value}})
 
-    async def act(self, uuid: str, value, timeout: float = REDRAW_TIMEOUT_S) -> tuple[float | None, float | None]:
+    async def act(self, uuid: str, value, timeout: float | None = None) -> tuple[float | None, float | None]:
         """Send a control's value; seconds to the first redraw (a preview counts) and to the full
-        one (None: none came in time)."""
-        k, kf = self.update_no, self.full_no
+        one (None: none came in time, or the server answered with a notification instead, e.g. a
+        run stopped at its time limit: see `answered`)."""
+        timeout = REDRAW_TIMEOUT_S if timeout is None else timeout
+        k, kf, kn = self.update_no, self.full_no, len(self.notifications)
         t0 = time.perf_counter()
         await self.send_gui(uuid, value)
         first = full = None
-        if await self.wait_for(lambda: self.update_no > k, timeout):
+        self.answered = False
+        if await self.wait_for(lambda: self.update_no > k or len(self.notifications) > kn, timeout):
+            self.answered = True
+        if self.update_no > k:
             first = time.perf_counter() - t0
-            if await self.wait_for(lambda: self.full_no > kf, max(0.0, timeout - first)):
+            if await self.wait_for(lambda: self.full_no > kf or len(self.notifications) > kn, max(0.0, timeout - first)) \
+                    and self.full_no > kf:
                 full = time.perf_counter() - t0
         return first, full
 
@@ -341,7 +347,8 @@ def tree_rss_mb(pid: int) -> tuple[float, float]:
     return own / 2**20, (own + kids) / 2**20
 
 
-async def _student(i: int, url: str, t_end: float, rec: dict) -> None:
+async def _student(i: int, url: str, t_end: float, rec: dict, scenarios=None) -> None:
+    """`scenarios`: the scenario labels (dropdown options) this student may switch to (all: None)."""
     rng = random.Random(i)
     c = ViserProtocolClient(url)
     t0 = time.perf_counter()
@@ -359,7 +366,10 @@ async def _student(i: int, url: str, t_end: float, rec: dict) -> None:
             uuid = value = None
             if kind == "switch":
                 uuid, options = c.dropdown("Scenario")
-                options = [o for o in options if o != c.values.get(uuid)]
+                options = [o for o in options if o != c.values.get(uuid) and (scenarios is None or
+                                                                            any(x in o for x in scenarios))]
+                if not options:
+                    continue
                 value = rng.choice(options)
             elif kind == "preset":
                 uuid, options = c.dropdown("Presets")
@@ -379,7 +389,8 @@ async def _student(i: int, url: str, t_end: float, rec: dict) -> None:
                 continue
             scen = c.status
             first, full = await c.act(uuid, value)
-            rec["actions"].append({"kind": kind, "first": first, "full": full, "client": i, "status": scen[:60]})
+            rec["actions"].append({"kind": kind, "first": first, "full": full, "client": i, "status": scen[:60],
+                                   "answered": c.answered})
     except Exception as e:  # noqa: BLE001 — a client's crash is counted, not fatal
         rec["errors"].append(f"client {i}: {type(e).__name__}: {e}")
     finally:
@@ -392,13 +403,20 @@ async def _abuser(url: str, t_end: float, rec: dict) -> None:
     c = ViserProtocolClient(url)
     await c.connect()
     try:
-        if not await c.wait_for(lambda: c.update_no >= 1 and c.param_sliders(), FIRST_SCENE_TIMEOUT_S):
+        if not await c.wait_for(lambda: c.update_no >= 1, FIRST_SCENE_TIMEOUT_S):
             return
-        uuid, props = c.param_sliders()[0]
-        lo, hi = float(props["min"]), float(props["max"])
+        folders = {u for u, x in c.components.items()
+                   if x["type"] == "GuiFolderMessage" and str(x["label"]).startswith("Parameters:")}
+        numbers = [(u, x) for u, x in c.components.items() if x["container"] in folders
+                   and x["type"] in ("GuiSliderMessage", "GuiNumberMessage") and isinstance(c.values.get(u), (int, float))]
+        uuid, comp = numbers[0]
+        v0 = float(c.values[uuid])
+        lo = float(comp["props"].get("min") if comp["props"].get("min") is not None else v0 * 0.5)
+        hi = float(comp["props"].get("max") if comp["props"].get("max") is not None else v0 * 2.0)
+        lo, hi = max(lo, v0 * 0.5 if v0 > 0 else lo), min(hi, v0 * 2.0 if v0 > 0 else hi)
         sent = 0
         while time.perf_counter() < t_end:
-            for k in range(ABUSE_MESSAGES):
+            for k in range(ABUSE_MESSAGES):  # values inside the control's range: each one a new run
                 await c.send_gui(uuid, lo + (hi - lo) * ((k % 97) / 97.0))
                 sent += 1
             await asyncio.sleep(0.5)
