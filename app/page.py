@@ -28,10 +28,15 @@ from .worker import cache_root
 
 TITLE = "theoria"
 LOADING = "theoria — connecting…"
-# Shown over the page from its first frame until the first scene is drawn (session: hide_loading).
+# The loading line is shown over the page from its first frame until the first scene is drawn
+# (`set_loading(client, None)`). While it is there, the content of viser's panel is hidden: before
+# the app's controls arrive, viser fills it with its developer tools (the websocket address, "Save
+# Canvas", "Dev Settings", the scene tree), which a class has no use for.
 CSS = """
-#theoria-loading{position:fixed;left:16px;top:12px;z-index:10000;font:15px/1.4 system-ui,sans-serif;
-  color:#333;background:rgba(255,255,255,.92);padding:6px 12px;border-radius:6px;pointer-events:none}
+#theoria-loading{position:fixed;left:50%;top:45%;transform:translate(-50%,-50%);z-index:10000;
+  font:17px/1.4 system-ui,sans-serif;color:#222;background:rgba(255,255,255,.94);padding:10px 18px;
+  border-radius:8px;box-shadow:0 1px 6px rgba(0,0,0,.15);pointer-events:none;max-width:70vw;text-align:center}
+body:has(#theoria-loading) .mantine-ScrollArea-root{visibility:hidden}
 """
 LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div>'
 

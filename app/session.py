@@ -264,6 +264,8 @@ class ClientSession:
 
     def _failed(self, req, e: Exception) -> None:
         name = req.spec.name
+        if self.updates == 0:  # nothing drawn: the panel (with the error) replaces the loading line
+            page.set_loading(self.client, None)
         if isinstance(e, ParameterError):
             self.notify(f"Bad value for {e.name}", f"{e} — keeping the last good state")
             self._status("bad value: " + str(e))
