@@ -27,7 +27,7 @@ from .controls import ParamControls
 from .export_html import configure_scene
 from .panel import UPLOT_POINTS, comparison_markdown, info_markdown, y_axis_px
 from .scene import SceneView
-from .worker import SimulationWorker, drawing_of
+from .worker import SimulationWorker, drawing_of, limits_text
 
 # Playback: one thread for every browser within a share of a core (app/playback.py); with many
 # browsers each plays back at a lower rate and slider changes stay quick.
@@ -126,6 +126,7 @@ class ClientSession:
         self._options_key = None
         self.plot_folder = gui.add_folder("Plot")
         self.plot = None
+        self.limits_md = gui.add_markdown(limits_text())
 
     def _follow_camera(self) -> None:
         """Apply the drawing's moving camera (e.g. the Moon seen from the Earth) while it has one;

@@ -410,6 +410,7 @@ class Job:
     slot: Any = None
     started: float | None = None
     cancel: bool = False
+    preempted: bool = False  # a background job stopped to free its child for a browser (queued again)
     nojit_tried: bool = False
     progress: float | None = None
 
@@ -553,7 +554,7 @@ class _Slot:
         t0 = time.perf_counter()
 
         def progress(frac):
-            if job.cancel or self.pool.closed:
+            if job.cancel or job.preempted or self.pool.closed:
                 raise Cancelled()
             if time.perf_counter() - t0 > RUN_SECONDS_LIMIT:
                 raise TimeLimit()
@@ -584,7 +585,7 @@ class _Slot:
         signalled = None
         while True:
             now = time.perf_counter()
-            if (job.cancel or self.pool.closed) and signalled is None:
+            if (job.cancel or job.preempted or self.pool.closed) and signalled is None:
                 signalled = now
                 try:
                     os.kill(self.proc.pid, signal.SIGUSR1)
@@ -755,8 +756,10 @@ class SimPool:
                     job.waiters.append(waiter)
                 if job.background:  # a browser waits for it now: it goes before the background jobs
                     job.background = False
+                    job.preempted = False
                     if job.state == "queued":
                         job.created = time.perf_counter()
+                        self._preempt()
                 self._cv.notify_all()
                 return job
             job = Job(key, spec, dict(values), preview=preview, waiters=[waiter])
@@ -830,7 +833,21 @@ class SimPool:
             if self.nojit is None:
                 self.nojit = _Slot(self, len(self.slots), jit=False)
             self._warm_soon(job.spec)
+        if not job.background:
+            self._preempt()
         self._cv.notify_all()
+
+    def _preempt(self) -> None:
+        """A browser's job is waiting and every compiling child is busy: a background job (not
+        one compiling a scenario for the first time) is stopped and queued again."""
+        if any(s.job is None for s in self.slots):
+            return
+        for s in self.slots:
+            j = s.job
+            if j is not None and j.background and not j.key.endswith("#warm") and not j.preempted \
+                    and j.spec.name in self.warm:
+                j.preempted = True
+                return
 
     def _warm_soon(self, spec) -> None:
         """Compile `spec`'s code in the background (a run of its preview), before other background work."""
@@ -863,14 +880,28 @@ class SimPool:
         t = self._seconds.get((job.spec.name, job.preview))
         return t is None or t > SLOW_JOB_S
 
+    def _running(self) -> tuple[int, int]:
+        """(background jobs, slow browser jobs) running in the compiling children."""
+        jobs = [s.job for s in self.slots if s.job is not None and s.job.state == "running"]
+        return (sum(1 for j in jobs if j.background),
+                sum(1 for j in jobs if not j.background and self._slow(j)))
+
     def _eligible(self, slot: _Slot, job: Job) -> bool:
+        """Which job a child may take. One compiling child is always kept for browsers' quick runs
+        (a slider on a quick scene): background work and slow runs share the others, and a
+        background job gives way to a browser's (`_preempt`)."""
         if not slot.jit:
             return self._cold(job)
-        if self._slow(job):  # slow runs leave one compiling child to the quick ones (a slider on a quick scene)
-            running_slow = sum(1 for s in self.slots if s.job is not None and s.job.state == "running"
-                               and self._slow(s.job))
-            if running_slow >= max(1, len(self.slots) - 1):
+        keep = max(1, len(self.slots) - 1)
+        bg, slow = self._running()
+        if job.background:
+            if bg + slow >= keep:
                 return False
+            # a browser waiting goes first; compiling a scenario a browser waits for (a warm job) does not wait
+            if not job.key.endswith("#warm") and any(not j.background and not self._cold(j) for j in self._queue):
+                return False
+        elif self._slow(job) and slow >= keep:
+            return False
         # compiling children leave a cold job to the idle pure-Python child (they warm the
         # scenario with a background job meanwhile)
         nj = self.nojit
@@ -933,6 +964,13 @@ class SimPool:
 
     def _cancelled(self, job: Job) -> None:
         self.stats["cancelled"] += 1
+        if job.preempted and not self.closed and not job.cancel:
+            job.preempted = False
+            with self._cv:
+                job.state, job.slot = "queued", None
+                self._queue.append(job)
+                self._cv.notify_all()
+            return
         if job.background and not self.closed and not job.cancel:
             return self._requeue(job)
         with self._cv:
@@ -1223,6 +1261,19 @@ class SimulationWorker:
 
 
 DRAWINGS_PER_RUN = 3
+
+
+def limits_text() -> str:
+    """The limits a browser's runs are held to, in a sentence for the panel (docs/classroom.md)."""
+    budget = ""
+    try:
+        from theoria.scenarios.budget import MAX_MEMORY, MAX_STEPS  # the step and memory budget, when present
+
+        budget = f", at most {MAX_STEPS:.0e} integrator steps and {MAX_MEMORY / 1e9:g} GB".replace("e+0", "e")
+    except ImportError:
+        pass
+    return (f"*This server runs one simulation per browser at a time (a newer request replaces it){budget}, "
+            f"each for at most {RUN_SECONDS_LIMIT:g} s of computing.*")
 
 
 def drawing_of(spec, run, view=None):
