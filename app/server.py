@@ -381,7 +381,7 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
         announced = not precompute
         while True:
             time.sleep(1.0)
-            if not announced and pool.pending_background() == 0:
+            if not announced and pool.pending_background() == 0 and pool.ready():
                 announced = True
                 print(f"theoria: every scenario's defaults and presets are ready "
                       f"({time.perf_counter() - t0:.0f} s after start)", flush=True)

@@ -440,6 +440,7 @@ class _Slot:
         self.busy_since: float | None = None
         self.runs = 0
         self.kills = 0
+        self.ready = not use_process  # a child is up and has imported the scenarios
         self._thread = threading.Thread(target=self._loop, daemon=True,
                                         name=f"theoria-sim-{'jit' if jit else 'nojit'}-{index}")
         self._thread.start()
@@ -474,6 +475,7 @@ class _Slot:
         if not self._wait_ready():
             self._kill("did not start")
             return False
+        self.ready = True
         return True
 
     def _wait_ready(self, limit: float = 300.0) -> bool:
@@ -689,8 +691,10 @@ class SimPool:
                  cache_bytes: float = CACHE_BYTES):
         if use_processes is None:
             use_processes = os.name == "posix" and os.environ.get("THEORIA_SIM_PROCESSES", "1") != "0"
-        # at least two: one compiling child stays free for quick runs while another does a slow one
-        self.slots_n = slots or max(2, min(4, os.cpu_count() or 1))
+        # one per core and one more: a child stays free for quick runs while the others do slow
+        # ones (they run below the server's priority, so the cores are shared, not oversubscribed
+        # at the expense of the event loop)
+        self.slots_n = slots or max(2, min(5, (os.cpu_count() or 1) + 1))
         self.use_processes = use_processes
         self.cache = RunCache(cache_bytes)
         self.store = RunStore() if store else None
@@ -803,6 +807,10 @@ class SimPool:
                 n += 1
         return n
 
+    def ready(self) -> bool:
+        """Every compiling child is up (they take seconds to import numpy, scipy and numba)."""
+        return all(s.ready for s in self.slots)
+
     def pending_background(self) -> int:
         with self._cv:
             return sum(1 for j in self._jobs.values() if j.background)
@@ -883,8 +891,11 @@ class SimPool:
     def _running(self) -> tuple[int, int]:
         """(background jobs, slow browser jobs) running in the compiling children."""
         jobs = [s.job for s in self.slots if s.job is not None and s.job.state == "running"]
+        now = time.perf_counter()
+        # a run that has gone on for longer than a quick one is slow, whatever was expected of it
+        # (a slider can make a quick scene's run long: a duration at its maximum)
         return (sum(1 for j in jobs if j.background),
-                sum(1 for j in jobs if not j.background and self._slow(j)))
+                sum(1 for j in jobs if not j.background and (self._slow(j) or now - (j.started or now) > SLOW_JOB_S)))
 
     def _eligible(self, slot: _Slot, job: Job) -> bool:
         """Which job a child may take. One compiling child is always kept for browsers' quick runs

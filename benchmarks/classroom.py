@@ -82,6 +82,7 @@ class ViserProtocolClient:
         self.markdown: dict[str, str] = {}  # markdown uuid → content (info, Euler table, status)
         self.notifications: list[tuple[str, str]] = []  # (title, body) as the page would pop them up
         self.scripts: list[str] = []  # JavaScript the server ran in the page (title, loading line)
+        self.scenario = ""  # the scenario whose scene is drawn (from the tab title the server sets)
         self.update_no = 0  # k of the last "(update #k)" seen
         self.full_no = 0  # k of the last update that was not a quick preview
         self.scene_names: set[str] = set()
@@ -135,7 +136,13 @@ class ViserProtocolClient:
         if "Notification" in typ and isinstance(m.get("props"), dict) and "title" in m["props"]:
             self.notifications.append((m["props"].get("title", ""), m["props"].get("body", "")))
         if typ == "RunJavascriptMessage":
-            self.scripts.append(m.get("source", ""))
+            src = m.get("source", "")
+            self.scripts.append(src)
+            if src.startswith("document.title"):  # "theoria — <scenario>": the scenario drawn
+                try:
+                    self.scenario = json.loads(src.split("=", 1)[1].strip().rstrip(";")).split(" — ")[-1]
+                except Exception:
+                    pass
         if typ.startswith("Gui") and "props" in m and isinstance(m["props"], dict):
             label = m["props"].get("label")
             if label:
@@ -387,10 +394,11 @@ async def _student(i: int, url: str, t_end: float, rec: dict, scenarios=None) ->
                             break
             if uuid is None or value is None:
                 continue
-            scen = c.status
+            scen = c.scenario
             first, full = await c.act(uuid, value)
-            rec["actions"].append({"kind": kind, "first": first, "full": full, "client": i, "status": scen[:60],
-                                   "answered": c.answered})
+            rec["actions"].append({"kind": kind, "first": first, "full": full, "client": i, "scenario": scen,
+                                   "answered": c.answered, "value": value if kind == "slider" else None,
+                                   "control": c.components.get(uuid, {}).get("label") if kind == "slider" else None})
     except Exception as e:  # noqa: BLE001 — a client's crash is counted, not fatal
         rec["errors"].append(f"client {i}: {type(e).__name__}: {e}")
     finally:
