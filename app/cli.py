@@ -1,14 +1,21 @@
 """The `theoria` command (design.md, "Command line").
 
-Exit status 2 with one line naming the key, the value and the allowed range for any bad input.
+Exit status 2 with one line naming the key, the value and the allowed range for any bad input,
+including a run beyond the step or memory limit (refused before it starts; `--max-steps`,
+`--max-memory` raise the limits). A file that cannot be written: exit 1, one line, nothing
+changed. Ctrl-C: exit 130, SIGTERM: exit 143, one line each, never a traceback.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import re
 import sys
 import time
 
+from theoria.app.files import WriteError
+from theoria.app.interrupt import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated, cli_signals
 from theoria.physics.params import ParameterError
 
 from .format import number
@@ -16,6 +23,8 @@ from .format import number
 
 class Progress:
     """Progress on stderr for runs that take longer than a second (throttled)."""
+
+    showing: "Progress | None" = None  # the progress line on the terminal now, if any
 
     def __init__(self, label: str, quiet: bool = False):
         self.label = label
@@ -30,12 +39,61 @@ class Progress:
             return
         self.last = now
         self.shown = True
+        Progress.showing = self
         sys.stderr.write(f"\r{self.label}: {100 * fraction:5.1f}%  ({now - self.t0:.1f} s)")
         sys.stderr.flush()
 
     def done(self) -> None:
         if self.shown:
             sys.stderr.write("\n")
+        Progress.showing = None
+
+    @staticmethod
+    def clear() -> None:
+        """Blank the progress line (a message follows on the same line)."""
+        if Progress.showing is not None:
+            sys.stderr.write("\r" + " " * 72 + "\r")
+            Progress.showing = None
+
+
+# ---- limits ------------------------------------------------------------------------------------
+
+_UNLIMITED = ("none", "inf", "unlimited")
+_UNITS = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "m": 1e6, "mb": 1e6, "g": 1e9, "gb": 1e9, "t": 1e12, "tb": 1e12,
+          "kib": 1024, "mib": 1024**2, "gib": 1024**3, "tib": 1024**4}
+
+
+def _max_steps(text: str) -> float | None:
+    if text.strip().lower() in _UNLIMITED:
+        return None
+    try:
+        v = float(text)
+    except ValueError:
+        raise ParameterError("--max-steps", text, "a number of integrator steps > 0, or none") from None
+    if not (math.isfinite(v) and v > 0):
+        raise ParameterError("--max-steps", text, "a number of integrator steps > 0, or none")
+    return v
+
+
+def _max_memory(text: str) -> float | None:
+    t = text.strip().lower()
+    if t in _UNLIMITED:
+        return None
+    m = re.fullmatch(r"([0-9.]+(?:e[+-]?[0-9]+)?)\s*([a-z]*)", t)
+    if m is None or m.group(2) not in _UNITS:
+        raise ParameterError("--max-memory", text, "bytes with an optional unit (e.g. 4GB, 500MB, 2GiB), or none")
+    v = float(m.group(1)) * _UNITS[m.group(2)]
+    if not (math.isfinite(v) and v > 0):
+        raise ParameterError("--max-memory", text, "a size > 0 (e.g. 4GB), or none")
+    return v
+
+
+def _limits(args) -> dict:
+    from theoria.scenarios.budget import MAX_MEMORY, MAX_STEPS
+
+    steps = MAX_STEPS if args.max_steps is None else _max_steps(args.max_steps)
+    memory = MAX_MEMORY if args.max_memory is None else _max_memory(args.max_memory)
+    return {"max_steps": steps, "max_memory": memory}
 
 
 def _parse_sets(items: list[str] | None) -> dict[str, str]:
@@ -92,6 +150,7 @@ def cmd_list(args) -> int:
 
 def cmd_run(args) -> int:
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
+    sc.check_budget(values, **_limits(args))  # before the run: a run of hours is refused at once
     prog = Progress(f"run {sc.name}", quiet=False)
     result = sc.simulate_fn(values, progress=prog)
     prog.done()
@@ -179,26 +238,40 @@ def cmd_serve(args) -> int:
         from theoria.scenarios import get
 
         get(args.scenario)  # unknown name: exit 2 before the server starts
-    serve(port=args.port, host=args.host, scenario=args.scenario)
+    from theoria.app.server import Limits
+
+    for flag, v in (("--max-clients", args.max_clients), ("--max-per-address", args.max_per_address)):
+        if v < 1:
+            raise ParameterError(flag, v, "a whole number ≥ 1")
+    serve(port=args.port, host=args.host, scenario=args.scenario,
+          limits=Limits(max_connections=args.max_clients, max_per_address=args.max_per_address),
+          precompute=not args.no_precompute)
+    return 0
+
+
+def _write_command(args, suffixes, write, what: str, how: str) -> int:
+    """record / export: the values, the limits and the target checked before the run; then the
+    file written whole or not at all (app/files.py), and where it went said."""
+    from theoria.app.files import check_out
+
+    sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
+    sc.check_budget(values, **_limits(args))
+    check_out(args.out, suffixes, force=args.force)
+    write(sc.name, args.out, values)
+    _wrote(args.out, f"{what} of {sc.name}", how)
     return 0
 
 
 def cmd_record(args) -> int:
     from theoria.app.record import record
 
-    sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
-    record(sc.name, args.out, values)
-    _wrote(args.out, f"a rerun recording of {sc.name}", "theoria replay")
-    return 0
+    return _write_command(args, (".rrd",), record, "a rerun recording", "theoria replay")
 
 
 def cmd_export(args) -> int:
     from theoria.app.export_html import export
 
-    sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
-    export(sc.name, args.out, values)
-    _wrote(args.out, f"an HTML replay of {sc.name}", "open it in a browser, or theoria replay")
-    return 0
+    return _write_command(args, (".html", ".htm"), export, "an HTML replay", "open it in a browser, or theoria replay")
 
 
 def human_size(n: int) -> str:
@@ -223,7 +296,8 @@ def cmd_replay(args) -> int:
     from theoria.app.replay import ReplayError, replay
 
     try:
-        return replay(args.file, check_only=args.check, web_viewer=args.web_viewer)
+        return replay(args.file, check_only=args.check, web_viewer=args.web_viewer, open_browser=args.open,
+                      host=args.host)
     except ReplayError as e:  # corrupt, truncated or foreign file: one line, exit 2
         sys.stderr.write(f"theoria: error: {e}\n")
         return 2
@@ -243,6 +317,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--port", type=int, default=8080)
     s.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1; 0.0.0.0 for a classroom)")
     s.add_argument("--scenario", default=None)
+    s.add_argument("--max-clients", type=int, default=200, metavar="N",
+                   help="browsers connected at once (default 200); more are refused")
+    s.add_argument("--max-per-address", type=int, default=10, metavar="N",
+                   help="browsers from one network address (default 10)")
+    s.add_argument("--no-precompute", action="store_true",
+                   help="do not prepare every scenario's defaults and presets in the background")
     s.set_defaults(fn=cmd_serve)
 
     s = sub.add_parser("list", help="scenarios, one line each")
@@ -258,16 +338,24 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--duration", type=float, default=None)
         s.add_argument("--preset", default=None, metavar="NAME",
                        help="start from a preset (its name or a unique part of it; `theoria list` shows them)")
+        s.add_argument("--max-steps", default=None, metavar="N",
+                       help="refuse a run of more integrator steps (default 2e7; none: no limit)")
+        s.add_argument("--max-memory", default=None, metavar="SIZE",
+                       help="refuse a run that keeps more memory (default 1GB; e.g. 4GB; none: no limit)")
         if name == "run":
             s.add_argument("--json", action="store_true")
         else:
             s.add_argument("--out", required=True)
+            s.add_argument("--force", action="store_true", help="replace the --out file if it exists")
         s.set_defaults(fn=fn)
 
     s = sub.add_parser("replay", help="open a theoria .rrd (rerun viewer) or .html export; refuses other files")
     s.add_argument("file")
     s.add_argument("--check", action="store_true", help="only validate the file (exit 0 if it is theoria's)")
-    s.add_argument("--web-viewer", action="store_true", help="rerun's web viewer instead of the native one")
+    s.add_argument("--web-viewer", action="store_true", help="rerun's web viewer instead of the native one "
+                   "(prints its URL; stops with this command)")
+    s.add_argument("--open", action="store_true", help="with --web-viewer: open the URL in a browser")
+    s.add_argument("--host", default="127.0.0.1", help="interface the viewer binds (default 127.0.0.1)")
     s.set_defaults(fn=cmd_replay)
 
     s = sub.add_parser("check", help="every result of Euler's: Euler / simulated / modern")
@@ -282,16 +370,26 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _fail(message: str, code: int) -> int:
+    Progress.clear()
+    sys.stderr.write(f"theoria: {message}\n")
+    sys.stderr.flush()
+    return code
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        return args.fn(args)
-    except ParameterError as e:
-        sys.stderr.write(f"theoria: error: {e}\n")
-        return 2
-    except KeyboardInterrupt:
-        sys.stderr.write("theoria: interrupted\n")
-        return 130
+    with cli_signals():
+        try:
+            args = build_parser().parse_args(argv)
+            return args.fn(args)
+        except ParameterError as e:
+            return _fail(f"error: {e}", 2)
+        except WriteError as e:
+            return _fail(f"error: {e}", 1)
+        except KeyboardInterrupt:
+            return _fail("interrupted", EXIT_INTERRUPTED)
+        except Terminated:
+            return _fail("terminated", EXIT_TERMINATED)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,9 @@ outs). `as_html()` inlines the viser client and the recording: the file plays fr
 server and no network. The camera starts where the app's does, looking at the same point, and a
 panel carries the scenario's title, §, what to look for, Euler's formula and the Euler /
 simulated / modern table (the serializer records no GUI, so the text is written into the page).
+The page is built in memory and written whole or not at all (`app.files.write_whole`: a temporary
+file beside the target, renamed over it once complete; a full disk or an interruption leaves an
+older file as it was).
 """
 from __future__ import annotations
 
@@ -18,6 +21,7 @@ import socket
 import numpy as np
 import viser
 
+from .files import write_whole
 from .scene import SceneView
 
 FRAMES = 240  # frames in the replay
@@ -96,8 +100,7 @@ def export_run(run, out, frames: int = FRAMES, fps: float = FPS, view=None) -> d
     drawing = run._spec().drawing(run, view)
     page = render_html(drawing, run, frames, fps)
     data = page.encode("utf-8")
-    with open(out, "wb") as f:
-        f.write(data)
+    write_whole(out, data)
     return {"path": str(out), "frames": int(min(frames, drawing.n_frames)), "bytes": len(data)}
 
 

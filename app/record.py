@@ -17,6 +17,13 @@ Differences that rerun imposes: paths are drawn whole (rerun has no "appear at f
 of one strip), lights are not recorded (rerun lights the scene itself), and a camera that follows
 the run (the Moon seen from the Earth) is recorded as the starting view only.
 
+The file is whole or absent: rerun encodes the recording into memory (a binary stream, footer
+included) and `app.files.write_whole` writes it beside the target and renames it over the target
+only when every byte is on disk. A recording interrupted (Ctrl-C, SIGTERM) or refused by the disk
+leaves no file and an older one as it was. rerun's own file sink is not used: it writes the footer
+however early the stream is closed (a cut-short file passed every check), and on a full disk its
+flush blocks forever.
+
 Replay: `rerun FILE.rrd`, or `theoria replay FILE.rrd --web-viewer`.
 """
 from __future__ import annotations
@@ -31,6 +38,7 @@ from theoria.physics.constants import JULIAN_YEAR_DAYS, SECONDS_PER_DAY
 from theoria.physics.quaternion import to_xyzw
 from theoria.scenarios.drawing import Arrows, Frame, Label, Light, Mesh, Path, Points, Segments, Sphere
 
+from .files import write_whole
 from .format import comparison_rows
 
 _YEAR_S = JULIAN_YEAR_DAYS * SECONDS_PER_DAY
@@ -220,12 +228,21 @@ def record_run(run, out, view=None, application_id: str = APPLICATION_ID) -> dic
     """Write the rerun recording of `run` (its drawing, camera and text) to the .rrd file `out`."""
     drawing = run._spec().drawing(run, view)
     rec = rr.RecordingStream(application_id, recording_id=str(uuid.uuid4()))
+    stream = rec.binary_stream()  # in memory: the file is written whole by write_whole below
+    rec.send_blueprint(blueprint(drawing), make_active=False, make_default=True)
+    data = None
     try:
-        rec.save(str(out), default_blueprint=blueprint(drawing))
         record_drawing(rec, drawing, run)
+        data = stream.read(flush=True)  # every chunk and the footer
     finally:
-        rec.disconnect()  # writes the footer; a file without it is refused by the reader
-    return {"path": str(out), "steps": len(run.trajectory.t), "frames": drawing.n_frames}
+        rec.disconnect()
+        if data is None:  # interrupted: drop what was encoded (rerun warns about unread bytes otherwise)
+            try:
+                stream.read(flush=False)
+            except Exception:  # noqa: BLE001 — nothing is written either way
+                pass
+    nbytes = write_whole(out, data)
+    return {"path": str(out), "steps": len(run.trajectory.t), "frames": drawing.n_frames, "bytes": nbytes}
 
 
 def record(name: str, out: str, values: dict | None = None) -> dict:

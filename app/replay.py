@@ -4,8 +4,11 @@ else with one clear line (exit 2).
 - ``.rrd`` (from `theoria record`): rerun's own reader (`rerun.chunk.RrdReader`) must read the
   whole file with its footer (a file cut short has none: rerun then warns "no footer", taken here
   as an error), hold a recording whose application id is "theoria", and hold theoria's entities
-  (`/world` and the `/text` document with the Euler table). Then the rerun viewer opens it
-  (`rerun FILE`, or `rerun FILE --web-viewer` with ``--web-viewer``).
+  (`/world` and the `/text` document with the Euler table). Then the rerun viewer opens it:
+  the native viewer, or with ``--web-viewer`` rerun's web viewer served on 127.0.0.1 (``--host``
+  to change it), its URL printed and a browser opened only with ``--open``. The viewer runs as
+  a child that stops with this command: Ctrl-C or SIGTERM stop it, and the kernel stops it if
+  this process dies (PR_SET_PDEATHSIG); it sends no analytics.
 - ``.html`` (from `theoria export`): must carry the marker `app.export_html.MARKER`, the embedded
   viser scene, and end with ``</html>`` (a truncated file does not). Then its ``file://`` URL is
   printed (the file plays in any browser with no server).
@@ -14,13 +17,17 @@ else with one clear line (exit 2).
 """
 from __future__ import annotations
 
+import ctypes
 import os
 import re
 import shutil
+import signal
+import socket
 import subprocess
 import sys
 import warnings
 from pathlib import Path
+from urllib.parse import quote
 
 APPLICATION_ID = "theoria"  # app/record.py: rr.RecordingStream("theoria", ...)
 REQUIRED_ENTITIES = ("/world", "/text")
@@ -104,7 +111,8 @@ def check(path: str) -> dict:
     raise ReplayError(f"{path}: unknown kind of file; theoria replays .rrd (theoria record) and .html (theoria export)")
 
 
-def replay(path: str, check_only: bool = False, web_viewer: bool = False) -> int:
+def replay(path: str, check_only: bool = False, web_viewer: bool = False, open_browser: bool = False,
+           host: str = "127.0.0.1") -> int:
     """Validate `path`, then open it (rerun viewer for .rrd; print the file:// URL for .html)."""
     info = check(path)
     if info["kind"] == "html":
@@ -113,6 +121,81 @@ def replay(path: str, check_only: bool = False, web_viewer: bool = False) -> int
     if check_only:
         print(f"theoria recording {info['recording_id']}: {info['entities']} entities, {info['rows']} rows — ok")
         return 0
-    exe = shutil.which("rerun") or str(Path(sys.executable).with_name("rerun"))
-    cmd = [exe, str(path)] + (["--web-viewer"] if web_viewer else [])
-    return subprocess.call(cmd)
+    cmd, url = viewer_command(path, web_viewer, open_browser, host)
+    if url is not None:
+        print(f"rerun web viewer for {path}: {url}", flush=True)
+    return run_child(cmd, viewer_env())
+
+
+def _free_port(host: str) -> int:
+    with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as s:
+        s.bind((host, 0))
+        return s.getsockname()[1]
+
+
+def rerun_binary() -> str:
+    """The rerun viewer binary itself. The `rerun` on PATH is a Python wrapper (rerun_cli) that
+    runs the binary as *its* child: stopping the wrapper left the viewer running on its own (at
+    ~95 % CPU), so theoria starts the binary directly and stops exactly the process it started."""
+    if os.environ.get("RERUN_CLI_PATH"):
+        return os.environ["RERUN_CLI_PATH"]
+    try:
+        import rerun_cli
+
+        here = Path(rerun_cli.__file__).parent
+        for cand in (here / "Rerun.app" / "Contents" / "MacOS" / "Rerun", here / "rerun", here / "rerun.exe"):
+            if cand.is_file():
+                return str(cand)
+    except ImportError:
+        pass
+    return shutil.which("rerun") or str(Path(sys.executable).with_name("rerun"))
+
+
+def viewer_command(path, web_viewer: bool, open_browser: bool, host: str) -> tuple[list[str], str | None]:
+    """The rerun command line for `path` and the URL of the web viewer (None for the native one).
+    rerun's own defaults listen on 0.0.0.0 and its `--web-viewer` opens a browser: here it binds
+    `host`, and serves (`--serve-web`) without opening anything unless `open_browser`."""
+    exe = rerun_binary()
+    if not web_viewer:
+        return [exe, str(path), "--bind", host], None
+    web, grpc = _free_port(host), _free_port(host)
+    shown = f"[{host}]" if ":" in host else host
+    url = f"http://{shown}:{web}?url=" + quote(f"rerun+http://{shown}:{grpc}/proxy", safe="")
+    mode = "--web-viewer" if open_browser else "--serve-web"
+    return [exe, str(path), mode, "--bind", host, "--web-viewer-port", str(web), "--port", str(grpc)], url
+
+
+def viewer_env() -> dict:
+    """rerun's analytics are off when `CI` is set (no first-run notice, no config written, nothing
+    sent); its INFO log lines are left out (theoria prints the URL itself)."""
+    return dict(os.environ, CI=os.environ.get("CI", "1"), RUST_LOG=os.environ.get("RUST_LOG", "warn"))
+
+
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def _die_with_parent() -> None:  # runs in the child between fork and exec
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    except (OSError, AttributeError):  # not Linux: the parent's own clean-up still stops it
+        pass
+
+
+STOP_GRACE_S = 3.0
+
+
+def run_child(cmd: list[str], env: dict | None = None) -> int:
+    """Run the viewer until it exits. If this command is stopped (Ctrl-C, SIGTERM, any error) the
+    viewer is stopped too: SIGTERM, then SIGKILL after STOP_GRACE_S; if this process is killed
+    outright, the kernel sends the viewer SIGTERM (PR_SET_PDEATHSIG)."""
+    proc = subprocess.Popen(cmd, env=env, preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
+    try:
+        return proc.wait()
+    finally:
+        if proc.poll() is None:
+            proc.terminate()
+            try:
+                proc.wait(timeout=STOP_GRACE_S)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()

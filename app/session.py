@@ -38,22 +38,19 @@ from theoria.physics.errors import ParameterError, show_value
 from theoria.scenarios import all_scenarios, get
 from theoria.scenarios.drawing import OVERLAYS, View, palette
 
-from . import browser, gallery
+from . import browser, gallery, page, playback
 from . import link as linkmod
 from .controls import ParamControls
 from .export_html import configure_scene
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, human_number, metric_label, numbers_markdown,
                     read_markdown, y_axis_px)
 from .scene import SceneView
-from .worker import SimulationWorker
+from .worker import SimulationWorker, drawing_of, limits_text
 
-PLAY_HZ = 60.0  # playback tick for one browser (messages go out each 1/60 s)
-# Pose updates per second shared by all browsers: the server runs on one core (the GIL), and 30
-# sessions at 60 Hz alone took 75% of it (docs/robustness.md), so with many browsers each plays
-# back at a lower rate and slider changes stay quick.
-PLAY_BUDGET = 360.0
-PLAY_HZ_MIN = 12.0
+# Playback: one thread for every browser within a share of a core (app/playback.py); with many
+# browsers each plays back at a lower rate and slider changes stay quick.
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
+CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubber while playing
 SLIDER_DEBOUNCE_S = 0.15  # slider moves closer than this are a drag: only its last value is simulated
 STEP_FRACTION = 0.01  # ← / → move the clock by this fraction of the run
 LINK_EVERY_S = 0.5  # the address bar follows the view at most this often (1 s while playing)
@@ -63,8 +60,8 @@ PLAY, PAUSE, RESET, BACK, FORWARD = "Play", "Pause", "Reset", "◀ Step", "Step 
 
 
 def playback_hz(active_sessions: int) -> float:
-    """Playback rate of each session when `active_sessions` browsers are connected."""
-    return max(PLAY_HZ_MIN, min(PLAY_HZ, PLAY_BUDGET / max(1, active_sessions)))
+    """Playback rate of each session when `active_sessions` browsers are playing."""
+    return playback.ticker().rate(active_sessions)
 
 
 _IDENT = re.compile(r"\b[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9.]+)+\b|extras\[|plot_series|\bJSON\b")
@@ -136,14 +133,16 @@ class ClientSession:
         self._class_key = None
         self.updates = 0  # scene rebuilds done (tests and bench read it)
         self._build_gui()
+        page.set_loading(client, f"theoria — preparing {self.spec.title}…")
         self._add_keys()
         browser.run_js(client, browser.SETUP)
         self._set_title()
         if self.present:
             self._apply_present()
         self.worker = SimulationWorker(f"sim-{client.client_id}", self._apply, self._failed, self._show_progress)
-        self._player = threading.Thread(target=self._play, daemon=True, name=f"play-{client.client_id}")
-        self._player.start()
+        self._last_tick = None
+        self._last_gui = 0.0
+        playback.ticker().add(self)
         if run is not None and run.scenario == self.spec.name:
             self.controls.set_values(run.params)
             self._apply(self.worker.adopt(self.spec, run.params), run, 0.0)
@@ -224,6 +223,7 @@ class ClientSession:
                                                    hint="large type, controls hidden; keys: space, ← →, 1–9, P")
                 self.present_cb.on_update(lambda e: self._safe(self._on_present_cb))
                 self.class_html = gui.add_html("")
+                self.limits_md = gui.add_markdown(limits_text())
         self._present_hidden = [self.draw_folder, self.speed, self.scrub]
 
     def _make_controls(self) -> ParamControls:
@@ -397,7 +397,7 @@ class ClientSession:
             self.notify("Error", f"{type(e).__name__}: {e}")
 
     def _set_title(self) -> None:
-        browser.call(self.client, "title", f"theoria — {self.spec.title}")
+        browser.call(self.client, "title", f"theoria — {self.spec.name}")
 
     # ---- scenario ------------------------------------------------------------------------------
     def _on_scenario(self) -> None:
@@ -531,6 +531,8 @@ class ClientSession:
 
     def _failed(self, req, e: Exception) -> None:
         name = req.spec.name
+        if self.updates == 0:  # nothing drawn: the panel (with the error) replaces the loading line
+            page.set_loading(self.client, None)
         if isinstance(e, ParameterError):
             self._notify_bad(e, " — keeping the last good state", spec=req.spec)
             who, allowed = self._words_for(e, req.spec)
@@ -549,7 +551,9 @@ class ClientSession:
             self.progress.value = pct
             if not self.progress.visible:
                 self.progress.visible = True
-            self._status(f"Computing the scene… {pct:.0f} %")
+            self._status(text or f"Computing the scene… {pct:.0f} %")
+            if self.updates == 0:  # nothing drawn yet: the line over the page says what is happening
+                page.set_loading(self.client, "theoria — " + (text or f"computing the scene… {pct:.0f} %"))
         except Exception:
             pass
 
@@ -573,7 +577,7 @@ class ClientSession:
                 return  # a newer request, or another scenario chosen meanwhile
             restore = self._restore if (self._restore is not None and
                                         self._restore.scenario in (None, spec.name)) else None
-            drawing = spec.drawing(result, self.view_opts)
+            drawing = drawing_of(spec, result, self.view_opts)
             new_scenario = self.drawing_spec != spec.name
             if new_scenario:  # the scenario's own overlay defaults and camera
                 overlays = dict(drawing.overlays)
@@ -610,11 +614,18 @@ class ClientSession:
             self._follow_camera()
             self._time_gui()
             req.stamps["shown"] = time.perf_counter()
+            if self.updates == 0:
+                page.set_loading(self.client, None)
             self.updates += 1
             warn = result.warnings
             self._status("⚠ This run comes with a note: see the Compare tab." if warn else "")
-            self._tick_text(f"*simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
-                            f"(update #{self.updates})*")
+            if getattr(req, "preview", False):
+                self._status("Quick preview; computing the full run…")
+                self._tick_text(f"*quick preview ({len(result.trajectory.t)} samples); computing the full run… "
+                                f"(update #{self.updates})*")
+            else:
+                self._tick_text(f"*simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
+                                f"(update #{self.updates})*")
 
     def _show_result_text(self, result) -> None:
         self.compare.content = compare_html(result)
@@ -630,7 +641,7 @@ class ClientSession:
             return
         with self._view_lock, self.client.atomic():
             old = self.drawing
-            self.drawing = self.spec.drawing(self.result, self.view_opts)
+            self.drawing = drawing_of(self.spec, self.result, self.view_opts)
             self.view.show(self.drawing, {k: bool(cb.value) for k, cb in self.toggles.items()})
             if old is None or old.camera != self.drawing.camera:
                 self._set_camera(self.drawing)
@@ -701,6 +712,35 @@ class ClientSession:
                 self.view.set_frame(i)
                 self._follow_camera()
 
+    def wants_ticks(self) -> bool:
+        """Playing a finished run, or the address bar due to follow the view (the playback thread
+        skips a session with nothing to do)."""
+        if self._closed:
+            return False
+        now = time.perf_counter()
+        if not (self.playing and self.result is not None):
+            self._last_tick = None
+            return now - self._link_time > LINK_EVERY_S
+        return True
+
+    def _tick(self, now: float) -> None:
+        """One frame of playback (called by app/playback.py's thread): the clock advances by the
+        real time since the last frame, so fewer frames a second never slow the run down. The
+        address bar follows the view at most every LINK_EVERY_S (1 s while playing)."""
+        if self._closed:
+            return
+        if self.playing and self.result is not None:
+            last, self._last_tick = self._last_tick, now
+            if last is not None:
+                self.clock = (self.clock + (now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
+                self._show_clock()
+                if now - self._last_gui > CLOCK_TEXT_EVERY:
+                    self._last_gui = now
+                    self._time_gui()
+        if now - self._link_time > (1.0 if self.playing else LINK_EVERY_S):
+            self._link_time = now
+            self._sync_link()
+
     def _time_gui(self, scrub: bool = True) -> None:
         """The scrubber and the time read-out follow the clock (playing or not)."""
         d = self.drawing
@@ -715,28 +755,6 @@ class ClientSession:
         t = d.times
         now = t[min(self.view.frame, len(t) - 1)]
         self.time_md.content = f"t = {human_number(now)} of {human_number(t[-1])} {_unit_words(d.time_unit)}"
-
-    def _play(self) -> None:
-        last = time.perf_counter()
-        last_gui = 0.0
-        while not self._closed:
-            now = time.perf_counter()
-            dt, last = now - last, now
-            try:
-                if self.playing and self.result is not None:
-                    self.clock = (self.clock + dt * float(self.speed.value) / RUN_SECONDS) % 1.0
-                    self._show_clock()
-                    if now - last_gui > 0.25:
-                        last_gui = now
-                        self._time_gui()
-                if now - self._link_time > (1.0 if self.playing else LINK_EVERY_S):
-                    self._link_time = now
-                    self._sync_link()
-            except Exception:
-                if self._closed:
-                    return
-                traceback.print_exc()
-            time.sleep(max(0.0, 1.0 / playback_hz(ClientSession.active) - (time.perf_counter() - now)))
 
     # ---- the view as a link ------------------------------------------------------------------
     def link_state(self) -> linkmod.LinkState | None:
@@ -805,6 +823,7 @@ class ClientSession:
         if not self._closed:
             ClientSession.active = max(0, ClientSession.active - 1)
         self._closed = True
+        playback.ticker().remove(self)
         if self._debounce is not None:
             self._debounce.cancel()
         self.worker.close()

@@ -49,12 +49,20 @@ def peale_residual(I, inclination, node_rate, k_earth, k_sun, moments):
     return lhs - rhs
 
 
-def peale_obliquity(inclination, node_rate, k_earth, k_sun, moments) -> float:
-    """The equilibrium obliquity I (rad) of Cassini state 2: the root of `peale_residual` between 0
-    and 90° − i (for the Moon there is one there; states 1 and 3 lie elsewhere)."""
+def peale_obliquity(inclination, node_rate, k_earth, k_sun, moments) -> float | None:
+    """The equilibrium obliquity I (rad) of Cassini state 2: the first root of `peale_residual`
+    between 0 and 180° − i (the Moon's lies near 1.5°); None when there is none (a figure too weak
+    for its node's regression: the spin cannot keep up with the orbit plane)."""
     f = lambda I: peale_residual(I, inclination, node_rate, k_earth, k_sun, moments)  # noqa: E731
-    hi = math.pi / 2 - inclination - 1e-9
-    return brentq(f, 1e-12, hi, xtol=1e-15)
+    grid = np.linspace(1e-12, math.pi - inclination - 1e-9, 2001)
+    values = np.array([f(I) for I in grid])
+    change = np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) <= 0)
+    if len(change) == 0:
+        return None
+    j = int(change[0])
+    if values[j] == 0.0:
+        return float(grid[j])
+    return brentq(f, grid[j], grid[j + 1], xtol=1e-15)
 
 
 def torque_coefficient(gm, mean_inverse_cube, spin) -> float:

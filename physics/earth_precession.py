@@ -27,6 +27,7 @@ from . import kepler
 from . import quaternion as quat
 from .constants import ARCSEC_RAD, GM_SUN_AU3_DAY2, JULIAN_YEAR_DAYS, OBLIQUITY_J2000_RAD
 from .integrator import PointMass, integrate
+from .rebound_run import integrate_to
 
 # masses in solar masses (G = k²): from the ratios of the GM's
 M_EARTH = C.GM_EARTH_KM3_S2 / C.GM_SUN_KM3_S2
@@ -152,7 +153,7 @@ def integrate_orbits(duration_days, sample_days=0.5, moon_elements=None, t_start
     xyz = np.empty((3, 3))
     vel = np.empty((3, 3))
     for j, tj in enumerate(tg):  # the first call goes backward (REBOUND flips dt), then forward
-        sim.integrate(tj, exact_finish_time=1)
+        integrate_to(sim, tj)
         sim.serialize_particle_data(xyz=xyz, vxvyvz=vel)
         out[j, :, :3] = xyz
         out[j, :, 3:] = vel

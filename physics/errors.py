@@ -7,6 +7,8 @@
 - `Cancelled`: a run stopped from its progress callback (a newer request, a closed tab, Ctrl-C).
 - `StepTooLarge`: the exact free flow refuses a step of thousands of turns (raised inside the
   integrator, reworded there as a ParameterError naming the scenario's step).
+- `BudgetExceeded`: a run refused before it starts, beyond the step or memory limit (a
+  ParameterError naming the parameter that drives the cost and the value that fits).
 """
 from __future__ import annotations
 
@@ -52,3 +54,19 @@ def show_value(value: Any) -> str:
     if not text.isprintable():
         text = repr(text)[1:-1]
     return text if len(text) <= SHOW_MAX else text[: SHOW_MAX - 1] + "…"
+
+
+class BudgetExceeded(ParameterError):
+    """A run refused before it starts: it would take more integrator steps or keep more memory
+    than the limits (scenarios.budget). Names the parameter that drives the cost; carries the
+    estimate (`cost`), the limits and what fits: `reset` {parameter: default} of those to bring
+    back to their defaults, then `fit` = (parameter, value), or None."""
+
+    def __init__(self, name: str, value: Any, allowed: str, *, cost=None, limit_steps=None, limit_bytes=None,
+                 fit=None, reset=None):
+        super().__init__(name, value, allowed)
+        self.cost = cost
+        self.limit_steps = limit_steps
+        self.limit_bytes = limit_bytes
+        self.fit = fit
+        self.reset = dict(reset or {})

@@ -81,12 +81,17 @@ def _torque(L, q, I, tq, pos, gm, c3, k3):
 
 
 @nb.njit(cache=True, nogil=True)
-def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, c3, k3, out_L, out_q, ip, c, tab):
+def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, c3, k3, out_L, out_q, last, ip, c, tab):
     """n_steps steps of the splitting; every `stride` steps the state goes to out_L, out_q
-    (row 0 is the initial state). pos: (n_steps, n_stages, n_masses, 3). (ip, c, tab): the
-    free flow's constants, `prepare(L0, I, h)` of the run's first state (used when no torque
-    acts: the orbit's invariants, k² and 1 − k², are then those of the start for the whole
-    run, not recomputed from states where rounding has touched them)."""
+    (row 0 is the initial state), the final state to `last` (L then q). pos: (n_steps, n_stages,
+    n_masses, 3). (ip, c, tab): the free flow's constants, `prepare(L0, I, h)` of the run's first
+    state (used when no torque acts: the orbit's invariants, k² and 1 − k², are then those of
+    the start for the whole run, not recomputed from states where rounding has touched them).
+
+    Returns nothing: a compiled function that returns arrays has numba run Python code to box
+    them, and a Ctrl-C that arrived during the loop is raised inside that code, where numba
+    cannot pass it on (SystemError "... returned a result with an exception set"). With nothing
+    to box, the interrupt surfaces in `integrate`, between chunks."""
     out_L[0] = L
     out_q[0] = q
     free = (not has_tq) and gm.shape[0] == 0
@@ -104,7 +109,32 @@ def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, c3, k3
             out_L[row] = L
             out_q[row] = q
             row += 1
-    return L, q
+    last[:3] = L
+    last[3:] = q
+
+
+MAX_STEPS_PER_RUN = 1e15  # beyond any budget: guards the compiled loop's integer counters
+
+
+def step_count(duration: float, step: float) -> float:
+    """Steps `integrate` takes over `duration` at (at most) `step`: a whole number of steps fills
+    the duration. A float (inf for an absurd ratio), so that a budget can be checked before any
+    integer is formed."""
+    if not duration > 0:
+        return 0.0
+    ratio = duration / step
+    if not np.isfinite(ratio) or ratio > MAX_STEPS_PER_RUN:
+        return float("inf")
+    return float(max(1, int(np.ceil(ratio - 1e-9))))
+
+
+def samples_kept(n_steps: float, stride: int) -> float:
+    """States `integrate` returns for n_steps steps kept every `stride`: the initial state, one
+    per `stride` steps, and the last state when it is not on the stride."""
+    if not np.isfinite(n_steps):
+        return float("inf")
+    n, s = int(n_steps), max(1, int(stride))
+    return float(1 + n // s + (1 if n % s else 0))
 
 
 def integrate(
@@ -136,7 +166,10 @@ def integrate(
     if w0.shape != (3,) or not np.all(np.isfinite(w0)):
         raise ParameterError("omega0", omega0, "three finite numbers")
     sch = SCHEMES[scheme]
-    n_steps = max(1, int(np.ceil(duration / step - 1e-9))) if duration > 0 else 0
+    if step_count(duration, step) > MAX_STEPS_PER_RUN:  # 1e-300 s steps: refused, not an overflow
+        raise ParameterError("step", step, f"at most {MAX_STEPS_PER_RUN:.0e} steps per run "
+                             f"(duration {duration:g} / step {step:g})")
+    n_steps = int(step_count(duration, step))
     h = duration / n_steps if n_steps else step
     stride = max(1, int(stride))
     tq = np.zeros(3) if torque_body is None else np.asarray(torque_body, float)
@@ -161,10 +194,12 @@ def integrate(
         rows = n // stride
         oL = np.empty((rows + 1, 3))
         oq = np.empty((rows + 1, 4))
+        last = np.empty(7)
         try:
             if consts is None:
                 consts = prepare(L, I, h)  # the free orbit's constants, from the first state, once
-            L, q = _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, c3, k3, oL, oq, *consts)
+            _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, c3, k3, oL, oq, last, *consts)
+            L, q = last[:3].copy(), last[3:].copy()
         except ZeroDivisionError:  # found by tests/test_fuzz.py: spin 1e-155 with moments ~1e-6 underflows
             raise ParameterError("parameters", "these values", "rates so small that their squares underflow "
                                  "(|ω| below ~1e-150): practically at rest; use larger rates or torques") from None

@@ -24,3 +24,10 @@ def zeta_of(traj_q, positions):
 
 def stride_for(n_steps):
     return max(1, int(np.ceil(n_steps / MAX_SAMPLES)))
+
+
+def run_samples(n_steps: float) -> float:
+    """States kept by a run of n_steps steps at `stride_for(n_steps)` (physics.integrator)."""
+    from ..physics.integrator import samples_kept
+
+    return samples_kept(n_steps, stride_for(n_steps)) if np.isfinite(n_steps) else MAX_SAMPLES + 1

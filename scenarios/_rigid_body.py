@@ -6,8 +6,9 @@ import numpy as np
 from scipy.optimize import brentq
 from ..physics.free_flow import free_flow
 from ..physics.inertia import validate_moments
-from ..physics.integrator import integrate
+from ..physics.integrator import integrate, samples_kept, step_count
 from ..physics.trajectory import Trajectory
+from .budget import Cost, trajectory_bytes
 
 
 MAX_SAMPLES = 20000  # states kept for drawing; the integrator steps finer
@@ -24,6 +25,14 @@ def check_body(values):
 def stride_for(duration, step):
     n = max(1, int(np.ceil(duration / step - 1e-9)))
     return max(1, int(np.ceil(n / MAX_SAMPLES)))
+
+
+def body_cost(values, extra_steps=0.0, series=0) -> Cost:
+    """The cost of `integrate_body` over the values' duration at their step (plus `extra_steps`
+    of side integrations), keeping `series` new scalar series beside the state."""
+    n = step_count(values["duration"], values["step"])
+    samples = samples_kept(n, stride_for(values["duration"], values["step"])) if np.isfinite(n) else MAX_SAMPLES + 1
+    return Cost(n + extra_steps, samples, trajectory_bytes(samples, series=series))
 
 
 def integrate_body(values, omega0, torque=None, progress=None):

@@ -25,6 +25,7 @@ import numpy as np
 from ..physics.errors import Diverged, ParameterError
 from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
+from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
 from .drawing import Camera, Drawing, Option, View, declutter_labels, standard
 
 
@@ -269,7 +270,7 @@ def _rename_error(e: ParameterError, params, values) -> ParameterError:
     return ParameterError("parameters", "these values", str(e))
 
 
-RESERVED = ("progress", "preset")  # keywords of Scenario.simulate: no parameter may be called so
+RESERVED = ("progress", "preset", "max_steps", "max_memory")  # keywords of Scenario.simulate: no parameter may be called so
 
 
 @dataclass(frozen=True)
@@ -300,6 +301,9 @@ class Scenario:
     # values that make a quick, coarser run of the same scene (shorter or with a larger step): the
     # first picture while the full run computes, and the tests' runs; {} when the defaults are quick
     preview: Mapping[str, Any] = field(default_factory=dict)
+    # what a run costs before it runs: validated values -> Cost(steps, samples, bytes) (scenarios.budget);
+    # None: a `duration` integrated at `step`, every step kept
+    cost_fn: Callable[[dict[str, Any]], Cost] | None = None
 
     def __post_init__(self):
         for p in self.params:
@@ -344,16 +348,40 @@ class Scenario:
         return self.resolve(None)
 
     def simulate(self, given: Mapping[str, Any] | None = None, /, *, preset: str | None = None,
-                 progress: Callable[[float], None] | None = None, **values) -> Run:
+                 progress: Callable[[float], None] | None = None, max_steps: float | None = MAX_STEPS,
+                 max_memory: float | None = MAX_MEMORY, **values) -> Run:
         """Run the scenario. Values come from the defaults, then `preset` (its name), then `given`
         (a mapping, e.g. of strings from a command line) and the keywords; every value is checked
-        (`ParameterError` names the parameter, the value and the allowed range)."""
+        (`ParameterError` names the parameter, the value and the allowed range).
+
+        A run that would need more than `max_steps` integrator steps or keep more than
+        `max_memory` bytes is refused before it starts (`BudgetExceeded`, a ParameterError naming
+        the parameter that drives the cost and the value that fits); None lifts a limit."""
+        resolved = self.resolve(self._merge(given, preset, values))
+        check_budget(self, resolved, max_steps, max_memory)
+        return self.simulate_fn(resolved, progress=progress)
+
+    def cost(self, given: Mapping[str, Any] | None = None, /, *, preset: str | None = None, **values) -> Cost:
+        """What `simulate` with the same values would cost, without running it: integrator steps,
+        samples kept and bytes held (`scenarios.budget.Cost`)."""
+        return self.cost_of(self.resolve(self._merge(given, preset, values)))
+
+    def cost_of(self, values: dict[str, Any]) -> Cost:
+        """The Cost of a run with these validated values (`resolve`)."""
+        return (self.cost_fn or default_cost)(values)
+
+    def check_budget(self, values: dict[str, Any], max_steps: float | None = MAX_STEPS,
+                     max_memory: float | None = MAX_MEMORY) -> Cost:
+        """The Cost of a run with these validated values, or `BudgetExceeded` before it starts."""
+        return check_budget(self, values, max_steps, max_memory)
+
+    def _merge(self, given, preset, values) -> dict[str, Any]:
         merged: dict[str, Any] = {}
         if preset is not None:
             merged.update(self.presets.get(self.preset_name(preset), {}))
         merged.update(given or {})
         merged.update(values)
-        return self.simulate_fn(self.resolve(merged), progress=progress)
+        return merged
 
     def resolve(self, given: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """The full, validated values: defaults overridden by `given`."""
@@ -405,7 +433,7 @@ def register(s: Scenario) -> Scenario:
     return s
 
 
-NOT_SCENARIOS = ("base", "checks", "drawing")
+NOT_SCENARIOS = ("base", "budget", "checks", "drawing")
 
 
 def load_all() -> None:

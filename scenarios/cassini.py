@@ -25,10 +25,11 @@ from ..physics import kepler
 from ..physics import moon
 from ..physics import quaternion as quat
 from ..physics.constants import ARCSEC_RAD, JULIAN_YEAR_DAYS
-from ..physics.integrator import PointMass, integrate
-from ..physics.params import Param
+from ..physics.integrator import PointMass, integrate, samples_kept, step_count
+from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, get, register
+from .budget import Cost, trajectory_bytes
 from .checks import register_check
 from .drawing import Arrows, Camera, Label, Option, Path, Segments, unit
 from ._ch16_drawing import body_scene
@@ -82,7 +83,12 @@ def peale(values) -> float:
     I = moon.moments(values["beta"], values["gamma"])
     k_e = CS.torque_coefficient(moon.GM_EARTH_KM3_DAY2, 1.0 / (a ** 3 * (1 - e * e) ** 1.5), N_MONTH)
     k_s = CS.torque_coefficient(GM_SUN_KM3_DAY2, C.AU_KM ** -3.0, N_MONTH) if values["sun_torque"] == "on" else 0.0
-    return math.degrees(CS.peale_obliquity(inc, g, k_e, k_s, I))
+    I_state = CS.peale_obliquity(inc, g, k_e, k_s, I)
+    if I_state is None:
+        raise ParameterError("beta", values["beta"], "large enough for a Cassini state 2 at this node period "
+                             f"({values['node_period_yr']:g} yr) and inclination (raise beta or gamma, or "
+                             "lengthen node_period_yr)")
+    return math.degrees(I_state)
 
 
 def _cassini(values, progress=None):
@@ -163,6 +169,15 @@ def _cassini(values, progress=None):
     plot = {"obliquity (deg)": np.degrees(obl), "obliquity, Peale (deg)": np.full_like(obl, I_peale),
             "out of plane (arcsec)": off / ARCSEC_RAD}
     return Run("cassini", values, traj, m, comps, notes, plot_series=plot, extras=extras)
+
+
+def _cost(values):
+    """One run over `years` at step_days (yoshida4, the Earth and the Sun), ~8,000 states kept;
+    per state the Earth's position, three directions (orbit normal, spin axis, node line) and
+    three plotted series."""
+    n = step_count(values["years"] * JULIAN_YEAR_DAYS, values["step_days"])
+    samples = samples_kept(n, max(1, int(math.ceil(n / 8000)))) if math.isfinite(n) else 8001
+    return Cost(n, samples, trajectory_bytes(samples, bodies=4, series=3))
 
 
 ECLIPTIC_COLOR, ORBIT_COLOR, SPIN_COLOR, NODE_COLOR = (200, 160, 0), (40, 120, 220), (220, 50, 47), (90, 90, 90)
@@ -275,6 +290,7 @@ register(Scenario(
     camera=Camera((3.2, -3.4, 2.6), (0.0, 0.0, 0.5)),
     preview={"years": 19.0, "step_days": 1.0},
     simulate_fn=_cassini,
+    cost_fn=_cost,
     draw=_draw,
     options={"magnify": Option(f"magnify the normals' angles ×{MAGNIFY:g}")},
     overlays={"axes": False, "vectors": False, "axis_trail": False, "polhode": False},

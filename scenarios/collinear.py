@@ -15,6 +15,7 @@ from ..physics.three_body.nbody import integrate_dop853
 from .drawing import Camera, Drawing, Label, ORBIT_RADIUS, Segments, View, new_drawing
 from . import _three_body_drawing as tbd
 from .base import Diverged, Comparison, Run, Scenario, get, register
+from .budget import Cost, trajectory_bytes
 from .checks import register_check
 from ._three_body import GROUP, orbit_trajectory
 
@@ -22,6 +23,15 @@ from ._three_body import GROUP, orbit_trajectory
 # far (relative) from α, or the satellite this far (in primary–secondary distances) from its point
 LINE_BROKEN = 0.01
 SATELLITE_LEFT = 0.1
+
+
+# DOP853 (rtol 1e-12) steps, measured on the defaults and presets: 48-98 for the three-body motions
+# (2 turns, a collapse, an expansion), 96-177 for the restricted case over 2 turns
+DOP853_STEPS_PER_TURN = 100
+DOP853_STEPS_HOMOTHETIC = 200
+N_SAMPLES = 600  # samples of the three-body motions
+N_SAMPLES_RESTRICTED = 1200
+ZERO_VELOCITY_GRID = 241  # points per side of the restricted case's grid of 2Ω
 
 
 def _collinear(values, progress=None):
@@ -34,9 +44,9 @@ def _collinear(values, progress=None):
     pos0 = np.zeros((3, 3))
     pos0[:, 0] = x
     motion = values["motion"]
-    nsamp = 600
+    nsamp = N_SAMPLES
     if motion == "restricted":
-        return _restricted(values, alpha)
+        return _restricted(values, alpha, progress)
     if motion == "rotating":
         Om = col.rotation_rate(A, B, C, alpha, 1.0)
         vel0 = np.zeros((3, 3))
@@ -57,7 +67,7 @@ def _collinear(values, progress=None):
         vel0 = np.zeros((3, 3))
         vel0[:, 0] = x * math.sqrt(2 * (E + K / 1.0)) / 1.0  # v_i = x_i ṗ/p, p = 1
     t_asked = t
-    t, P, V = integrate_dop853([A, B, C], pos0, vel0, t)
+    t, P, V = integrate_dop853([A, B, C], pos0, vel0, t, progress=progress)
     # DOP853 gives up when its step underflows (found by tests/test_fuzz.py: masses 125846, 1e-6, 1e-6
     # expanding, 13 of 600 samples): keep the part it did and say so, like a diverged run
     stopped = len(t) < len(t_asked)
@@ -140,7 +150,7 @@ def _collinear(values, progress=None):
     return result
 
 
-def _restricted(values, alpha):
+def _restricted(values, alpha, progress=None):
     """Primary, secondary (mass_ratio) and a massless satellite released at rest in the turning
     frame at one Lagrange point; markers L1–L5 turn with the primaries (inertial frame, unit
     distance). L1–L3 are unstable: the satellite drifts off after a few turns; L4/L5 hold for
@@ -152,8 +162,8 @@ def _restricted(values, alpha):
     pos = np.array([[-mu, 0, 0], [1 - mu, 0, 0], [x0, y0, 0.0]])
     vel = np.zeros((3, 3))
     vel[:, 0], vel[:, 1] = -pos[:, 1], pos[:, 0]  # rate 1 about z
-    t = np.linspace(0.0, values["turns"] * 2 * math.pi, 1200)
-    t, P, V = integrate_dop853([1 - mu, mu, 0.0], pos, vel, t)
+    t = np.linspace(0.0, values["turns"] * 2 * math.pi, N_SAMPLES_RESTRICTED)
+    t, P, V = integrate_dop853([1 - mu, mu, 0.0], pos, vel, t, progress=progress)
     c, s = np.cos(t), np.sin(t)
     bodies = {"primary": P[:, 0], "secondary": P[:, 1], "satellite": P[:, 2]}
     for k, (x, y) in pts.items():
@@ -188,7 +198,7 @@ def _restricted(values, alpha):
                                                             "satellite_corotating_y": ys,
                                                             "frame_angle_rad": t})
     # zero-velocity curves: 2Ω on a grid of the turning plane, levels through L1–L5 (= C_J there)
-    X, Y, Z = col.zero_velocity_grid(mr, n=241, extent=1.6)
+    X, Y, Z = col.zero_velocity_grid(mr, n=ZERO_VELOCITY_GRID, extent=1.6)
     extras = {"zero_velocity": {"x": X[0], "y": Y[:, 0], "two_omega": Z, "levels": CJ},
               "lagrange_points": {k: (float(x), float(y)) for k, (x, y) in pts.items()}}
     warnings = []
@@ -276,6 +286,19 @@ def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
     return d
 
 
+def _cost(values):
+    """One DOP853 run; kept: 600 samples of the three bodies (1200 and the five L-point markers in
+    the restricted case) with their integrated state and the ratio and spacing series."""
+    motion = values["motion"]
+    if motion == "restricted":
+        grid = 3 * 8 * ZERO_VELOCITY_GRID**2
+        return Cost(DOP853_STEPS_PER_TURN * values["turns"], N_SAMPLES_RESTRICTED,
+                    trajectory_bytes(N_SAMPLES_RESTRICTED, bodies=6 + 5, series=3, extra=grid))
+    steps = DOP853_STEPS_PER_TURN * values["turns"] if motion == "rotating" else DOP853_STEPS_HOMOTHETIC
+    series = 8 if motion == "rotating" else 7
+    return Cost(steps, N_SAMPLES, trajectory_bytes(N_SAMPLES, bodies=6, series=series))
+
+
 register(Scenario(
     name="collinear",
     title="Three bodies on a line: Euler's quintic",
@@ -312,6 +335,7 @@ register(Scenario(
     simulate_fn=_collinear,
     draw=_draw,
     options=OPTIONS,
+    cost_fn=_cost,
     euler_formula=("(A+B)α⁵ + (3A+2B)α⁴ + (3A+B)α³ − (B+3C)α² − (2B+3C)α − (B+C) = 0 (§7, Eq. 33)\n"
                    "p̈ = −(D/2) p⁻², D/2 = A + B + C/(α+1)² − C/α²\n"
                    "Case II: p ∝ cos²φ, t = n³a² (φ + sin φ cos φ)"),

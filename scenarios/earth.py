@@ -27,8 +27,9 @@ from ..physics.precession import euler_N, fit_pole, pole_angles
 from ..physics.three_body.lunar_elements import NODE_PERIOD_SIDEREAL_YR, NODE_PERIOD_YR
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, register
+from .budget import Cost, trajectory_bytes
 from ._ch16_drawing import EARTH_OPTIONS, earth_scene
-from ._earth import MIN_STEPS, YR
+from ._earth import CALIBRATION_STEPS, MIN_STEPS, REBOUND_STEPS_PER_DAY, YR, rotation_run
 
 
 @functools.lru_cache(maxsize=1)
@@ -369,6 +370,20 @@ def _draw(run, spec, view):
     return d
 
 
+def _cost(values):
+    """The REBOUND orbits over the run (an output every 0.5 day) and the Moon's calibration, then
+    three rotation runs (Sun and Moon, each alone) at step_days, a state every 0.5 day. Kept: the
+    drawn states (at most MAX_SAMPLES) with the Sun's and the Moon's directions, the attitudes and
+    the six plotted series at full resolution (the drawn ones are views of them)."""
+    dur = values["years"] * YR
+    n, full = rotation_run(dur, values["step_days"], 0.5)
+    calibrated = EP.calibrated_moon_elements.cache_info().currsize > 0  # done once per process
+    steps = 3 * n + REBOUND_STEPS_PER_DAY * dur + (0 if calibrated else CALIBRATION_STEPS)
+    drawn = float(np.ceil(full / max(1, int(np.ceil(full / MAX_SAMPLES)))))
+    attitude = 8 * 4  # the full-resolution quaternions, kept alive by the drawn view of them
+    return Cost(steps, drawn, full * (attitude + 6 * 8) + trajectory_bytes(drawn, bodies=2) - drawn * attitude)
+
+
 register(Scenario(
     name="earth",
     title="The Earth under the Sun and the Moon: precession and nutation",
@@ -395,6 +410,7 @@ register(Scenario(
     simulate_fn=_earth,
     draw=_draw,
     options=EARTH_OPTIONS,
+    cost_fn=_cost,
     check=_check_earth,
     euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)\n"
                    "nutation in 2φ: εN sin n (ε + 2δ cos n) / (2δ(εε − 4δδ)) in obliquity, εN (ε cos n + 2δ) / (2δ(εε − 4δδ)) in longitude (§844)"),

@@ -36,7 +36,8 @@ from .checks import register_check
 from .drawing import Camera, Label, Option, Path, Sphere, unit, z_to_many
 from ._ch16_drawing import EARTH_OPTIONS, bright_stars, earth_scene
 from ._earth import MIN_STEPS, YR
-from . import _validity
+from .budget import Cost, trajectory_bytes
+from ._earth import CALIBRATION_STEPS, REBOUND_STEPS_PER_DAY, rotation_run
 from . import _validity
 
 J2000_YEAR = 2000.0
@@ -367,6 +368,24 @@ def e10_earth_long_term():
                       f"0.019 → 0.014), and the accuracy of Vondrák's fit itself"))
 
 
+def _cost(values):
+    """Full model: one rotation run (Sun and Moon) over `years` at step_days, a state every
+    sample_years, after the mean orbits' 40-year REBOUND run (cached). Secular model: a pole per
+    sample from the averaged torque, after a 4-year REBOUND calibration (cached). Kept: each state
+    with the Sun's and the Moon's directions and six series of the pole."""
+    calibrated = EP.calibrated_moon_elements.cache_info().currsize > 0
+    steps = 0.0 if calibrated else CALIBRATION_STEPS
+    if values["model"] == "full":
+        n, samples = rotation_run(values["years"] * YR, values["step_days"], values["sample_years"] * YR)
+        cached = mean_orbits.cache_info().currsize > 0  # the mean orbits: once per process
+        steps += n + (0 if cached else REBOUND_STEPS_PER_DAY * 40 * YR)
+    else:
+        samples = math.floor(values["years"] / values["sample_years"]) + 2.0
+        cached = secular_calibration.cache_info().currsize > 0
+        steps += samples + (0 if cached else SECULAR_CALIBRATION_YEARS * YR / 0.5)
+    return Cost(steps, samples, trajectory_bytes(samples, bodies=2, series=6))
+
+
 register(Scenario(
     name="earth-long-view",
     title="A whole precession cycle: the pole among the stars",
@@ -406,6 +425,7 @@ register(Scenario(
     options={**{k: v for k, v in EARTH_OPTIONS.items() if k != "wiggle"},  # sampled every few years: no nutation
              "vondrak": Option("pole of Vondrák et al. 2011 (grey)"),
              "pole_stars": Option("Polaris, Thuban, Vega at their dates")},
+    cost_fn=_cost,
     check=_check_long,
     euler_formula=("mean precession N cos n per attracting body, N = 3GM (C − A) / (2Aε s³) (§846)"),
     presets=(

@@ -18,7 +18,7 @@ from ..physics import quaternion as quat
 from ..physics.euler_equations import direction_cosines_dot, omega_dot
 from ..physics.torque_free_exact import exact_free_motion
 from .checks import register_check
-from ._rigid_body import (INERTIA_PARAM, check_body, drift_metrics, free_body_warnings, integrate_body,
+from ._rigid_body import (INERTIA_PARAM, body_cost, check_body, drift_metrics, free_body_warnings, integrate_body,
                           middle_axis_crossings)
 
 
@@ -92,6 +92,7 @@ register(Scenario(
     ),
     camera=Camera((3.0, 2.3, 1.8), (0.0, 0.0, 0.0)),
     simulate_fn=_free_tumble,
+    cost_fn=body_cost,
     check=check_body,
     euler_formula=("dx + (cc − bb)/aa · yz dt = 0, and the same for y and z in turn (§808)\n"
                    "aa·xx + bb·yy + cc·zz = const (vis viva, §805)\n"

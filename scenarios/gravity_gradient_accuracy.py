@@ -11,6 +11,7 @@ from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
+from .budget import Cost, trajectory_bytes
 from ..physics.gravity_gradient import (fitted_order, force_error_vs_size, torque_error_vs_size)
 from .checks import register_check
 from .drawing import Label, Option, Segments, Sphere, unit
@@ -80,6 +81,13 @@ def _check_ratios(v):
         raise ParameterError("min_ratio", v["min_ratio"], f"below max_ratio = {v['max_ratio']:g}")
 
 
+def _cost(values):
+    """No integrator: one quadrature over the ellipsoid per distance; n_points samples, F's
+    position and three series each."""
+    n = values["n_points"]
+    return Cost(0, n, trajectory_bytes(n, bodies=1, series=3))
+
+
 register(Scenario(
     name="gravity-gradient-accuracy",
     title="How good is Euler's first-order torque?",
@@ -105,6 +113,7 @@ register(Scenario(
     simulate_fn=_gg_accuracy,
     draw=_draw,
     options={"attractor": Option("F at its distance, with the errors there")},
+    cost_fn=_cost,
     euler_formula=("τ = (3GM/s³) ŝ × I ŝ + O(size²/s²) (§815–816)"),
     check=lambda v: _check_ratios(v),
     presets=(

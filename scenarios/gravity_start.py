@@ -13,9 +13,13 @@ from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
+from .budget import Cost, trajectory_bytes
 from .base import get
 from .checks import register_check
 from ._ch16_drawing import ZETA_OPTION, body_scene, centre_of_force, f_and_zeta
+
+
+N_STEPS = 2000  # the run: until the body has turned turn_deg, in a fixed number of steps
 
 
 def _gravity_start(values, progress=None):
@@ -31,7 +35,7 @@ def _gravity_start(values, progress=None):
     # a time in which the body turns by `turn_deg` if the acceleration stayed constant
     T = np.sqrt(2.0 * np.radians(values["turn_deg"]) / rate_e)
     pos = lambda t: np.broadcast_to(u * s, (len(np.atleast_1d(t)), 3)).copy()  # noqa: E731
-    n = 2000
+    n = N_STEPS
     t, L, q = integrate(I, np.zeros(3), T, T / n, masses=[PointMass(gm, pos)], scheme="yoshida4",
                         stride=2, progress=progress)
     traj = Trajectory(t, q, L, I, time_unit="s", bodies={"attractor": pos(t)})
@@ -83,6 +87,12 @@ def _check_gravity_start(v):
         raise ParameterError("direction", v["direction"], "not the zero vector")
 
 
+def _cost(values):
+    """A fixed 2000 steps, every second one kept, with F's position and one series."""
+    samples = N_STEPS // 2 + 1
+    return Cost(N_STEPS, samples, trajectory_bytes(samples, bodies=1, series=1))
+
+
 register(Scenario(
     name="gravity-start",
     title="A body at rest pulled by a distant mass",
@@ -108,6 +118,7 @@ register(Scenario(
     simulate_fn=_gravity_start,
     draw=_draw,
     options=ZETA_OPTION,  # F stays where it is: no orbit to draw
+    cost_fn=_cost,
     euler_formula=("P = 3GM (C − B) cos η cos ϑ / s³, and the same for Q and R in turn (§815)\n"
                    "cos α : cos β : cos γ = P/A : Q/B : R/C (§820)"),
     check=lambda v: _check_gravity_start(v),

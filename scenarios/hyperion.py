@@ -22,6 +22,7 @@ from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
 from .checks import register_check
 from . import _validity
+from .budget import Cost, trajectory_bytes
 from ._libration import planar_moments, zeta_of
 from .drawing import Label, Option, Points, Segments
 from ._ch16_drawing import (ORBIT_OPTION, PANEL_COLOR, ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force,
@@ -44,7 +45,9 @@ def _hyperion(values, progress=None):
     e, w0 = values["eccentricity"], values["omega0"]
     ns, no = values["n_starts"], values["n_orbits"]
     th0, wd0 = ensemble_starts(ns)
-    T, W, lyap = lib.spin_orbit_section(th0, wd0, e, w0, no, steps_per_orbit=values["steps_per_orbit"], lyapunov=True)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    T, W, lyap = lib.spin_orbit_section(th0, wd0, e, w0, no, steps_per_orbit=values["steps_per_orbit"], lyapunov=True,
+                                        progress=part(0.0, 0.6))
     # the probe start, as a full rigid body (the integrator of physics.integrator)
     gamma = w0**2 / 3.0
     I = planar_moments(gamma)
@@ -56,12 +59,12 @@ def _hyperion(values, progress=None):
     t, L, q = integrate(I, [0, 0, values["probe_rate"]], probe_orbits * P, probe_orbits * P / n_steps,
                         q0=quat.from_axis_angle([0, 0, 1], values["probe_theta_deg"] * np.pi / 180),
                         masses=[PointMass(1.0, orbit.position)], scheme="yoshida4",
-                        stride=n_steps // S, progress=progress)
+                        stride=n_steps // S, progress=part(0.6, 0.8))
     pos = orbit.position(t)
     traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
     zeta = zeta_of(q, pos)
     _, _, lp = lib.spin_orbit_section([values["probe_theta_deg"] * np.pi / 180], [values["probe_rate"]], e, w0,
-                                      max(no, 100), values["steps_per_orbit"], lyapunov=True)
+                                      max(no, 100), values["steps_per_orbit"], lyapunov=True, progress=part(0.8, 0.9))
     m = {
         "lyapunov_probe_per_unit_time": float(lp[0]),
         "lyapunov_probe_per_orbit": float(lp[0] * P),
@@ -188,6 +191,27 @@ def _section(d, run):
     return p
 
 
+# the periodic orbits followed from small ω₀: per resonance and per ω₀ step of 0.05, Newton on the
+# one-orbit map at 128 steps per orbit (1 + 4 runs per iteration) and the map's trace; measured
+# 2850 steps per resonance and ω₀ step on the defaults and presets
+ISLAND_STEPS_PER_W0_STEP = 2900
+
+
+def _cost(values):
+    """The ensemble (n_starts × n_orbits × steps_per_orbit member-steps), the drawn probe and its
+    Lyapunov run, the islands' continuation; kept: n_starts × n_orbits + 1 states of the probe with
+    F's position and ζ, the section (θ mod π, θ̇, start index, exponent per point)."""
+    ns, no, spo = values["n_starts"], values["n_orbits"], values["steps_per_orbit"]
+    S = ns * no
+    probe = S * max(1, int(np.ceil(64 * values["probe_orbits"] / S)))
+    lyap = max(no, 100) * spo
+    islands = len(RESONANCES[:4]) * (len(np.arange(0.05, values["omega0"], 0.05)) + 1) * ISLAND_STEPS_PER_W0_STEP
+    samples = S + 1
+    euler_curve = 1 if abs(1 - values["omega0"] ** 2) > 1e-9 else 0
+    return Cost(float(S * spo + probe + lyap + islands), samples,
+                trajectory_bytes(samples, bodies=1, series=1 + euler_curve, extra=4 * 8 * S + 3 * 8 * ns))
+
+
 register(Scenario(
     name="hyperion",
     title="Hyperion: chaotic tumbling (spin–orbit surface of section)",
@@ -220,6 +244,7 @@ register(Scenario(
     simulate_fn=_hyperion,
     draw=_draw,
     options={**ZETA_OPTION, **ORBIT_OPTION, "section": Option("surface of section + resonance zones")},
+    cost_fn=_cost,
     euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f)\n"
                    "θ: the body's long axis, f: the moon's direction seen from the planet, r: its distance"),
     presets=(

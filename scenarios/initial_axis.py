@@ -16,7 +16,7 @@ from . import _validity
 from scipy.integrate import solve_ivp
 from ..physics.euler_equations import omega_dot
 from .checks import register_check
-from ._rigid_body import INERTIA_PARAM, check_body, integrate_body
+from ._rigid_body import INERTIA_PARAM, body_cost, check_body, integrate_body
 
 
 def _check_initial(values):
@@ -90,6 +90,9 @@ def _draw(run, spec, view):
                    colors=EULER_AXIS_COLOR, thickness=0.02),
           Label(name="body/euler_axis/label", text="Euler's axis: P/A : Q/B : R/C (§806)", position=tip, anchor=side))
     return d
+def _cost(values):
+    """The run over `duration` at `step`, the probe run (probe_time in 4 steps) and |ω| kept."""
+    return body_cost(values, extra_steps=4, series=1)
 
 
 register(Scenario(
@@ -117,6 +120,7 @@ register(Scenario(
     camera=Camera((2.6, 2.6, 1.9), (0.0, 0.0, 0.0)),
     simulate_fn=_initial_axis,
     draw=_draw,
+    cost_fn=_cost,
     check=_check_initial,
     euler_formula=("cos α : cos β : cos γ = P/aa : Q/bb : R/cc (§806)\n"
                    "α, β, γ: angles of the starting axis with the principal axes; aa, bb, cc: the moments A, B, C"),

@@ -9,15 +9,16 @@ from __future__ import annotations
 import numpy as np
 from ..physics import libration as lib
 from ..physics import quaternion as quat
-from ..physics.integrator import PointMass, integrate
+from ..physics.integrator import PointMass, integrate, step_count
 from ..physics.orbits import CircularOrbit
 from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
+from .budget import Cost, trajectory_bytes
 from .base import get
 from .checks import register_check
-from ._libration import planar_moments, stride_for, zeta_of
+from ._libration import planar_moments, run_samples, stride_for, zeta_of
 from .drawing import Label, Option, Points, Segments, Sphere
 from ._ch16_drawing import (ORBIT_OPTION, PANEL_AXES_COLOR, PANEL_COLOR, POINT_COLOR, SEPARATRIX_COLOR, ZETA_COLOR,
                             ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force, f_and_zeta, wrap)
@@ -211,6 +212,14 @@ def _phase_portrait(d, s):
     return p
 
 
+def _cost(values):
+    """periods × steps_per_period steps (the libration period cancels), F's position and six
+    series (ζ, Euler's ζ, ζ̇ and the three separatrix curves) per sample."""
+    n = step_count(values["periods"], 1.0 / values["steps_per_period"])
+    samples = run_samples(n)
+    return Cost(n, samples, trajectory_bytes(samples, bodies=1, series=6))
+
+
 register(Scenario(
     name="libration-circular",
     title="Libration in a circular orbit (Problem 93)",
@@ -241,6 +250,7 @@ register(Scenario(
     draw=_draw,
     options={**ZETA_OPTION, **ORBIT_OPTION,
              "portrait": Option("phase portrait (ζ, dζ/dt) with the separatrix")},
+    cost_fn=_cost,
     euler_formula=("ζ̈ + N sin 2ζ = 0, N = 3GM (B − A) / (2C s³) (§825)\n"
                    "small swings: period T = 2π / √(2N) (§831)"),
     presets=(

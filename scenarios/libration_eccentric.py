@@ -11,15 +11,16 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from ..physics import libration as lib
 from ..physics import quaternion as quat
-from ..physics.integrator import PointMass, integrate
+from ..physics.integrator import PointMass, integrate, step_count
 from ..physics.orbits import KeplerOrbit
 from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
+from .budget import Cost, trajectory_bytes
 from .base import get
 from .checks import register_check
-from ._libration import planar_moments, stride_for, zeta_of
+from ._libration import planar_moments, run_samples, stride_for, zeta_of
 from ._ch16_drawing import ORBIT_OPTION, ZETA_OPTION, body_scene, centre_of_force, f_and_zeta
 from . import _validity
 
@@ -224,6 +225,20 @@ def _draw(run, spec, view):
     return d
 
 
+# DOP853 steps of the search for the forced (periodic) solution: Newton on one orbit with the
+# variational equations: 216-652 DOP853 steps for the defaults and presets (measured), a few dozen
+# runs of one period at most
+FORCED_SEARCH_STEPS = 3000
+
+
+def _cost(values):
+    """orbits × steps_per_orbit steps (the period cancels), the forced-solution search, F's
+    position and four ζ series per sample."""
+    n = step_count(values["orbits"], 1.0 / values["steps_per_orbit"])
+    samples = run_samples(n)
+    return Cost(n + FORCED_SEARCH_STEPS, samples, trajectory_bytes(samples, bodies=1, series=4))
+
+
 register(Scenario(
     name="libration-eccentric",
     title="Forced libration in an eccentric orbit (Problem 94)",
@@ -249,6 +264,7 @@ register(Scenario(
     simulate_fn=_libration_eccentric,
     draw=_draw,
     options={**ZETA_OPTION, **ORBIT_OPTION},
+    cost_fn=_cost,
     euler_formula=("ζ = A²α/(A² − 2N) · sin At + Nαβ/(4(A² − 2N)) · sin 2At (§833–835)"),
     presets=(
         ("Forced swing: a nearly circular orbit", {}),

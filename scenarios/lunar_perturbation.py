@@ -14,10 +14,16 @@ from .drawing import Camera, Drawing, Frame, Label, Mesh, Option, Segments, Sphe
 from . import _three_body_drawing as tbd
 from .base import Comparison, Run, Scenario, register
 from . import _validity
+from .budget import Cost, trajectory_bytes
 import functools
 from ..physics.three_body import lunar_elements as le
 from .checks import register_check
 from ._three_body import GROUP, orbit_trajectory
+
+
+# calibrate_mean_elements: three element runs of 730 days at 0.05 day
+CALIBRATION_STEPS = 3 * 14600
+DRAWN = 20000  # at most this many states drawn
 
 
 def _lunar(values, progress=None):
@@ -32,11 +38,13 @@ def _lunar(values, progress=None):
     days = values["duration_yr"] * JULIAN_YEAR_DAYS
     h, ds = values["step_days"], values["sample_days"]
     series = values["solar_force"] == "euler-series"
-    t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series, progress=part(0.1, 0.5))
     if progress:
         progress(0.5)
     r0, v0 = le.elements_to_cartesian(el0, mu)
-    _, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), days, h, ds, mu, mus, sun)
+    _, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), days, h, ds, mu, mus, sun,
+                            progress=part(0.5, 0.9))
     if progress:
         progress(0.9)
     P = le.elements_to_position(E)
@@ -99,7 +107,7 @@ def _lunar(values, progress=None):
         notes.append("Element equations with Euler's §XXXIII expansion of 1/w³; the Cartesian reference keeps the "
                      "exact force, so elements_vs_cartesian_max_error measures the neglected (v/u)³ terms.")
     # bodies (lunar distances), at most ~20000 samples for drawing
-    stride = max(1, int(math.ceil(len(t) / 20000)))
+    stride = max(1, int(math.ceil(len(t) / DRAWN)))
     sl = slice(None, None, stride)
     tt = t[sl]
     sunpos = np.array([le.sun_state(float(x), np.asarray(sun, float))[:2] for x in tt])
@@ -223,6 +231,31 @@ def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
     return d
 
 
+def _rk4_steps(days, step, sample):
+    """Steps of `le.integrate_rk4` (whole strides) and the states it returns."""
+    stride = max(1, int(round(sample / step)))
+    strides = days / step / stride
+    if not strides < 1e15:
+        return float("inf"), float("inf")
+    n = float(np.ceil(strides) * stride)
+    return n, n / stride + 1
+
+
+def _cost(values):
+    """The element and the Cartesian runs over the span (RK4 at step_days), their 60-day dense
+    pieces, the calibration; kept: the drawn states (at most 20000) with the Sun and the Earth,
+    twelve series, and at full resolution the elements and the Moon's positions (the drawn ones
+    are views of them)."""
+    h = values["step_days"]
+    n, full = _rk4_steps(values["duration_yr"] * JULIAN_YEAR_DAYS, h, values["sample_days"])
+    dense, _ = _rk4_steps(60.0, h, h)
+    steps = 2 * n + 2 * dense + CALIBRATION_STEPS
+    if not np.isfinite(full):
+        return Cost(steps, DRAWN, float("inf"))
+    drawn = float(np.ceil(full / max(1, int(np.ceil(full / DRAWN)))))
+    return Cost(steps, drawn, full * 8 * (6 + 3) + trajectory_bytes(drawn, bodies=2, series=12))
+
+
 register(Scenario(
     name="lunar-perturbation",
     title="The Moon perturbed by the Sun, by its elements",
@@ -254,6 +287,7 @@ register(Scenario(
     simulate_fn=_lunar,
     draw=_draw,
     options=OPTIONS,
+    cost_fn=_cost,
     euler_formula=("dψ = −n v³ u d∅ sin σ sin(θ − ψ)/p · (1/w³ − 1/u³) (§XXVIII)\n"
                    "dω / sin ω = dψ / tan σ, dσ = d∅ − dψ cos ω"),
     kind="orbit",

@@ -14,7 +14,7 @@ from .drawing import Camera, standard
 from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
-from ._rigid_body import INERTIA_PARAM, drift_metrics, free_body_warnings, integrate_body, middle_axis_crossings
+from ._rigid_body import INERTIA_PARAM, body_cost, drift_metrics, free_body_warnings, integrate_body, middle_axis_crossings
 
 
 def _check_flip(values):
@@ -85,6 +85,7 @@ register(Scenario(
     camera=Camera((3.4, 1.2, 1.6), (0.0, 0.0, 0.0)),  # B (green) axis across the view: the flip is seen
     simulate_fn=_middle_axis_flip,
     draw=lambda run, spec, view: standard(run, spec, view, shape="box"),
+    cost_fn=body_cost,
     check=_check_flip,
     euler_formula=("dt = −𝔄 dx √(𝔅ℭ) / [ √(𝔄xx − 𝔄a² + 𝔅b²) · √(𝔄xx − 𝔄a² + ℭc²) ] (§808)"),
     presets=(

@@ -32,12 +32,13 @@ from ..physics import moon
 from ..physics import real_moon
 from ..physics.constants import ARCSEC_RAD, JULIAN_YEAR_DAYS
 from ..physics import quaternion as quat
-from ..physics.integrator import Degree3Field, PointMass, integrate
+from ..physics.integrator import Degree3Field, PointMass, integrate, samples_kept, step_count
 from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, register
 from .drawing import Follow, Frame, Label, Light, Mesh, Option, Segments, quat_from_matrix, segments, unit
 from ._ch16_drawing import body_scene, camera_basis, line_from_centre, moon_surface_parts
+from .budget import Cost, trajectory_bytes
 
 
 MOON_YEARS = 6.0
@@ -621,6 +622,16 @@ def _face_from_earth(d, run, spec, semi, e) -> None:
                 position=look + 1.35 * up))
 
 
+def _cost(values):
+    """The run over `years` at step_days (yoshida4), twice when it is long enough for the free
+    period (a companion run); the Earth's position and eight libration series per sample."""
+    duration = values["years"] * JULIAN_YEAR_DAYS
+    n = step_count(duration, values["step_days"])
+    runs = 1 if duration < 3 * JULIAN_YEAR_DAYS else 2
+    samples = samples_kept(n, max(1, int(np.ceil(n / 6000)))) if np.isfinite(n) else 6001
+    return Cost(runs * n, samples, trajectory_bytes(samples, bodies=1, series=8))
+
+
 register(Scenario(
     name="moon",
     title="The Moon's libration seen from the Earth",
@@ -671,6 +682,7 @@ register(Scenario(
              "earth_line": Option("direction to the Earth + sub-Earth meridian"),
              "plot_physical": Option("time plot: physical libration (″) instead of the face's wobble (°)", False),
              "plot_de421": Option("time plot: the attitude's difference from JPL DE421 (″)", False)},
+    cost_fn=_cost,
     euler_formula=("τₖ = −αₖ · 2N/(Aₖ² − 2N) · sin(Aₖt + 𝔄ₖ), 2N = 3 (B − A)/C · GM⊕/s³ (§833, §836)"),
     presets=(
         ("Moon: the face wobbles", {}),

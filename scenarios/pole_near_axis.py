@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 from ..physics.inertia import validate_moments
-from ..physics.integrator import PointMass, integrate
+from ..physics.integrator import PointMass, integrate, samples_kept, step_count
 from ..physics.params import Param
 from ..physics.precession import (TYPOS_840_843, equal_moments_841, pole_rates_840)
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, register
 from . import _validity
+from .budget import Cost, trajectory_bytes
 from .base import get
 from .checks import register_check
 from ._precession import MAX_SAMPLES
@@ -158,6 +159,16 @@ def _pole_scale(d, c, dev_deg, k):
                 position=edge * (np.cos(drawn[-1]) * c - np.sin(drawn[-1]) * tc)))
 
 
+def _cost(values):
+    """duration_turns × steps_per_turn steps (yoshida4), the 100-step run that measures the rates
+    at t = 0, and the centre's direction and three series kept per sample."""
+    T = 2 * np.pi / values["spin"]
+    dur, step = values["duration_turns"] * T, T / values["steps_per_turn"]
+    n = step_count(dur, step)
+    samples = samples_kept(n, _stride(n)) if np.isfinite(n) else MAX_SAMPLES + 1
+    return Cost(n + step_count(T / 200, T / 20000), samples, trajectory_bytes(samples, bodies=1, series=3))
+
+
 register(Scenario(
     name="pole-near-axis",
     title="The pole of rotation near a principal axis",
@@ -194,6 +205,7 @@ register(Scenario(
     draw=_draw,
     options={"pole_path": Option("path of the rotation pole O in the body, magnified"),
              "centre": Option("direction to the centre of force")},
+    cost_fn=_cost,
     euler_formula=("dγ' = 6gee (cc − bb) dt cos η cos ϑ / (aa s³) (§840)\n"
                    "γ' dβ = −6gee (aa − cc) dt cos ζ cos ϑ / (bb s³)\n"
                    "γ' dγ = −6gee (bb − aa) dt cos ζ cos η / (cc s³)   (6gee = 3GM)\n"

@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 from ..physics import quaternion as quat
-from ..physics.integrator import PointMass, integrate
+from ..physics.integrator import PointMass, integrate, samples_kept
 from ..physics.params import Param, ParameterError
 from ..physics.precession import (TYPOS_844_849, euler_N, fit_pole, linear_theory,
                           pole_angles, resonance_849)
 from ..physics.trajectory import Trajectory
 from .drawing import Camera
 from .base import Comparison, Run, Scenario, get, register
+from .budget import Cost, trajectory_bytes
 import functools
 from .checks import register_check
 from ._precession import MAX_SAMPLES
@@ -245,6 +246,17 @@ def _draw(run, spec, view):
     return d
 
 
+SWEEP_STEPS = 6 * 30 * 100  # resonance_sweep: six ratios, 30 revolutions at 100 steps
+
+
+def _cost(values):
+    """orbits × steps_per_orbit steps (yoshida4), the sweep toward the resonance, the centre's
+    position and six series of the pole per sample."""
+    n = float(np.ceil(values["orbits"] * values["steps_per_orbit"]))
+    samples = samples_kept(n, max(1, int(np.ceil(n / MAX_SAMPLES))))
+    return Cost(n + SWEEP_STEPS, samples, trajectory_bytes(samples, bodies=1, series=6))
+
+
 register(Scenario(
     name="precession-circular",
     title="Precession and nutation under a centre on a circle",
@@ -277,6 +289,7 @@ register(Scenario(
     options={"cone": Option("precession cone (figure axis on the celestial sphere)"),
              "wiggle": Option("nutation wiggle, magnified"),
              "centre": Option("direction to the centre of force")},
+    cost_fn=_cost,
     check=_check_circular,
     euler_formula=("ZA = n − εN sin n (ε + 2δ cos n) / (2δ(εε − 4δδ)) · cos 2φ + h sin(ε/δ · (φ + ζ)) (§844)\n"
                    "XZA = m − Nt cos n + εN (ε cos n + 2δ) / (2δ(εε − 4δδ)) · sin 2φ + h/sin n · cos(ε/δ · (φ + ζ))\n"

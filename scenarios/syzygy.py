@@ -15,9 +15,16 @@ from ..physics.params import Param
 from .drawing import Camera, Drawing, Label, Option, Segments, Sphere, View, circle, new_drawing, segments
 from . import _three_body_drawing as tbd
 from .base import Comparison, Run, Scenario, register
+from .budget import Cost, trajectory_bytes
 from ..physics.three_body import syzygy as sz
 from .checks import register_check
 from ._three_body import GROUP, orbit_trajectory
+
+
+# DOP853 (rtol 1e-12) takes 81-130 steps for the displayed run (≤ 3 yr, often cut by the escape) and the
+# 2-year measurement together (defaults and presets, measured): 60 per year of run is above that
+STEPS_PER_YEAR = 60
+N_SAMPLES = 4000  # the displayed run's samples (fewer when the Moon leaves)
 
 
 def _syzygy(values, progress=None):
@@ -38,14 +45,15 @@ def _syzygy(values, progress=None):
     modes = sz.linear_modes(m, side)
     # the displayed run: Euler's start (or the exact linear mode) + optional seed of the escape
     s0 = sz.initial_state(m, A, side, values["start"], values["escape_seed"])
-    t, S, _ = sz.integrate(m, s0, 2 * math.pi * values["duration_yr"], n_samples=4000)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    t, S, _ = sz.integrate(m, s0, 2 * math.pi * values["duration_yr"], n_samples=N_SAMPLES, progress=part(0.0, 0.5))
     eta, v = sz.eta_and_distance(S, side)
     left = t[-1] < 2 * math.pi * values["duration_yr"] * (1 - 1e-9)
     # a clean measurement: the exact linear mode at a tiny amplitude plus a tinier seed of the
     # escape; fit η = a cos ωt + b sin ωt + c e^{λt} + d e^{−λt} in the linear regime
     A_meas = 1e-6
     tm, Sm, _ = sz.integrate(m, sz.initial_state(m, A_meas, side, "linear-mode", 1e-9), 2 * math.pi * 2.0,
-                             n_samples=8000)
+                             n_samples=8000, progress=part(0.5, 1.0))
     etam, _ = sz.eta_and_distance(Sm, side)
     w_meas, lam_meas, fit_res = sz.fit_swing_and_escape(tm, etam, A_meas,
                                                          guess=(modes["frequency"], modes["escape_exponent"]))
@@ -258,6 +266,13 @@ def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
     return d
 
 
+def _cost(values):
+    """The displayed run and the 2-year measurement (DOP853); kept: up to N_SAMPLES states with the
+    Sun, the Earth and the Moon, five series and four plotted curves."""
+    steps = STEPS_PER_YEAR * (values["duration_yr"] + 2.0)
+    return Cost(steps, N_SAMPLES, trajectory_bytes(N_SAMPLES, bodies=3, series=9))
+
+
 register(Scenario(
     name="syzygy",
     title="The Moon kept in syzygy with the Sun",
@@ -273,6 +288,7 @@ register(Scenario(
     simulate_fn=_syzygy,
     draw=_draw,
     options=OPTIONS,
+    cost_fn=_cost,
     euler_formula=("m(1 − α)² = α² − α²(1 − α)³ (§7)\n"
                    "η = A sin ω, v = b(1 − 0.3117 A cos ω), ω = αζ, α⁴ + 2α² = 27 (§16)"),
     kind="orbit",

@@ -138,6 +138,23 @@ def test_validation_fuzz(name, data):
     STATS["validation: accepted"] += 1
     assert "no_such_param" not in given_
     check_valid_values(spec, values)
+    check_cost(spec, values, set(given_))
+
+
+def check_cost(spec, values, fuzzed):
+    """Any valid values have a cost (no exception, nothing negative or NaN; inf for an absurd
+    step), and the budget check passes them or refuses them in one line naming a parameter."""
+    from theoria.physics.errors import BudgetExceeded
+
+    cost = spec.cost_of(values)
+    for x in (cost.steps, cost.samples, cost.bytes):
+        assert x >= 0, (spec.name, values, cost)  # False for NaN too
+    try:
+        spec.check_budget(values)
+    except BudgetExceeded as e:
+        STATS["validation: over budget"] += 1
+        check_error(spec, e, fuzzed | {"parameters"})
+    return cost
 
 
 # ---- 2. simulation of valid values -------------------------------------------------------------
@@ -259,6 +276,7 @@ def simulate_fuzzed(name, data):
         check_error(spec, e, set(given_))
         return
     STATS["simulation cases"] += 1
+    cost = check_cost(spec, values, set(given_))
     try:
         result = spec.simulate_fn(values)
     except ParameterError as e:  # e.g. Diverged: no finite sample at all
@@ -278,6 +296,12 @@ def simulate_fuzzed(name, data):
                        *((f"series {k}", v) for k, v in tr.series.items()),
                        *((f"plot {k}", v) for k, v in result.plot_series.items())):
         assert np.all(np.isfinite(np.asarray(arr, float))), f"{name}: non-finite {label} with {values}"
+    # the estimate made before the run (scenarios/budget.py) holds for these values too
+    from theoria.scenarios.budget import held_bytes
+
+    assert len(tr.t) <= cost.samples, (name, values, cost, len(tr.t))
+    if result.status == "ok":
+        assert held_bytes(result) <= 1.25 * cost.bytes, (name, values, cost, held_bytes(result))
     if result.status == "diverged":
         STATS["simulation: diverged (reported)"] += 1
         FOUND.append(f"{name}: {result.warnings[0]} with {values}")

@@ -13,7 +13,10 @@ One import gives what a notebook needs::
     th.check("E2")                          # rows of `theoria check`
 
 A bad value raises `th.ParameterError` (a ValueError) naming the parameter, the value and the
-allowed range: the same line the command line prints with exit status 2. The physics
+allowed range: the same line the command line prints with exit status 2. A run beyond the step
+or memory limit (`sc.cost(**values)` says what it would take; `th.MAX_STEPS`, `th.MAX_MEMORY`) is
+refused before it starts with `th.BudgetExceeded`; `simulate(..., max_steps=None,
+max_memory=None)` lifts the limits. The physics
 (`theoria.physics`), the scenarios (`theoria.scenarios`) and the app (`theoria.app`) are
 reachable but not needed.
 """
@@ -21,18 +24,19 @@ from __future__ import annotations
 
 from importlib import metadata as _metadata
 
-from .physics.errors import Cancelled, Diverged, ParameterError
+from .physics.errors import BudgetExceeded, Cancelled, Diverged, ParameterError
 from .physics.params import Param
 from .physics.trajectory import Trajectory
 from .scenarios.base import Comparison, Run, Scenario
+from .scenarios.budget import MAX_MEMORY, MAX_STEPS, Cost
 
 try:
     __version__ = _metadata.version("theoria-motus")
 except _metadata.PackageNotFoundError:  # imported from a checkout that was never installed
     __version__ = "0+unknown"
 
-__all__ = ["scenarios", "scenario", "check", "Scenario", "Run", "Comparison", "Param", "Trajectory",
-           "ParameterError", "Diverged", "Cancelled", "__version__"]
+__all__ = ["scenarios", "scenario", "check", "Scenario", "Run", "Comparison", "Param", "Trajectory", "Cost",
+           "ParameterError", "Diverged", "Cancelled", "BudgetExceeded", "MAX_STEPS", "MAX_MEMORY", "__version__"]
 
 
 def scenarios() -> list[str]:

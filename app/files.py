@@ -1,0 +1,114 @@
+"""Files theoria writes (a recording, an HTML export): whole or absent.
+
+`check_out` validates the target before any simulation runs (its directory exists and takes a
+new file, it is not a directory, it has the suffix `theoria replay` reads, and an existing file
+is replaced only when asked). `write_whole` writes the bytes to a temporary file beside the
+target (`.NAME.XXXX.part`: same directory, so the rename cannot cross file systems), flushes it
+to disk, checks its size and renames it over the target. Until that rename the target is
+untouched: an older file stays as it was. On a full disk, any other write error, Ctrl-C or
+SIGTERM the temporary file is removed and the error raised (`WriteError`: one line). The bytes
+are produced in memory before the write, so no library's own file sink is involved (rerun's
+blocks forever in its flush on a full disk).
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from ..physics.errors import ParameterError
+from .interrupt import sigterm_raises
+
+CHUNK = 1 << 20  # bytes per write call
+
+
+class WriteError(Exception):
+    """The file could not be written; the target is as it was. Message: one line."""
+
+
+def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = False, what: str = "--out") -> Path:
+    """The target path, validated before a run: ParameterError naming `what` when its directory
+    is missing or does not take a new file, when it is a directory, has another suffix than
+    `suffixes`, or exists and `force` is not given."""
+    raw = os.fspath(path)
+    if not raw or raw.endswith(os.sep) or (os.altsep and raw.endswith(os.altsep)):
+        raise ParameterError(what, str(path), "a file name, not a directory")
+    p = Path(raw).expanduser()
+    if p.is_dir():
+        raise ParameterError(what, str(path), "a file, not a directory")
+    if p.suffix.lower() not in suffixes:
+        raise ParameterError(what, str(path), "a file name ending in " + " or ".join(suffixes) +
+                             " (what theoria replay reads)")
+    parent = p.resolve().parent
+    if not parent.is_dir():
+        raise ParameterError(what, str(path), f"a file in an existing directory ({parent} does not exist)")
+    if p.exists() and not p.is_file():
+        raise ParameterError(what, str(path), "a regular file (this is a device, a pipe or a socket)")
+    if p.exists() and not force:
+        raise ParameterError(what, str(path), "a new file: it exists; add --force to replace it")
+    try:  # the only sure test that the directory takes a new file (read-only mounts, permissions, ACLs)
+        with tempfile.NamedTemporaryFile(dir=parent, prefix=f".{p.name}.", suffix=".probe"):
+            pass
+    except OSError as e:
+        raise ParameterError(what, str(path), f"a file in a writable directory ({parent}: "
+                             f"{e.strerror or type(e).__name__})") from None
+    return p
+
+
+def _mode_for(target: Path) -> int:
+    try:
+        return target.stat().st_mode & 0o7777  # a replaced file keeps its permissions
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        n = os.write(fd, view[:CHUNK])
+        view = view[n:]
+
+
+def write_whole(path: str | os.PathLike, data: bytes) -> int:
+    """Write `data` to `path` whole or not at all (see the module). Returns the bytes written."""
+    target = Path(os.fspath(path)).expanduser()
+    if target.is_symlink():  # replace the file the link points to; the link stays
+        target = target.resolve()
+    mode = _mode_for(target)
+    fd, tmp = -1, None
+    with sigterm_raises():
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+            _write_all(fd, data)
+            os.fsync(fd)
+            size = os.fstat(fd).st_size
+            if size != len(data):
+                raise OSError(0, f"short write ({size} of {len(data)} bytes)")
+            os.fchmod(fd, mode)
+            os.close(fd)
+            fd = -1
+            os.replace(tmp, target)
+            tmp = None
+        except BaseException as e:
+            if fd >= 0:
+                os.close(fd)
+            if tmp is not None:
+                try:
+                    os.unlink(tmp)
+                except OSError:
+                    pass
+            if isinstance(e, OSError):
+                reason = e.strerror or str(e) or type(e).__name__
+                raise WriteError(f"{path}: cannot write ({reason}); nothing was changed") from None
+            raise
+    try:  # the rename itself is durable once the directory is
+        dfd = os.open(target.parent, os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+    except OSError:
+        pass
+    return len(data)
