@@ -138,9 +138,9 @@ def _flip_interval_decimal(inertia, omega0, digits=40):
                 "of k²)", "§808, modern")
 def e2_separatrix():
     nudge, spin = 1e-9, 6.0
-    r = get("middle-axis-flip").simulate(perturbation=nudge, duration=40.0)
+    r = get("middle-axis-flip").simulate(inertia=(1.0, 2.0, 3.0), spin=spin, perturbation=nudge, duration=40.0)
     m = r.metrics
-    ref, gap = _flip_interval_decimal((1.0, 2.0, 3.0), (nudge * spin, spin, nudge * spin))
+    ref, gap = _flip_interval_decimal(r.params["inertia"], (nudge * spin, spin, nudge * spin))
     rel = max(abs(m[k] / ref - 1) for k in ("flip_interval", "flip_interval_exact", "flip_interval_euler_808"))
     return dict(euler=m["flip_interval_euler_808"], simulated=m["flip_interval"], modern=m["flip_interval_exact"],
                 rel_error=rel, tolerance=1e-12, unit="s", passed=rel <= 1e-12 and not r.warnings,
@@ -153,11 +153,11 @@ def e2_separatrix():
 @register_check("E2.aliasing", "a step too coarse for the spin and the flips: said, and the interval not measured",
                 "§808")
 def e2_aliasing():
-    r = get("middle-axis-flip").simulate(step=2.0, duration=200.0)
+    r = get("middle-axis-flip").simulate(inertia=(1.0, 2.0, 3.0), spin=6.0, step=2.0, duration=200.0)
     warned = [w for w in r.warnings if "too sparse" in w]
     ok = len(warned) == 2 and not np.isfinite(r.metrics["flip_interval"])
     return dict(euler=r.metrics["flip_interval_euler_808"], simulated=r.metrics["flip_interval"],
                 modern=r.metrics["flip_interval_exact"], rel_error=0.0 if ok else 1.0, tolerance=0.0, passed=ok,
-                unit="s", note="step 2 s, samples 2 s apart against a spin period of 0.91 s and flips every 3.26 s "
+                unit="s", note="moments 1 : 2 : 3, spin 6 rad/s, step 2 s, samples 2 s apart against a spin period of 0.91 s and flips every 3.26 s "
                 "(Nyquist: 2 samples per period): the run warns twice and reports no measured interval. "
                 + (warned[0] if warned else "NO WARNING"))
