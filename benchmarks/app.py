@@ -228,7 +228,7 @@ def _theoria_playback(b, viewport) -> dict:
                 session.view.set_overlay(k, False)
         time.sleep(1.0)
         out["no_paths"] = page.evaluate(FPS_JS, 3)
-        out["trail_points"] = int(len(session.view._idx))
+        out["trail_points"] = int(session.drawing.n_frames)  # frames drawn of the run (a trail grows over them)
         out["samples"] = len(session.result.trajectory.t)
         ctx.close()
     finally:

@@ -142,9 +142,10 @@ class ViserProtocolClient:
         if typ == "RunJavascriptMessage":
             src = m.get("source", "")
             self.scripts.append(src)
-            if src.startswith("document.title"):  # "theoria — <scenario>": the scenario drawn
+            if "theoria.title(" in src:  # "theoria — <scenario>": the scenario shown
                 try:
-                    self.scenario = json.loads(src.split("=", 1)[1].strip().rstrip(";")).split(" — ")[-1]
+                    arg = src.split("theoria.title(", 1)[1].rsplit(")", 1)[0]
+                    self.scenario = json.loads(arg).split(" — ")[-1]
                 except Exception:
                     pass
         if typ.startswith("Gui") and "props" in m and isinstance(m["props"], dict):
@@ -220,6 +221,19 @@ class ViserProtocolClient:
         return [(u, c["props"]) for u, c in self.components.items()
                 if c["type"] == "GuiSliderMessage" and not str(c["label"]).startswith(PANEL_SLIDERS)]
 
+    def number_fields(self) -> list[str]:
+        """uuids of the typed fields (a text field in a form) that hold one number now."""
+        out = []
+        for u, c in self.components.items():
+            if c["type"] != "GuiTextMessage" or self.components.get(c["container"], {}).get("type") != "GuiFormMessage":
+                continue
+            try:
+                float(str(self.values.get(u)))
+            except ValueError:
+                continue
+            out.append(u)
+        return out
+
     async def wait_for(self, cond, timeout: float) -> bool:
         t_end = time.perf_counter() + timeout
         while not cond():
@@ -235,6 +249,15 @@ class ViserProtocolClient:
 
     async def send_gui(self, uuid: str, value) -> None:
         await self.send_raw({"type": "GuiUpdateMessage", "uuid": uuid, "updates": {"value": value}})
+        self.values[uuid] = value  # the page shows what it sent (the server echoes only its own changes)
+
+    async def enter(self, label_prefix: str, text: str) -> None:
+        """Type `text` into a parameter's field and press Enter, as the page does: the field's value,
+        then the submit of the form that holds it."""
+        uuid = self.uuid_of(label_prefix)
+        await self.send_gui(uuid, str(text))
+        form = self.components[uuid]["container"]
+        await self.send_raw({"type": "GuiFormSubmitMessage", "uuid": form})
 
     async def act(self, uuid: str, value, timeout: float | None = None) -> tuple[float | None, float | None]:
         """Send a control's value; seconds to the first redraw (a preview counts) and to the full
@@ -400,7 +423,7 @@ async def _student(i: int, url: str, t_end: float, rec: dict, scenarios=None) ->
             scen = c.scenario
             first, full = await c.act(uuid, value)
             rec["actions"].append({"kind": kind, "first": first, "full": full, "client": i, "scenario": scen,
-                                   "answered": c.answered, "value": value if kind == "slider" else None,
+                                   "answered": c.answered, "value": value if kind != "preset" else value,
                                    "control": c.components.get(uuid, {}).get("label") if kind == "slider" else None})
     except Exception as e:  # noqa: BLE001 — a client's crash is counted, not fatal
         rec["errors"].append(f"client {i}: {type(e).__name__}: {e}")
@@ -416,16 +439,28 @@ async def _abuser(url: str, t_end: float, rec: dict) -> None:
     try:
         if not await c.wait_for(lambda: c.update_no >= 1, FIRST_SCENE_TIMEOUT_S):
             return
-        uuid, _ = c.param_sliders()[0]
-        comp = c.components[uuid]
-        v0 = float(c.values[uuid])
-        lo = float(comp["props"].get("min") if comp["props"].get("min") is not None else v0 * 0.5)
-        hi = float(comp["props"].get("max") if comp["props"].get("max") is not None else v0 * 2.0)
-        lo, hi = max(lo, v0 * 0.5 if v0 > 0 else lo), min(hi, v0 * 2.0 if v0 > 0 else hi)
+        sliders = c.param_sliders()
+        if sliders:  # a slider: values inside its range, each one a new run
+            uuid, _ = sliders[0]
+            comp = c.components[uuid]
+            v0 = float(c.values[uuid])
+            lo = float(comp["props"].get("min") if comp["props"].get("min") is not None else v0 * 0.5)
+            hi = float(comp["props"].get("max") if comp["props"].get("max") is not None else v0 * 2.0)
+            lo, hi = max(lo, v0 * 0.5 if v0 > 0 else lo), min(hi, v0 * 2.0 if v0 > 0 else hi)
+
+            async def send(k):
+                await c.send_gui(uuid, lo + (hi - lo) * ((k % 97) / 97.0))
+        else:  # no slider in this scene: a typed number field, typed and entered
+            uuid = c.number_fields()[0]
+            v0 = float(c.values[uuid])
+
+            async def send(k):
+                await c.send_gui(uuid, f"{v0 * (0.5 + (k % 97) / 97.0):.6g}")
+                await c.send_raw({"type": "GuiFormSubmitMessage", "uuid": c.components[uuid]["container"]})
         sent = 0
         while time.perf_counter() < t_end:
-            for k in range(ABUSE_MESSAGES):  # values inside the control's range: each one a new run
-                await c.send_gui(uuid, lo + (hi - lo) * ((k % 97) / 97.0))
+            for k in range(ABUSE_MESSAGES):
+                await send(k)
                 sent += 1
             await asyncio.sleep(0.5)
         rec["abuse_sent"] = sent
