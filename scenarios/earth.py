@@ -384,20 +384,6 @@ def _cost(values):
     return Cost(steps, drawn, full * (attitude + 6 * 8) + trajectory_bytes(drawn, bodies=2) - drawn * attitude)
 
 
-def _cost(values):
-    """The REBOUND orbits over the run (an output every 0.5 day) and the Moon's calibration, then
-    three rotation runs (Sun and Moon, each alone) at step_days, a state every 0.5 day. Kept: the
-    drawn states (at most MAX_SAMPLES) with the Sun's and the Moon's directions, the attitudes and
-    the six plotted series at full resolution (the drawn ones are views of them)."""
-    dur = values["years"] * YR
-    n, full = rotation_run(dur, values["step_days"], 0.5)
-    calibrated = EP.calibrated_moon_elements.cache_info().currsize > 0  # done once per process
-    steps = 3 * n + REBOUND_STEPS_PER_DAY * dur + (0 if calibrated else CALIBRATION_STEPS)
-    drawn = float(np.ceil(full / max(1, int(np.ceil(full / MAX_SAMPLES)))))
-    attitude = 8 * 4  # the full-resolution quaternions, kept alive by the drawn view of them
-    return Cost(steps, drawn, full * (attitude + 6 * 8) + trajectory_bytes(drawn, bodies=2) - drawn * attitude)
-
-
 register(Scenario(
     name="earth",
     title="The Earth under the Sun and the Moon: precession and nutation",
