@@ -306,32 +306,58 @@ def cmd_serve(args) -> int:
         from theoria.scenarios import get
 
         get(args.scenario)  # unknown name: exit 2 before the server starts
-    serve(port=args.port, host=args.host, scenario=args.scenario)
+    from theoria.app.server import Limits
+
+    for flag, v in (("--max-clients", args.max_clients), ("--max-per-address", args.max_per_address)):
+        if v < 1:
+            raise ParameterError(flag, v, "a whole number ≥ 1")
+    serve(port=args.port, host=args.host, scenario=args.scenario,
+          limits=Limits(max_connections=args.max_clients, max_per_address=args.max_per_address),
+          precompute=not args.no_precompute)
     return 0
 
 
-def _write_command(args, suffixes, write) -> int:
+def _write_command(args, suffixes, write, what: str, how: str) -> int:
     """record / export: the values, the limits and the target checked before the run; then the
-    file written whole or not at all (app/files.py)."""
+    file written whole or not at all (app/files.py), and where it went said."""
     from theoria.app.files import check_out
 
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     sc.check_budget(values, **_limits(args))
     check_out(args.out, suffixes, force=args.force)
     write(sc.name, args.out, values)
+    _wrote(args.out, f"{what} of {sc.name}", how)
     return 0
 
 
 def cmd_record(args) -> int:
     from theoria.app.record import record
 
-    return _write_command(args, (".rrd",), record)
+    return _write_command(args, (".rrd",), record, "a rerun recording", "theoria replay")
 
 
 def cmd_export(args) -> int:
     from theoria.app.export_html import export
 
-    return _write_command(args, (".html", ".htm"), export)
+    return _write_command(args, (".html", ".htm"), export, "an HTML replay", "open it in a browser, or theoria replay")
+
+
+def human_size(n: int) -> str:
+    """A file size as a person reads it: "840 KB", "1.2 MB"."""
+    for unit, k in (("GB", 1e9), ("MB", 1e6), ("KB", 1e3)):
+        if n >= k:
+            v = n / k
+            return f"{v:.1f} {unit}" if v < 10 else f"{v:.0f} {unit}"
+    return f"{n} bytes"
+
+
+def _wrote(path: str, what: str, how: str) -> None:
+    """Say where the file went and how big it is (a silent success looked like a failure)."""
+    import os
+
+    full = os.path.abspath(path)
+    size = os.path.getsize(full)
+    print(f"theoria: wrote {what} to {full} ({human_size(size)}); {how} {path}", flush=True)
 
 
 def cmd_replay(args) -> int:
@@ -359,6 +385,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--port", type=int, default=8080)
     s.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1; 0.0.0.0 for a classroom)")
     s.add_argument("--scenario", default=None)
+    s.add_argument("--max-clients", type=int, default=200, metavar="N",
+                   help="browsers connected at once (default 200); more are refused")
+    s.add_argument("--max-per-address", type=int, default=10, metavar="N",
+                   help="browsers from one network address (default 10)")
+    s.add_argument("--no-precompute", action="store_true",
+                   help="do not prepare every scenario's defaults and presets in the background")
     s.set_defaults(fn=cmd_serve)
 
     s = sub.add_parser("list", help="scenarios, one line each")

@@ -1,16 +1,26 @@
-"""GUI controls generated from a scenario's parameter spec (physics.params.Param).
+"""The controls of a scenario's parameters, generated from its `Param`s.
 
-float / int → a slider when the range is finite and not too fine for one (≤ MAX_SLIDER_STEPS
-steps), otherwise a number input; vec3 → a vector input; choice → a dropdown. The GUI limits
-are deliberately NOT enforced in the browser for number and vector inputs: every value goes
-through `Scenario.resolve`, so a bad value gives the same one-line message (naming the
-parameter and the allowed range) as the CLI.
+- A float or int with a finite range that a slider can hold exactly (every default and preset on
+  its grid, ≤ MAX_SLIDER_STEPS steps) → a slider. The session debounces it: while it is dragged
+  only the last value is simulated.
+- Any other number, and a vec3 ("1, 0.5, 1.5") → a text field in a form of its own. What is typed
+  is taken only on Enter or when the field loses focus (never per keystroke), through
+  `Param.parse`: "1e9", "2.5e6", "1e-3" and "-0.5" are taken exactly, a value out of range is
+  refused with the allowed range and the field goes back to the last good value. (viser's number
+  field takes its displayed precision from the initial value and mangles exponents: typed 0.001
+  into a field made with 1000 it shows 1 and sends 0.)
+- A choice → a dropdown of the choices' words (`Param.choice_labels`).
+
+Labels are `Param.display()` ("Spin rate about the middle axis (rad/s)"), never the keys.
+Numerical settings and modelling details (`Param.advanced`: steps, sample spacings, which
+ephemeris) go into a folder kept folded ("More settings").
 """
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Callable
 
+from theoria.physics.errors import ParameterError
 from theoria.physics.params import Param
 
 MAX_SLIDER_STEPS = 2000
@@ -28,81 +38,207 @@ def _step(p: Param) -> float:
 
 
 def label_of(p: Param) -> str:
-    unit = f" [{p.unit}]" if p.unit and p.unit != "1" else ""
-    return f"{p.name}{unit}"
+    return p.display()
 
 
 def hint_of(p: Param) -> str:
-    return f"{p.help} — {p.allowed()}".strip(" —")
+    allowed = p.allowed()
+    if p.kind == "choice":
+        return p.help
+    return f"{p.help[:1].upper()}{p.help[1:]}. Allowed: {allowed.split(' ', 2)[-1] if allowed.startswith('allowed range') else allowed}"
+
+
+def _on_grid(v: float, lo: float, step: float) -> bool:
+    k = (v - lo) / step
+    return abs(k - round(k)) <= 1e-6 * max(1.0, abs(k))
 
 
 def slider_range(p: Param, presets=()) -> tuple[float, float, float] | None:
-    """(min, max, step) if the parameter is shown as a slider, else None (a number input).
+    """(min, max, step) if the parameter is shown as a slider, else None (a text field).
 
-    A slider must hold its default exactly and reach the values around it: the default lies in
-    [min, max] and at least one step above min (unless it is min), and every preset value lies in
-    [min, max]. A parameter whose default is small against its range (pole-near-axis's tidal
-    1 in (0, 10⁶], gravity-start's GM 1000 in (0, 10²⁰]) would otherwise have been clamped to the
-    slider's first step and simulated at values 1000× off."""
+    A slider must hold its default and every preset value exactly: each lies in [min, max] on the
+    slider's grid (a default small against its range, pole-near-axis's tidal 1 in (0, 10⁶], or a
+    preset of 10⁻⁶ on a 0.001 grid would otherwise be rounded and simulated at values far off)."""
     if p.kind not in ("float", "int") or p.minimum is None or p.maximum is None:
         return None
     step = _step(p)
     lo = p.minimum + (step if p.exclusive_min else 0)
     if p.maximum <= lo or (p.maximum - lo) / step > MAX_SLIDER_STEPS:
         return None
-    d = p.default
-    if isinstance(d, (int, float)) and not (lo <= d <= p.maximum and (d == lo or d - lo >= step * (1 - 1e-9))):
-        return None
-    if any(not (lo <= v <= p.maximum) for v in presets if isinstance(v, (int, float))):
-        return None
+    for v in (p.default, *presets):
+        if not isinstance(v, (int, float)):
+            continue
+        if not (lo <= v <= p.maximum) or not _on_grid(float(v), lo, step):
+            return None
     return lo, p.maximum, step
 
 
-def add_param_control(gui, p: Param, value: Any, presets=()):
-    """One GUI element for parameter `p`, showing `value` (`presets`: the values presets give it)."""
-    label, hint = label_of(p), hint_of(p)
+def format_value(p: Param, v: Any) -> str:
+    """The text a field shows for value `v`: exact enough that reading it back gives `v`."""
     if p.kind == "choice":
-        return gui.add_dropdown(label, [str(c) for c in p.choices], initial_value=str(value), hint=hint)
+        return p.choice_text(v)
     if p.kind == "vec3":
-        return gui.add_vector3(label, tuple(float(x) for x in value), step=p.step or 0.001, hint=hint)
-    rng = slider_range(p, presets)
-    if rng is not None:
-        lo, hi, step = rng
-        v = min(max(value, lo), hi)
-        return gui.add_slider(label, min=lo, max=hi, step=step, initial_value=int(v) if p.kind == "int" else float(v),
-                              hint=hint)
-    # number inputs: the spec's step if it has one, else viser's own (precision of the value)
-    step = 1 if p.kind == "int" else (float(p.step) if p.step else None)
-    return gui.add_number(label, int(value) if p.kind == "int" else float(value), step=step, hint=hint)
+        return ", ".join(_num(x) for x in v)
+    if p.kind == "int":
+        return str(int(v))
+    return _num(v)
+
+
+def _num(x) -> str:
+    x = float(x)
+    text = f"{x:.12g}"
+    return text if float(text) == x else repr(x)
 
 
 class ParamControls:
-    """The folder of controls of one scenario; `values()` gives the raw values for resolve()."""
+    """The controls of one scenario. `values()` gives the values last taken (parsed and in range
+    for text fields; what the sliders and dropdowns show otherwise).
 
-    def __init__(self, gui, spec, values: dict[str, Any] | None = None, on_change=None):
+    `on_change(name, debounce)`: a value was taken (debounce True for a slider being dragged).
+    `on_error(ParameterError)`: a typed value was refused (the field shows the last good value)."""
+
+    def __init__(self, gui, spec, values: dict[str, Any] | None = None,
+                 on_change: Callable[[str, bool], None] | None = None,
+                 on_error: Callable[[ParameterError], None] | None = None, advanced=None,
+                 order: float | None = None):
         self.spec = spec
-        self.folder = gui.add_folder(f"Parameters: {spec.name}")
-        self.handles = {}
-        vals = spec.resolve(None) if values is None else values
-        with self.folder:
-            for p in spec.params:
-                presets = [given[p.name] for given in spec.presets.values() if p.name in given]
-                h = add_param_control(gui, p, vals[p.name], presets)
-                self.handles[p.name] = h
-                if on_change is not None:
-                    h.on_update(lambda event, name=p.name: on_change(name))
+        self.gui = gui
+        self.on_change, self.on_error = on_change, on_error
+        self.handles: dict[str, Any] = {}
+        self.forms: dict[str, Any] = {}
+        self.kinds: dict[str, str] = {}  # name → "slider" | "text" | "choice"
+        self._containers: list = []  # what remove() takes away
+        self._guard = False
+        self._order = order  # place in the panel (viser's `order`): between two elements made earlier
+        self._k = 0
+        vals = spec.resolve(None) if values is None else dict(values)
+        self._values = dict(vals)
+        main = [p for p in spec.params if not p.advanced]
+        extra = [p for p in spec.params if p.advanced]
+        self._top = True
+        self._add(main, vals)
+        if extra:
+            if advanced is None:
+                advanced = gui.add_folder("More settings", expand_by_default=False, order=self._next())
+                self._containers.append(advanced)
+                self._top = False  # its elements go with the folder
+            with advanced:
+                self._add(extra, vals)
+        self._top = True
 
+    def _next(self) -> float | None:
+        if self._order is None:
+            return None
+        self._k += 1
+        return self._order + 0.001 * self._k
+
+    def _add(self, params, vals) -> None:
+        for p in params:
+            presets = [given[p.name] for given in self.spec.presets.values() if p.name in given]
+            self._add_one(p, vals[p.name], presets)
+
+    def _add_one(self, p: Param, value, presets) -> None:
+        gui, name = self.gui, p.name
+        hint = hint_of(p)
+        if p.kind == "choice":
+            h = gui.add_dropdown(p.display(), [p.choice_text(c) for c in p.choices],
+                                 initial_value=p.choice_text(value), hint=hint, order=self._next())
+            h.on_update(lambda e, name=name: self._taken(name, self.handles[name].value, False))
+            self.kinds[name] = "choice"
+            self._keep(h)
+        elif (rng := slider_range(p, presets)) is not None:
+            lo, hi, step = rng
+            v = min(max(value, lo), hi)
+            h = gui.add_slider(p.display(), min=lo, max=hi, step=step,
+                               initial_value=int(v) if p.kind == "int" else float(v), hint=hint, order=self._next())
+            h.on_update(lambda e, name=name: self._taken(name, self.handles[name].value, True))
+            self.kinds[name] = "slider"
+            self._keep(h)
+        else:
+            form = gui.add_form(None, order=self._next())
+            with form:
+                h = gui.add_text(p.display(), format_value(p, value), hint=hint)
+            form.on_submit(lambda e, name=name: self._submitted(name))
+            self.forms[name] = form
+            self.kinds[name] = "text"
+            self._keep(form)
+        self.handles[name] = h
+
+    def _keep(self, h) -> None:
+        if self._top:
+            self._containers.append(h)
+
+    # ---- values in -------------------------------------------------------------------------
+    def _taken(self, name: str, shown, debounce: bool) -> None:
+        if self._guard:
+            return
+        p = self.spec.param(name)
+        self._values[name] = p.choice_of(shown) if p.kind == "choice" else shown
+        if self.on_change is not None:
+            self.on_change(name, debounce)
+
+    def _submitted(self, name: str) -> None:
+        """Enter in a text field, or the field lost focus: parse what it shows."""
+        if self._guard:
+            return
+        p = self.spec.param(name)
+        h = self.handles[name]
+        text = str(h.value).strip()
+        try:
+            v = p.parse(text)
+        except ParameterError as e:
+            self._show(name, self._values[name])
+            if self.on_error is not None:
+                self.on_error(e)
+            return
+        if v == self._values.get(name):
+            return  # unchanged (a blur with nothing typed)
+        self._values[name] = v
+        if self.on_change is not None:
+            self.on_change(name, False)
+
+    def enter(self, name: str, text: str) -> None:
+        """Type `text` into a field and press Enter (scripts and tests; the browser does the same)."""
+        h = self.handles[name]
+        if self.kinds[name] == "text":
+            h.value = text
+            self.forms[name].submit()
+        elif self.kinds[name] == "choice":
+            h.value = self.spec.param(name).choice_text(text)
+        else:
+            h.value = self.spec.param(name).parse(text)
+
+    # ---- values out ------------------------------------------------------------------------
     def values(self) -> dict[str, Any]:
-        out = {}
-        for name, h in self.handles.items():
-            v = h.value
-            out[name] = tuple(float(x) for x in v) if isinstance(v, (tuple, list)) else v
-        return out
+        return dict(self._values)
 
     def set_values(self, values: dict[str, Any]) -> None:
-        for name, h in self.handles.items():
-            if name in values:
-                h.value = values[name]
+        """Show `values` (a preset, a link) without calling on_change."""
+        self._guard = True
+        try:
+            for name in self.handles:
+                if name in values:
+                    self._values[name] = values[name]
+                    self._show(name, values[name])
+        finally:
+            self._guard = False
+
+    def _show(self, name: str, v) -> None:
+        p = self.spec.param(name)
+        h = self.handles[name]
+        guard, self._guard = self._guard, True
+        try:
+            if self.kinds[name] == "slider":
+                h.value = int(v) if p.kind == "int" else float(v)
+            else:
+                h.value = format_value(p, v)
+        finally:
+            self._guard = guard
 
     def remove(self) -> None:
-        self.folder.remove()
+        for c in self._containers:
+            try:
+                c.remove()
+            except Exception:
+                pass
+        self._containers = []

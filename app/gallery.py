@@ -11,6 +11,7 @@ import re
 
 import numpy as np
 
+from theoria.physics.params import pretty_unit  # noqa: F401  (units as the panel prints them)
 from theoria.scenarios.base import GROUP_ORDER, section_key
 
 CUSTOM = "(your own values)"  # the Presets dropdown once a parameter has been changed by hand

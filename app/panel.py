@@ -1,13 +1,24 @@
-"""What the side panel shows besides the controls: the scenario's text, the Euler / simulated /
-modern table, the metrics and notes, the live plot's axis."""
+"""What the side panel says, in a class's words: the scenario's heading, the Euler / simulated /
+modern table with units and verdicts, the run's warnings, the text to read, the live plot's axis.
+
+Pure text and HTML (no viser here): `app/session.py` puts it in the panel's tabs. Nothing a script
+uses as a key (a metric's snake_case name, a parameter's key, the scenario's slug) is shown: a
+metric is named in words by `metric_label`, a parameter by its `Param.display()`.
+"""
 from __future__ import annotations
+
+import html
+import math
+import re
 
 import numpy as np
 
 from . import gallery
-from .format import number
 
 UPLOT_POINTS = 2000  # points per series in the live plot
+
+_SUP = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+MINUS = "−"
 
 
 def y_axis_px(series_values, px_per_char: float = 7.2, min_px: int = 50) -> int:
@@ -29,26 +40,223 @@ def y_axis_px(series_values, px_per_char: float = 7.2, min_px: int = 50) -> int:
     return int(max(min_px, np.ceil(widest * px_per_char + 15)))
 
 
-def info_markdown(spec, result=None) -> str:
-    lines = [f"### {spec.title}", f"**{spec.section}** · {spec.group} · `{spec.name}`", "", spec.summary, ""]
+# ---- numbers as a person reads them ----------------------------------------------------------
+
+def human_number(x, digits: int = 4) -> str:
+    """`digits` significant digits; plain decimals from 10⁻³ to 10⁶, else "2.80 × 10⁻¹¹"; a true
+    minus sign; "–" for a missing or non-finite value. Vectors: comma-separated."""
+    if x is None:
+        return "–"
+    if isinstance(x, (tuple, list, np.ndarray)):
+        return ", ".join(human_number(v, digits) for v in x)
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return str(x)
+    if not math.isfinite(v):
+        return "–"
+    if v == 0:
+        return "0"
+    a = abs(v)
+    if 1e-3 <= a < 1e6:
+        text = f"{v:.{digits}g}"
+        if "e" in text:  # .4g of 123456 gives 1.235e+05: write it out
+            text = f"{v:.0f}"
+    else:
+        mant, exp = f"{v:.{digits - 1}e}".split("e")
+        mant = mant.rstrip("0").rstrip(".") if "." in mant else mant
+        text = f"{mant} × 10{str(int(exp)).translate(_SUP)}"
+    return text.replace("-", MINUS, 1) if text.startswith("-") else text
+
+
+def percent(rel: float) -> str:
+    """A relative difference as a percentage with two significant digits ("0.0012 %")."""
+    p = 100.0 * rel
+    if p >= 10:
+        return f"{p:.0f} %"
+    return f"{p:.2g} %"
+
+
+def verdict(c) -> tuple[str, str]:
+    """(words, tone) comparing Euler's value with the simulated one: tone "good" (agree to 0.1 %),
+    "close" (within 5 %), "far" (more), or "" when there is nothing to compare."""
+    e, s = c.euler, c.simulated
+    if not _finite(e) or not _finite(s):
+        if _finite(s) and _finite(c.modern):
+            return _versus("simulated and modern", s, c.modern)
+        return ("Euler gives no value here" if not _finite(e) else "no simulated value"), ""
+    if e == 0 or s == 0:
+        if e == s:
+            return "Euler and the simulation agree exactly", "good"
+        return (f"Euler says exactly 0; the simulation gives {human_number(s)}" if e == 0
+                else f"the simulation gives exactly 0; Euler says {human_number(e)}"), ""
+    return _versus("Euler and the simulation", e, s)
+
+
+def _versus(who: str, a: float, b: float) -> tuple[str, str]:
+    rel = abs(a - b) / max(abs(a), abs(b))
+    if rel < 1e-9:
+        return f"{who} agree to 10⁻⁹", "good"
+    if rel < 1e-4:
+        return f"{who} agree to {human_number(rel, 2)} (relative)", "good"
+    if rel < 1e-3:
+        return f"{who} agree to {percent(rel)}", "good"
+    if rel < 0.05:
+        return f"{who} are within {percent(rel)}", "close"
+    return f"{who} differ by {percent(rel)}", "far"
+
+
+def _finite(x) -> bool:
+    try:
+        return x is not None and math.isfinite(float(x))
+    except (TypeError, ValueError):
+        return False
+
+
+# ---- metric keys in words --------------------------------------------------------------------
+
+# unit suffixes of metric names (design.md: a field's unit lives in its name), longest first
+_UNIT_SUFFIX = (
+    ("arcsec_per_yr", "″/yr"), ("arcsec_per_century", "″/century"), ("deg_per_yr", "°/yr"),
+    ("kg_m2_per_s", "kg·m²/s"), ("rad_per_s2", "rad/s²"), ("rad_per_s", "rad/s"), ("rad_per_day", "rad/day"),
+    ("per_s", "1/s"), ("per_yr", "1/yr"), ("per_day", "1/day"),
+    ("arcsec", "″"), ("mas", "mas"), ("deg", "°"), ("rad", "rad"), ("yr", "yr"), ("years", "yr"),
+    ("days", "days"), ("day", "days"), ("d", "days"), ("s", "s"), ("km", "km"), ("au", "au"), ("m", "m"), ("J", "J"),
+    ("pct", "%"), ("percent", "%"), ("hz", "Hz"),
+)
+_WORDS = {"rel": "relative", "abs": "absolute", "err": "error", "max": "largest", "min": "smallest",
+          "num": "number of", "n": "number of", "dt": "step", "std": "spread", "rms": "rms", "obs": "observed",
+          "sim": "simulated", "euler": "Euler's", "iau": "IAU", "llr": "LLR", "freq": "frequency",
+          "amp": "amplitude", "init": "initial", "nut": "nutation", "prec": "precession", "lon": "longitude",
+          "lat": "latitude", "ecc": "eccentricity", "incl": "inclination", "omega": "ω", "zeta": "ζ",
+          "eta": "η", "phi": "φ", "theta": "θ", "psi": "ψ", "eps": "ε", "delta": "δ", "L": "L"}
+
+
+def metric_label(key: str) -> str:
+    """A metric's name in words with its unit: "flip_interval_s" → "flip interval (s)",
+    "energy_rel_drift" → "energy relative drift"."""
+    unit = ""
+    for suffix, text in _UNIT_SUFFIX:
+        if key.endswith("_" + suffix):
+            key, unit = key[: -len(suffix) - 1], text
+            break
+    words = []
+    for w in re.split(r"_+", key):
+        if not w:
+            continue
+        if re.fullmatch(r"\d{3,4}", w):  # a § number (polhode_period_euler_808) or a year
+            words.append(f"§{w}" if len(w) == 3 else w)
+        else:
+            words.append(_WORDS.get(w, w))
+    text = " ".join(words)
+    text = text[:1].upper() + text[1:]
+    return f"{text} ({unit})" if unit else text
+
+
+# ---- the panel's texts -----------------------------------------------------------------------
+
+def heading_markdown(spec) -> str:
+    """The scenario's name and its place in Euler (Explore tab)."""
+    return f"**{_md(spec.title)}**  \n{_md(spec.section)} · {_md(spec.group)}"
+
+
+def read_markdown(spec) -> str:
+    """The Read tab: what to look for, Euler's own words, where in the book."""
+    lines = ["**What to look for**", "", _md(spec.summary), ""]
     if spec.euler_formula:  # plain Unicode text: viser's markdown renders no TeX
         lines += [gallery.formula_markdown(spec.euler_formula), ""]
+    lines += [f"*Where: {_md(spec.section)}, {_md(spec.group)} of Euler's texts.*"]
     return "\n".join(lines)
+
+
+def _md(text: str) -> str:
+    """Plain text inside markdown: no emphasis from * or _ in formulas."""
+    return str(text).replace("*", "\\*").replace("_", "\\_")
+
+
+TONE_COLOR = {"good": "#2b8a3e", "close": "#b08800", "far": "#c92a2a", "": "#666"}
+
+
+def compare_html(result) -> str:
+    """The Compare tab: each comparison as its label (with unit), the three values side by side and
+    a verdict in words; the run's warnings first, as a visible note."""
+    if result is None:
+        return "<p style='color:#666;padding:0 12px'>Computing…</p>"
+    parts = ["<div style='padding:0 12px'>", warnings_html(result)]
+    if not result.comparisons:
+        parts.append("<p style='color:#666'>This scene has no Euler / simulated / modern values to compare.</p></div>")
+        return "".join(parts)
+    th = "padding:2px 4px;text-align:right;font-weight:600;color:#555;font-size:0.85em"
+    rows = [f"<table style='width:100%;border-collapse:collapse;font-size:0.92em'>"
+            f"<tr><th></th><th style='{th}'>Euler</th><th style='{th}'>simulated</th><th style='{th}'>modern</th></tr>"]
+    for c in result.comparisons:
+        unit = gallery.pretty_unit(c.unit)
+        label = html.escape(c.label) + (f" <span style='color:#666'>({html.escape(unit)})</span>" if unit else "")
+        words, tone = verdict(c)
+        note = f"<div style='color:#666;font-size:0.85em'>{html.escape(c.note)}</div>" if c.note else ""
+        cell = "padding:1px 4px;text-align:right;white-space:nowrap;font-variant-numeric:tabular-nums"
+        rows.append(
+            f"<tr><td colspan='4' style='padding:8px 0 1px 0;border-top:1px solid #ddd'><b>{label}</b></td></tr>"
+            f"<tr><td></td><td style='{cell}'>{human_number(c.euler)}</td>"
+            f"<td style='{cell};font-weight:600'>{human_number(c.simulated)}</td>"
+            f"<td style='{cell}'>{human_number(c.modern)}</td></tr>"
+            f"<tr><td colspan='4' style='font-size:0.85em;color:{TONE_COLOR[tone]}'>{html.escape(words)}{note}</td></tr>")
+    rows.append("</table></div>")
+    parts.append("".join(rows))
+    return "".join(parts)
+
+
+def warnings_html(result) -> str:
+    """The run's warnings (outside a formula's validity, diverged, …) as a yellow note; "" if none."""
+    if result is None or not result.warnings:
+        return ""
+    items = "".join(f"<li>{html.escape(w)}</li>" for w in result.warnings)
+    return ("<div style='background:#fff4d6;border-left:4px solid #e0a800;padding:4px 8px;margin:0 0 6px 0;"
+            f"font-size:0.9em'><b>Note</b><ul style='margin:2px 0 2px 16px;padding:0'>{items}</ul></div>")
+
+
+def numbers_markdown(result) -> str:
+    """The run's other numbers (its metrics), each named in words with its unit."""
+    if result is None or not result.metrics:
+        return ""
+    lines = []
+    for k, v in result.metrics.items():
+        lines.append(f"- {_md(metric_label(k))}: {human_number(v, 6)}")
+    return "\n".join(lines)
+
+
+def notes_markdown(result) -> str:
+    """Notes of the run that are not already among its warnings."""
+    if result is None:
+        return ""
+    notes = [n for n in result.notes if n not in result.warnings]
+    return "\n\n".join(f"*{_md(n)}*" for n in notes)
 
 
 def comparison_markdown(result) -> str:
+    """The table and notes as markdown (a notebook, the HTML replay's page): the same words as the
+    panel's Compare tab."""
     if result is None:
         return ""
     lines = []
-    if result.comparisons:
-        lines += ["| | Euler says | simulated | modern | unit |", "|---|---|---|---|---|"]
-        for c in result.comparisons:
-            note = f" ({c.note})" if c.note else ""
-            label = (c.label + note).replace("|", "\\|")  # a | in a label (|H(p,e)|) would split the row
-            lines.append(f"| {label} | {number(c.euler)} | {number(c.simulated)} | {number(c.modern)} | {c.unit} |")
+    for w in result.warnings:
+        lines.append(f"> **Note:** {_md(w)}")
+    if result.warnings:
         lines.append("")
-    if result.metrics:
-        lines.append("**Metrics:** " + ", ".join(f"{k} = {number(v)}" for k, v in result.metrics.items()))
+    if result.comparisons:
+        lines += ["| | Euler | simulated | modern | |", "|---|---|---|---|---|"]
+        for c in result.comparisons:
+            unit = gallery.pretty_unit(c.unit)
+            label = (c.label + (f" ({unit})" if unit else "")).replace("|", "\\|")
+            lines.append(f"| {label} | {human_number(c.euler)} | {human_number(c.simulated)} | "
+                         f"{human_number(c.modern)} | {verdict(c)[0]} |")
+        lines.append("")
     for n in result.notes:
-        lines.append(f"\n*{n}*")
+        if n not in result.warnings:
+            lines.append(f"\n*{_md(n)}*")
     return "\n".join(lines)
+
+
+def info_markdown(spec, result=None) -> str:
+    """Heading and the text to read, in one block (the HTML replay's page)."""
+    return heading_markdown(spec) + "\n\n" + read_markdown(spec)

@@ -30,8 +30,37 @@ import numpy as np
 from theoria.scenarios.drawing import (Arrows, Drawing, Frame, Item, Label, Light, Mesh, Path, Points, Segments,
                                        Sphere, z_to_many)
 
+def _hints_per_class() -> None:
+    """viser looks up the type hints of a node's properties (typing.get_type_hints, ~3 ms: it
+    evaluates every annotation of the props class) once per node it creates; a scene of 200
+    nodes sent to each of 100 browsers spent most of its time there. The hints depend on the
+    class only, so they are computed once per class. (viser 1.1: `AssignablePropsBase._prop_hints`,
+    a cached_property per handle.)"""
+    import functools
+    import typing
+
+    try:
+        from viser import _assignable_props_api as apa
+    except ImportError:
+        return
+    base = getattr(apa, "AssignablePropsBase", None)
+    if base is None or not isinstance(base.__dict__.get("_prop_hints"), functools.cached_property):
+        return
+
+    @functools.lru_cache(maxsize=None)
+    def hints(cls):
+        return typing.get_type_hints(cls)
+
+    base._prop_hints = property(lambda self: hints(type(self._impl.props)))
+
+
+_hints_per_class()
+
 MAX_DRAW_POINTS = 10000  # points per drawn path (10⁴-point trails)
-TRAIL_CHUNKS = 24
+# A growing trail is sent once as this many point clouds shown one after another: fewer nodes to
+# send per browser and scene (the frame rate does not depend on it, docs/app.md), a trail that
+# grows in 1/12 steps of the run.
+TRAIL_CHUNKS = 12
 # A path point is not drawn again where an earlier point of the same path already is: points are
 # quantised to cells of REPEAT_CELL × their size and only the first (in time) of each cell is kept.
 # viser draws a point `size` wide on each side of its centre, so a dropped point lies within 0.61 of
@@ -71,6 +100,40 @@ def drop_repeats(path: np.ndarray, idx: np.ndarray, cell: float):
     _, first = np.unique(key, axis=0, return_index=True)
     keep = np.sort(first)
     return path[keep], idx[keep]
+
+
+def path_chunks(it: Path, grow_trails: bool = True):
+    """The points a path is drawn with, as (chunks of float32 points, first frame of each chunk,
+    precision), or None for a path of fewer than two points. Computed once per Path item and kept
+    on it: a drawing shared by many browsers (the server caches runs and their drawings) is
+    densified and thinned once, not once per browser (17 ms a path)."""
+    key = (grow_trails, MAX_DRAW_POINTS, TRAIL_CHUNKS, REPEAT_CELL, float(it.thickness))
+    cached = it.__dict__.get("_theoria_chunks")
+    if cached is not None and cached[0] == key:
+        return cached[1]
+    path = np.asarray(it.points, float)
+    if len(path) < 2:
+        out = None
+    else:
+        at = np.zeros(len(path)) if it.at is None else np.asarray(it.at, float)
+        path, at = densify(path, at, 0.6 * it.thickness, MAX_DRAW_POINTS)
+        path, at = drop_repeats(path, at, REPEAT_CELL * it.thickness)
+        grow = grow_trails and it.at is not None
+        k = TRAIL_CHUNKS if grow else 1
+        # chunks of equal time span (after drop_repeats the points are not uniform in time); always
+        # the same number, so a new drawing updates the same nodes in place (a chunk left without a
+        # point of its own repeats the previous point)
+        grid = np.linspace(at[0], at[-1], k + 1)
+        bounds = np.concatenate([[0], np.searchsorted(at, grid[1:-1], side="left"), [len(path)]]).astype(int)
+        prec = PATH_PRECISION if np.all(np.abs(path) < FLOAT16_MAX / 8) else "float32"
+        pieces, starts = [], []
+        for j in range(k):
+            a, b = bounds[j], bounds[j + 1]
+            pieces.append(_f32(path[a:b] if b > a else path[max(a - 1, 0):max(a - 1, 0) + 1]))
+            starts.append(int(np.ceil(grid[j])) if grow else 0)
+        out = (pieces, np.asarray(starts), prec)
+    it.__dict__["_theoria_chunks"] = (key, out)
+    return out
 
 
 def _content_key(*arrays) -> str:
@@ -128,6 +191,7 @@ class SceneView:
         self.scene = scene
         self.root = root
         self.grow_trails = grow_trails
+        self.label_scale = 1.0  # text size of labels (presenter mode: larger)
         self.drawing: Drawing | None = None
         self.overlays: dict[str, bool] = {}
         self.frame = 0
@@ -168,6 +232,13 @@ class SceneView:
         return h
 
     def _remove(self, name: str) -> None:
+        # viser removes a node's descendants with it: forget their handles too, or a later drawing
+        # would update a removed handle (a scenario whose node was a frame and is now a mesh)
+        prefix = name + "/"
+        for child in [n for n in self._h if n.startswith(prefix)]:
+            self._auto.discard(child)
+            self._sig.pop(child, None)
+            self._h.pop(child, None)
         self._auto.discard(name)
         self._sig.pop(name, None)
         h = self._h.pop(name, None)
@@ -264,7 +335,11 @@ class SceneView:
         wxyz = _tuple(self._static_value(it.wxyz, "wxyz" in anim))
         pos = _tuple(self._static_value(it.position, "position" in anim))
         scale = _tuple(it.scale)
-        sig = (_content_key(it.vertices, it.faces), _rgb(it.color), it.opacity, it.double_sided)
+        ck = it.__dict__.get("_theoria_key")
+        if ck is None or ck[0] is not it.vertices or ck[1] is not it.faces:
+            ck = (it.vertices, it.faces, _content_key(it.vertices, it.faces))
+            it.__dict__["_theoria_key"] = ck
+        sig = (ck[2], _rgb(it.color), it.opacity, it.double_sided)
         return [self._node(name, lambda: self.scene.add_mesh_simple(
             name, it.vertices, it.faces, color=_rgb(it.color), opacity=None if it.opacity >= 1 else float(it.opacity),
             side="double" if it.double_sided else "front", scale=scale, wxyz=wxyz, position=pos,
@@ -294,7 +369,10 @@ class SceneView:
     def _draw_label(self, it: Label, name, anim):
         text = str(self._static_value(it.text, "text" in anim))
         pos = _tuple(self._static_value(it.position, "position" in anim))
-        return [self._node(name, lambda: self.scene.add_label(name, text, position=pos), text=text, position=pos)]
+        anchor, scale = getattr(it, "anchor", "top-left"), float(self.label_scale)
+        return [self._node(name, lambda: self.scene.add_label(name, text, position=pos, anchor=anchor,
+                                                              font_screen_scale=scale),
+                           sig=(anchor, scale), text=text, position=pos)]
 
     def _draw_light(self, it: Light, name, anim):
         pos = _tuple(self._static_value(it.position, "position" in anim))
@@ -317,8 +395,9 @@ class SceneView:
                 f"{name}/arrow", np.zeros((1, 2, 3), np.float32), col, **style), sig=tuple(style.values()))
             label = None
             if it.labels:
-                label = self._node(f"{name}/label", lambda: self.scene.add_label(f"{name}/label", str(it.labels[0])),
-                                   text=str(it.labels[0]))
+                scale = float(self.label_scale)
+                label = self._node(f"{name}/label", lambda: self.scene.add_label(
+                    f"{name}/label", str(it.labels[0]), font_screen_scale=scale), sig=(scale,), text=str(it.labels[0]))
             self._vectors[it.name] = [frame, arrow, label, -1.0, poses]
             return [frame, arrow, label]
         vec = _f32(self._static_value(it.vectors, "vectors" in anim))
@@ -327,37 +406,26 @@ class SceneView:
                           points=pts)]
         for j, text in enumerate(it.labels):
             pos = _tuple(1.08 * pts[j, 1])
+            scale = float(self.label_scale)
             out.append(self._node(f"{name}/label_{j}", lambda text=text, pos=pos, j=j: self.scene.add_label(
-                f"{name}/label_{j}", str(text), position=pos), text=str(text), position=pos))
+                f"{name}/label_{j}", str(text), position=pos, font_screen_scale=scale), sig=(scale,), text=str(text),
+                position=pos))
         return out
 
     def _draw_path(self, it: Path, name, anim):
         """Send the path once, as chunks whose visibility follows the playback frame."""
-        path = np.asarray(it.points, float)
-        if len(path) < 2:
+        chunks = path_chunks(it, self.grow_trails)
+        if chunks is None:
             return []
-        at = np.zeros(len(path)) if it.at is None else np.asarray(it.at, float)
-        path, at = densify(path, at, 0.6 * it.thickness, MAX_DRAW_POINTS)
-        path, at = drop_repeats(path, at, REPEAT_CELL * it.thickness)
-        grow = self.grow_trails and it.at is not None
-        k = TRAIL_CHUNKS if grow else 1
-        # chunks of equal time span (after drop_repeats the points are not uniform in time); always
-        # the same number, so a new drawing updates the same nodes in place (a chunk left without a
-        # point of its own repeats the previous point)
-        grid = np.linspace(at[0], at[-1], k + 1)
-        bounds = np.concatenate([[0], np.searchsorted(at, grid[1:-1], side="left"), [len(path)]]).astype(int)
-        handles, starts = [], []
-        prec = PATH_PRECISION if np.all(np.abs(path) < FLOAT16_MAX / 8) else "float32"
+        pieces, starts, prec = chunks
+        handles = []
         col = _rgb(it.color)
-        for j in range(k):
-            a, b = bounds[j], bounds[j + 1]
-            pts = _f32(path[a:b] if b > a else path[max(a - 1, 0):max(a - 1, 0) + 1])
+        for j, pts in enumerate(pieces):
             cname = f"{name}/{j}"
             handles.append(self._node(cname, lambda cname=cname, pts=pts: self.scene.add_point_cloud(
                 cname, pts, col, point_size=float(it.thickness), point_shape="square", precision=prec,
                 point_shading="flat"), sig=(float(it.thickness), prec, col), points=pts))
-            starts.append(int(np.ceil(grid[j])) if grow else 0)
-        self._chunks.setdefault(it.group, []).append(_Chunks(handles, np.asarray(starts)))
+        self._chunks.setdefault(it.group, []).append(_Chunks(handles, starts))
         return []  # chunk visibility is handled by _Chunks, not by the group's static list
 
     # ---- changing what is shown --------------------------------------------------------------

@@ -1,34 +1,321 @@
-"""`theoria serve`: the viser web app, one `ClientSession` (app/session.py) per browser."""
+"""`theoria serve`: the viser web app, one `ClientSession` (app/session.py) per browser, built to
+be left running in front of a class.
+
+What the server refuses, whoever asks (a student's browser or a script speaking viser's protocol):
+
+- **Nothing leaves the machine.** viser answers a `ShareUrlRequest` from any peer by opening a
+  public tunnel (two child processes and a look-up of the share host); the server drops that
+  message, and every message type the app does not use, before viser sees it (each logged once).
+  The server binds 127.0.0.1 unless `--host` says otherwise, opens no browser, sends no
+  analytics, and stops when its parent process dies.
+- **A browser's messages are bounded** (`Gate`): GUI updates carry only a `value` of a plain
+  type (text at most MAX_TEXT_CHARS); with the panel's form submits, key commands and
+  localStorage answers, at most GUI_RATE a second reach the app, the rest are
+  coalesced (the newest value per control wins, so a slider flood ends at its last value and
+  costs the other students nothing); camera updates at most CAMERA_RATE a second.
+- **Connections are bounded** (`Door`): at most `max_connections` websockets in all and
+  `max_per_address` from one address; a socket that has not opened the app (viser's camera
+  handshake) within HANDSHAKE_S is closed. Log lines are rate-limited.
+- **Runs are bounded** (app/worker.py): a bounded pool of simulation processes, fair between
+  browsers, a wall-clock limit per run, the scenario's step and memory budget checked before a
+  run starts, a closed tab's run cancelled at once.
+
+Caching: runs are deterministic, so the server keeps finished runs (memory LRU) and precomputes
+every scenario's defaults and presets in the background at start-up (kept on disk for the next
+start, `app.worker.RunStore`). A class switching among the same presets computes nothing.
+"""
 from __future__ import annotations
 
+import asyncio
+import contextlib
+import io
+import logging
+import os
+import signal
+import threading
 import time
 import traceback
+from dataclasses import dataclass
 
 import viser
+from viser import _messages as vm
 
-from theoria.scenarios import get
+from theoria.scenarios import all_scenarios, get
 
+from . import page
 from .gallery import camera_view  # noqa: F401  (the scenario's view, as the app frames it)
 from .panel import comparison_markdown, info_markdown  # noqa: F401
 from .session import ClientSession
+from .worker import MAX_TEXT_CHARS, RateLimitedLog, SimPool, shared_pool
+
+GUI_RATE = 10.0  # GUI updates per second a browser may send on average (the rest are coalesced)
+GUI_BURST = 20.0
+CAMERA_RATE = 30.0  # camera updates per second taken from a browser
+HANDSHAKE_S = 10.0  # a websocket that has not opened the app by then is closed
+MAX_PENDING = 64  # distinct controls with a coalesced update waiting, per browser
+MAX_LIST = 16  # numbers in a vector value
+
+# what a browser may send: the page's camera (which also opens the session), a control's value, and
+# what the panel's forms (a typed value taken on Enter or blur), keys (viser's commands) and the
+# view-as-a-link (an answer from the page's localStorage) send. Each but the camera counts against
+# the same rate as control values, keyed by what it acts on.
+ACTIONS = {vm.GuiFormSubmitMessage: "uuid", vm.CommandTriggerMessage: "uuid",
+           vm.LocalStorageGetItemResponseMessage: "request_uuid"}
+IGNORED_QUIETLY = (vm.GuiFormDirtyMessage,)  # the form's "edited" marker: nothing for the app
+
+
+@dataclass
+class Limits:
+    """Connection limits of a server (`theoria serve --max-clients/--max-per-address`)."""
+
+    max_connections: int = 200
+    max_per_address: int = 10
+    handshake_s: float = HANDSHAKE_S
+
+
+class Gate:
+    """What one browser's messages may do before viser dispatches them (see the module text)."""
+
+    def __init__(self, door: "Door", inner, client_id: int, address: str):
+        self.door, self.inner, self.client_id, self.address = door, inner, client_id, address
+        self.tokens = GUI_BURST
+        self.t = time.monotonic()
+        self.pending: dict[str, object] = {}
+        self.flush_at: float | None = None
+        self.camera_t = 0.0
+        self.camera_pending = None
+        self.registered = False
+        self.dropped = 0
+        self.coalesced = 0
+
+    def _refill(self) -> None:
+        now = time.monotonic()
+        self.tokens = min(GUI_BURST, self.tokens + (now - self.t) * GUI_RATE)
+        self.t = now
+
+    async def __call__(self, client_id, message) -> None:
+        typ = type(message)
+        if typ is vm.ViewerCameraMessage:
+            return self._camera(client_id, message)
+        if typ is vm.GuiUpdateMessage:
+            why = _bad_update(message)
+            if why:
+                self.dropped += 1
+                self.door.log.line(f"theoria: dropped a control update from {self.address}: {why}",
+                                   once_key=("gui", self.address, why))
+                return
+            if message.uuid in self.pending:
+                self.coalesced += 1
+                del self.pending[message.uuid]  # the newest value goes to the end
+            elif len(self.pending) >= MAX_PENDING:
+                self.dropped += 1
+                return
+            self.pending[message.uuid] = message
+            self._pump()
+            return
+        if typ in ACTIONS:
+            key = getattr(message, ACTIONS[typ], None)
+            if not isinstance(key, str) or len(key) > 64:
+                self.dropped += 1
+                return
+            key = f"{typ.__name__}:{key}"
+            if key in self.pending:
+                self.coalesced += 1
+                del self.pending[key]
+            elif len(self.pending) >= MAX_PENDING:
+                self.dropped += 1
+                return
+            self.pending[key] = message
+            self._pump()
+            return
+        if typ in IGNORED_QUIETLY:
+            return
+        self.dropped += 1
+        self.door.refused[typ.__name__] = self.door.refused.get(typ.__name__, 0) + 1
+        self.door.log.line(f"theoria: ignored a {typ.__name__} message from {self.address} "
+                           "(not something this app offers; logged once)", once_key=("type", typ.__name__))
+
+    def _dispatch(self, client_id, message) -> None:
+        self.door.loop.create_task(self.inner(client_id, message))
+
+    def _pump(self) -> None:
+        self.flush_at = None
+        self._refill()
+        while self.pending and self.tokens >= 1.0:
+            uuid = next(iter(self.pending))
+            msg = self.pending.pop(uuid)
+            self.tokens -= 1.0
+            self._dispatch(self.client_id, msg)
+        if self.pending and self.flush_at is None:
+            wait = (1.0 - self.tokens) / GUI_RATE
+            self.flush_at = time.monotonic() + wait
+            self.door.loop.call_later(wait, self._pump)
+
+    def _camera(self, client_id, message) -> None:
+        now = time.monotonic()
+        if not self.registered or now - self.camera_t >= 1.0 / CAMERA_RATE:
+            self.registered = True
+            self.camera_t = now
+            self._dispatch(client_id, message)
+            return
+        first = self.camera_pending is None
+        self.camera_pending = message
+        if first:
+            def flush():
+                m, self.camera_pending = self.camera_pending, None
+                if m is not None:
+                    self.camera_t = time.monotonic()
+                    self._dispatch(client_id, m)
+
+            self.door.loop.call_later(1.0 / CAMERA_RATE - (now - self.camera_t), flush)
+
+
+def _bad_update(message) -> str | None:
+    """Why a GuiUpdateMessage is refused (None: it is a plain value for a control)."""
+    up = message.updates
+    if not isinstance(message.uuid, str) or len(message.uuid) > 64:
+        return "not a control"
+    if not isinstance(up, dict) or set(up) != {"value"}:
+        return "changes something other than a value"
+    v = up["value"]
+    if isinstance(v, str):
+        return None if len(v) <= MAX_TEXT_CHARS else f"a text value longer than {MAX_TEXT_CHARS} characters"
+    if isinstance(v, (bool, int, float)) or v is None:
+        return None
+    if isinstance(v, (list, tuple)):
+        if len(v) <= MAX_LIST and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+            return None
+        return "a list that is not a short list of numbers"
+    return f"a value of type {type(v).__name__}"
+
+
+class Door:
+    """Connection limits and the message gate of one viser server."""
+
+    def __init__(self, server: viser.ViserServer, limits: Limits, log: RateLimitedLog):
+        self.server, self.limits, self.log = server, limits, log
+        self.ws = server._websock_server
+        self.loop = server._event_loop
+        self.open: dict[int, str] = {}  # client id → address
+        self.refused: dict[str, int] = {}  # message type or reason → count
+        self.gates: dict[int, Gate] = {}
+        self.ws.on_client_connect(self._connect)
+        self.ws.on_client_disconnect(self._disconnect)
+        # server-level handlers: the share tunnel and viser's own GUI/scene of the server; the app
+        # uses none of them (each browser has its own GUI), so nothing from a browser goes there
+        self.ws._handle_incoming_message = self._server_level
+
+    async def _server_level(self, client_id, message) -> None:
+        """Every message also reaches the server-level handlers; none is the app's. The same
+        message goes through the browser's gate, which counts and logs what it refuses."""
+        return None
+
+    def _address(self, client_id) -> str:
+        conn = self.ws._live_connections.get(client_id)
+        try:
+            return str(conn.remote_address[0])
+        except Exception:
+            return "?"
+
+    async def _connect(self, conn) -> None:
+        cid = conn.client_id
+        addr = self._address(cid)
+        same = sum(1 for a in self.open.values() if a == addr)
+        ws = self.ws._live_connections.get(cid)
+        if len(self.open) >= self.limits.max_connections or same >= self.limits.max_per_address:
+            why = "server full" if len(self.open) >= self.limits.max_connections else "too many from one address"
+            self.refused[why] = self.refused.get(why, 0) + 1
+            self.log.line(f"theoria: refused a connection from {addr}: {why} (limits: {self.limits.max_connections} "
+                          f"in all, {self.limits.max_per_address} per address)", once_key=("conn", addr, why))
+            if ws is not None:
+                self.loop.create_task(ws.close(1013, why))
+            conn._handle_incoming_message = _drop_all
+            return
+        self.open[cid] = addr
+        gate = Gate(self, conn._handle_incoming_message, cid, addr)
+        self.gates[cid] = gate
+        conn._handle_incoming_message = gate
+        self.loop.call_later(self.limits.handshake_s, self._check_handshake, cid)
+
+    def _check_handshake(self, cid) -> None:
+        gate = self.gates.get(cid)
+        if gate is None or gate.registered:
+            return
+        ws = self.ws._live_connections.get(cid)
+        self.refused["no handshake"] = self.refused.get("no handshake", 0) + 1
+        self.log.line(f"theoria: closed an idle connection from {gate.address} (it never opened the app)",
+                      once_key=("idle", gate.address))
+        if ws is not None:
+            self.loop.create_task(ws.close(1008, "idle"))
+
+    async def _disconnect(self, conn) -> None:
+        self.open.pop(conn.client_id, None)
+        self.gates.pop(conn.client_id, None)
+
+
+async def _drop_all(client_id, message) -> None:
+    return None
+
+
+def _quiet_libraries(log: RateLimitedLog) -> None:
+    """websockets and asyncio log every failed handshake or handler with a traceback: a hostile
+    client could fill the terminal. Their records go through the rate-limited log."""
+
+    class Through(logging.Filter):
+        def filter(self, record):
+            try:
+                msg = record.getMessage()
+            except Exception:
+                msg = str(record.msg)
+            log.line(f"{record.name}: {msg}"[:300], once_key=(record.name, msg[:60]))
+            return False
+
+    for name in ("websockets", "websockets.server", "asyncio"):
+        lg = logging.getLogger(name)
+        if not any(isinstance(f, Through) for f in lg.filters):
+            lg.addFilter(Through())
+
+
+def _refuse_share(server: viser.ViserServer, log: RateLimitedLog) -> None:
+    """No share tunnel, whatever arrives: the handlers are removed and the methods they call
+    replaced on this server."""
+    for cls in (vm.ShareUrlRequest, vm.ShareUrlDisconnect):
+        try:
+            server._websock_server.unregister_handler(cls)
+        except (AssertionError, KeyError, ValueError):
+            pass
+
+    def refused(*args, **kwargs):
+        log.line("theoria: a share link was requested and refused (this server makes no outbound connection)",
+                 once_key="share")
+        return None
+
+    server.request_share_url = refused
+    server.disconnect_share_url = refused
 
 
 def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None, verbose: bool = True,
-                run=None):
+                run=None, limits: Limits | None = None, pool: SimPool | None = None):
     """A running viser server with one ClientSession per browser; returns (server, sessions).
     `run`: a finished Run every new browser is shown first (its scenario and parameters)."""
     if run is not None:
         scenario = run.scenario
     if scenario is not None:
         get(scenario)  # a bad name raises ParameterError before the server starts
-    if verbose:
-        server = viser.ViserServer(host=host, port=port, verbose=True)
-    else:
-        import contextlib
-        import io
-
-        with contextlib.redirect_stdout(io.StringIO()):  # viser prints its banner even when not verbose
-            server = viser.ViserServer(host=host, port=port, verbose=False)
+    log = RateLimitedLog()
+    _quiet_libraries(log)
+    with page.themed_client():
+        if verbose:
+            server = viser.ViserServer(host=host, port=port, verbose=True)
+        else:
+            with contextlib.redirect_stdout(io.StringIO()):  # viser prints its banner even when not verbose
+                server = viser.ViserServer(host=host, port=port, verbose=False)
+    _refuse_share(server, log)
+    door = Door(server, limits or Limits(), log)
+    server._theoria_door = door
+    pool = pool or shared_pool()
+    pool.prepare(scenario or "free-tumble")
+    server._theoria_pool = pool
     sessions: dict[int, ClientSession] = {}
 
     @server.on_client_connect
@@ -36,7 +323,7 @@ def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None 
         try:
             sessions[client.client_id] = ClientSession(server, client, scenario, run=run)
         except Exception as e:
-            traceback.print_exc()
+            log.line("theoria: a browser's session could not start:\n" + traceback.format_exc())
             try:
                 client.add_notification("Error", f"{type(e).__name__}: {e}", color="red")
             except Exception:
@@ -51,9 +338,54 @@ def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None 
     return server, sessions
 
 
-def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None, run=None) -> None:
-    """Run the web app until interrupted, printing the URL to open."""
-    server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False, run=run)
+def _watch_parent() -> None:
+    """Stop with the process that started us: the kernel signals us when it dies (Linux), and a
+    watcher notices being re-parented anywhere else."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except Exception:
+        pass
+    parent = os.getppid()
+
+    def watch():
+        while True:
+            time.sleep(1.0)
+            if os.getppid() != parent:
+                os.kill(os.getpid(), signal.SIGTERM)
+                return
+
+    threading.Thread(target=watch, daemon=True, name="theoria-parent-watch").start()
+
+
+def _raise_fd_limit() -> None:
+    try:
+        import resource
+
+        soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+        want = hard if hard != resource.RLIM_INFINITY else 65536
+        if soft < want:
+            resource.setrlimit(resource.RLIMIT_NOFILE, (want, hard))
+    except Exception:
+        pass
+
+
+def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None, run=None,
+          limits: Limits | None = None, precompute: bool = True) -> None:
+    """Run the web app until interrupted (Ctrl-C, SIGTERM, or the parent process gone), printing
+    the URL to open."""
+    _raise_fd_limit()
+    _watch_parent()
+
+    def on_term(signum, frame):
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, on_term)
+    t0 = time.perf_counter()
+    pool = shared_pool()
+    server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False, run=run, limits=limits, pool=pool)
     port = server.get_port()
     if host in ("0.0.0.0", "::", ""):
         import socket
@@ -62,13 +394,26 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
               f"(or http://127.0.0.1:{port}/ on this machine). Ctrl-C to stop.", flush=True)
     else:
         print(f"theoria: open http://{host}:{port}/ in a browser (Ctrl-C to stop)", flush=True)
+    if precompute:
+        first = run.scenario if run is not None else (scenario or "free-tumble")
+        n = pool.precompute(all_scenarios(), first=first)
+        if n:
+            print(f"theoria: preparing {n} scenes in the background (defaults and presets, kept for the next "
+                  f"start); started in {time.perf_counter() - t0:.1f} s", flush=True)
     try:
+        announced = not precompute
         while True:
-            time.sleep(3600)
+            time.sleep(1.0)
+            if not announced and pool.pending_background() == 0 and pool.ready():
+                announced = True
+                print(f"theoria: every scenario's defaults and presets are ready "
+                      f"({time.perf_counter() - t0:.0f} s after start)", flush=True)
     except KeyboardInterrupt:
         pass
     finally:
-        server.stop()
+        with contextlib.redirect_stdout(io.StringIO()):
+            server.stop()
+        pool.close()
 
 
 class Shown:
@@ -96,7 +441,7 @@ def show_run(run, port: int = 8080, host: str = "127.0.0.1", block: bool | None 
     notebook, the REPL) returns a `Shown` handle at once and serves in the background."""
     block = (not _interactive()) if block is None else block
     if block:
-        serve(port=port, host=host, run=run)
+        serve(port=port, host=host, run=run, precompute=False)
         return None
     server, _ = make_server(port=port, host=host, verbose=False, run=run)
     shown = Shown(server)

@@ -1,15 +1,31 @@
 """One browser's session: its own scenario, parameters, run, drawing, scene nodes and playback
 clock, so two people on one server do not disturb each other.
 
+The panel is laid out for a class, in the manner of PhET simulations: the scene picker on top,
+then three tabs. **Explore**: the preset to start from, play / reset / step, time and speed, the
+few parameters that matter (numerical settings folded away), what is drawn, the plot over time.
+**Compare**: Euler / simulated / modern side by side with units and a verdict in words, and the
+run's warnings as a visible note. **Read**: what to look for, Euler's own words and §, where the
+printed text is wrong, and the class's link with its QR code and presenter mode. Everything is
+named in words (`Param.display()`, `panel.metric_label`), never by the keys scripts use.
+
 A parameter change posts a request to the session's `SimulationWorker` (app/worker.py: off the
-event loop, the newest request wins, an older run is cancelled); the run's drawing is then shown
-in one `client.atomic()` batch. Playback runs in its own thread and moves only what the drawing
-animates. Bad input: the ParameterError (one line naming the parameter and the allowed range) is
-shown as a notification and the scene keeps the last good run. Any other exception in a scenario
-is reported the same way and never reaches the server loop.
+event loop, the newest request wins, an older run is cancelled); a slider being dragged is
+debounced (only its last value is simulated), a typed value is taken on Enter or when its field
+loses focus. The run's drawing is shown in one `client.atomic()` batch, with the drawing's own
+camera. Playback runs in its own thread and moves only what the drawing animates.
+
+The browser's address holds the view (app/link.py): opening a copied address restores scenario,
+parameters, time, camera, options and presenter mode. Keys (viser commands): space play/pause,
+← → step, 1–9 presets, P presenter mode.
+
+Bad input: the ParameterError is shown as a notification naming the control in words and the
+allowed range, and the scene keeps the last good run. Any other exception in a scenario is
+reported the same way and never reaches the server loop.
 """
 from __future__ import annotations
 
+import re
 import threading
 import time
 import traceback
@@ -18,29 +34,64 @@ from typing import Any
 import numpy as np
 import viser
 
-from theoria.physics.errors import ParameterError
+from theoria.physics.errors import ParameterError, show_value
 from theoria.scenarios import all_scenarios, get
 from theoria.scenarios.drawing import OVERLAYS, View, palette
 
-from . import gallery
+from . import browser, gallery, page, playback
+from . import link as linkmod
 from .controls import ParamControls
 from .export_html import configure_scene
-from .panel import UPLOT_POINTS, comparison_markdown, info_markdown, y_axis_px
+from .panel import (UPLOT_POINTS, compare_html, heading_markdown, human_number, metric_label, numbers_markdown,
+                    read_markdown, y_axis_px)
 from .scene import SceneView
-from .worker import SimulationWorker
+from .worker import SimulationWorker, drawing_of, limits_text
 
-PLAY_HZ = 60.0  # playback tick for one browser (messages go out each 1/60 s)
-# Pose updates per second shared by all browsers: the server runs on one core (the GIL), and 30
-# sessions at 60 Hz alone took 75% of it (docs/robustness.md), so with many browsers each plays
-# back at a lower rate and slider changes stay quick.
-PLAY_BUDGET = 360.0
-PLAY_HZ_MIN = 12.0
+# Playback: one thread for every browser within a share of a core (app/playback.py); with many
+# browsers each plays back at a lower rate and slider changes stay quick.
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
+CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubber while playing
+SLIDER_DEBOUNCE_S = 0.15  # slider moves closer than this are a drag: only its last value is simulated
+STEP_FRACTION = 0.01  # ← / → move the clock by this fraction of the run
+LINK_EVERY_S = 0.5  # the address bar follows the view at most this often (1 s while playing)
+PRESENT_LABEL_SCALE = 1.6  # labels in the scene in presenter mode
+
+PLAY, PAUSE, RESET, BACK, FORWARD = "Play", "Pause", "Reset", "◀ Step", "Step ▶"
 
 
 def playback_hz(active_sessions: int) -> float:
-    """Playback rate of each session when `active_sessions` browsers are connected."""
-    return max(PLAY_HZ_MIN, min(PLAY_HZ, PLAY_BUDGET / max(1, active_sessions)))
+    """Playback rate of each session when `active_sessions` browsers are playing."""
+    return playback.ticker().rate(active_sessions)
+
+
+_IDENT = re.compile(r"\b[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9.]+)+\b|extras\[|plot_series|\bJSON\b")
+_ERRATUM = re.compile(r"^(Text:|The translation|Eqs?\.|§[\dIVXLC]+[^:]{0,40} prints|§7's)|translat|prints? ", re.I)
+
+
+def split_notes(notes) -> tuple[list[str], list[str]]:
+    """A run's notes for the panel: (the text's errata, other notes a class can read). Notes written
+    for scripts (naming series keys, extras, JSON fields) are left out."""
+    errata, other = [], []
+    for n in notes:
+        if _IDENT.search(n):
+            continue
+        (errata if _ERRATUM.search(n) else other).append(n)
+    return errata, other
+
+
+def series_label(key: str) -> str:
+    """A plot series' name in words (a snake_case key of the run becomes "ζ, Euler (rad)")."""
+    if "_" not in key or " " in key:
+        return key
+    words = key.split("_")
+    tail = ""
+    for w in ("euler", "simulated", "exact", "forced", "free"):
+        if w in words[:-1] or (w == words[-1]):
+            words.remove(w)
+            tail = ", Euler" if w == "euler" else f", {w}"
+    text = metric_label("_".join(words))
+    m = re.match(r"(.*?)( \(.*\))?$", text)
+    return f"{m.group(1)}{tail}{m.group(2) or ''}"
 
 
 class ClientSession:
@@ -54,27 +105,54 @@ class ClientSession:
         self.server, self.client = server, client
         ClientSession.active += 1
         self.scenarios = {s.name: s for s in all_scenarios()}
-        self.spec = get(scenario) if scenario else self.scenarios.get("free-tumble") or next(iter(self.scenarios.values()))
+        # the address the browser opened: a shared view to restore (not for a Run.show())
+        self.address = browser.read_address(client) if run is None else None
+        self.link = linkmod.from_address(self.address)
+        if self.link.scenario not in self.scenarios:
+            self.link.scenario = None
+        name = self.link.scenario or scenario
+        self.spec = get(name) if name else self.scenarios.get("free-tumble") or next(iter(self.scenarios.values()))
+        self.present = bool(self.link.present)
         self.view = SceneView(client.scene, "/world")
-        self.view_opts = View()
+        self.view_opts = View(options=dict(self.link.options) if self.link.scenario else {})
+        self._restore = self.link if (self.link.scenario or self.link.params) else None
         self.drawing = None
         self.drawing_spec: str | None = None  # the scenario whose drawing is shown
         self.result = None
         self.good_values: dict[str, Any] | None = None
         self.playing = True
         self.clock = 0.0  # playback time as a fraction of the run, 0..1
-        self._guard = False  # set while the code itself moves the scrubber
+        self._guard = False  # set while the code itself moves the scrubber or the checkboxes
         self._pguard = False  # set while the code itself sets the preset or the parameter controls
         self._view_lock = threading.RLock()  # the worker rebuilds while the player animates
         self._closed = False
+        self._debounce: threading.Timer | None = None
+        self._slider_at = -1e9  # when a slider last moved (perf_counter)
+        self._link_sent = None
+        self._link_time = 0.0
+        self._class_key = None
         self.updates = 0  # scene rebuilds done (tests and bench read it)
         self._build_gui()
+        page.set_loading(client, f"theoria — preparing {self.spec.title}…")
+        self._add_keys()
+        browser.run_js(client, browser.SETUP)
+        self._set_title()
+        if self.present:
+            self._apply_present()
         self.worker = SimulationWorker(f"sim-{client.client_id}", self._apply, self._failed, self._show_progress)
-        self._player = threading.Thread(target=self._play, daemon=True, name=f"play-{client.client_id}")
-        self._player.start()
+        self._last_tick = None
+        self._last_gui = 0.0
+        playback.ticker().add(self)
         if run is not None and run.scenario == self.spec.name:
             self.controls.set_values(run.params)
             self._apply(self.worker.adopt(self.spec, run.params), run, 0.0)
+        elif self._restore is not None and self._restore.params:
+            values, errors = linkmod.link_values(self.spec, self._restore)
+            for e in errors:
+                self._notify_bad(e, " (from the link: the default is used)")
+            self.controls.set_values(values)
+            self._set_preset_for(values)
+            self.request(values)
         else:
             self.request()
 
@@ -84,83 +162,161 @@ class ClientSession:
         client = self.client
         client.scene.set_up_direction("+z")
         configure_scene(client.scene)
-        self._set_camera(self.spec)
-        gui.configure_theme(control_width="large", show_share_button=False)
+        try:
+            gui.configure_theme(control_width="large", show_share_button=False)
+            gui.set_panel_label("theoria")
+        except AttributeError:  # a test's fake client
+            pass
         order = gallery.ordered(self.scenarios.values())
         self._labels = {gallery.label(s): s.name for s in order}
-        self.dd = gui.add_dropdown("Scenario", list(self._labels), initial_value=gallery.label(self.spec),
+        self.dd = gui.add_dropdown("Scene", list(self._labels), initial_value=gallery.label(self.spec),
                                    hint="Euler's ch. 15, ch. 16, then the three-body papers, in § order")
         self.dd.on_update(lambda e: self._safe(self._on_scenario))
-        self.presets = gui.add_dropdown("Presets", self._preset_options(self.spec),
-                                        initial_value=self._preset_options(self.spec)[0],
-                                        hint="starting points named after what they show")
-        self.presets.on_update(lambda e: self._safe(self._on_preset))
-        self.info = gui.add_markdown(info_markdown(self.spec))
-        self.table = gui.add_markdown("")
-        self.status = gui.add_markdown("*simulating…*")
+        self.status = gui.add_markdown("*Computing the scene…*")
         self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
-        with gui.add_folder("Playback"):
-            self.play_btn = gui.add_button("Pause")
-            self.play_btn.on_click(lambda e: self._safe(self._toggle_play))
-            self.reset_btn = gui.add_button("Reset")
-            self.reset_btn.on_click(lambda e: self._safe(self._reset))
-            self.speed = gui.add_slider("speed", min=0.1, max=10.0, step=0.1, initial_value=1.0,
-                                        hint=f"1 = the whole run in {RUN_SECONDS:g} s")
-            self.scrub = gui.add_slider("time (% of run)", min=0.0, max=100.0, step=0.1, initial_value=0.0)
+        # the update counter that protocol-level tools (benchmarks/classroom.py) follow; never shown
+        self._tick = gui.add_markdown("*simulating…*", visible=False)
+        self.tabs = gui.add_tab_group()
+        self._explore = self.tabs.add_tab("Explore")
+        with self._explore:
+            self.heading = gui.add_markdown(heading_markdown(self.spec))
+            self.presets = gui.add_dropdown("Start from", self._preset_options(self.spec),
+                                            initial_value=self._preset_options(self.spec)[0],
+                                            hint="starting points named after what they show (keys 1–9)")
+            self.presets.on_update(lambda e: self._safe(self._on_preset))
+            self.playback = gui.add_button_group("Playback", [PAUSE, RESET, BACK, FORWARD],
+                                                 hint="keys: space play/pause, ← → step")
+            self.playback.on_click(lambda e: self._safe(self._on_playback, e.target.value))
+            self.scrub = gui.add_slider("Time (% of the run)", min=0.0, max=100.0, step=0.1, initial_value=0.0)
             self.scrub.on_update(lambda e: self._safe(self._on_scrub))
             self.time_md = gui.add_markdown("t = 0")
-        self.params_parent = gui.add_folder("Parameters (§)")
-        with self.params_parent:
-            self.controls = ParamControls(gui, self.spec, on_change=self._on_param)
-        with gui.add_folder("Overlays", expand_by_default=False):
-            self.exag = gui.add_slider("exaggerate shape", min=1.0, max=20.0, step=0.5, initial_value=1.0,
-                                       hint="multiplies the departures of the semi-axes from their mean")
-            self.exag.on_update(lambda e: self._safe(self._on_exaggerate))
-            self.toggles = {}
-            for key, (label, _, _) in OVERLAYS.items():
-                cb = gui.add_checkbox(label, initial_value=True)
-                cb.on_update(lambda e, key=key: self._safe(self._on_toggle, key))
-                self.toggles[key] = cb
-        self.options_folder = gui.add_folder("Scene options")
-        self._option_handles: list = []
-        self._options_key = None
-        self.plot_folder = gui.add_folder("Plot")
-        self.plot = None
+            self.speed = gui.add_slider("Playback speed", min=0.1, max=10.0, step=0.1, initial_value=1.0,
+                                        hint=f"1 = the whole run in {RUN_SECONDS:g} s")
+            self._controls_order = getattr(self.speed, "order", None)
+            self.controls = self._make_controls_here()
+            self.draw_folder = gui.add_folder("What is drawn", expand_by_default=False)
+            with self.draw_folder:
+                self.options_folder = gui.add_folder("This scene")
+                self.toggles = {}
+                for key, (label, _, _) in OVERLAYS.items():
+                    cb = gui.add_checkbox(label[:1].upper() + label[1:], initial_value=True)
+                    cb.on_update(lambda e, key=key: self._safe(self._on_toggle, key))
+                    self.toggles[key] = cb
+                self.exag = gui.add_slider("Exaggerate the shape", min=1.0, max=20.0, step=0.5, initial_value=1.0,
+                                           hint="multiplies the departures of the semi-axes from their mean")
+                self.exag.on_update(lambda e: self._safe(self._on_exaggerate))
+            self._option_handles: list = []
+            self._options_key = None
+            self.plot_folder = gui.add_folder("Over time")
+            self.plot = None
+        with self.tabs.add_tab("Compare"):
+            self.compare = gui.add_html(compare_html(None))
+            self.notes_md = gui.add_markdown("")
+            self.numbers_folder = gui.add_folder("All numbers of this run", expand_by_default=False)
+            with self.numbers_folder:
+                self.numbers = gui.add_markdown("")
+        with self.tabs.add_tab("Read"):
+            self.read = gui.add_markdown(read_markdown(self.spec))
+            self.errata = gui.add_markdown("")
+            with gui.add_folder("For the class"):
+                self.present_cb = gui.add_checkbox("Presenter mode", initial_value=self.present,
+                                                   hint="large type, controls hidden; keys: space, ← →, 1–9, P")
+                self.present_cb.on_update(lambda e: self._safe(self._on_present_cb))
+                self.class_html = gui.add_html("")
+                self.limits_md = gui.add_markdown(limits_text())
+        self._present_hidden = [self.draw_folder, self.speed, self.scrub]
 
+    def _make_controls(self) -> ParamControls:
+        tab = getattr(self, "_explore", None)
+        if tab is not None:
+            with tab:
+                return self._make_controls_here()
+        return self._make_controls_here()
+
+    def _make_controls_here(self) -> ParamControls:
+        return ParamControls(self.client.gui, self.spec, on_change=self._on_param,
+                             on_error=lambda e: self._notify_bad(e, " — keeping the last good value"),
+                             order=self._controls_order)
+
+    def _add_keys(self) -> None:
+        """Keyboard for a projector (viser commands, also in the command palette)."""
+        gui = self.client.gui
+        keys = [("Play / pause", "space", self._toggle_play), ("Step back", "arrowleft", lambda: self._step(-1)),
+                ("Step forward", "arrowright", lambda: self._step(1)),
+                ("Presenter mode", "P", lambda: self._set_present(not self.present))]
+        keys += [(f"Preset {k}", str(k), lambda k=k: self._preset_key(k)) for k in range(1, 10)]
+        self._commands = []
+        for label, key, fn in keys:
+            try:
+                cmd = gui.add_command(label, hotkey=key)
+                cmd.on_trigger(lambda e, fn=fn: self._safe(fn))
+                self._commands.append(cmd)
+            except (AttributeError, TypeError, ValueError):  # a fake client, or a viser without commands
+                return
+
+    # ---- camera --------------------------------------------------------------------------------
     def _follow_camera(self) -> None:
         """Apply the drawing's moving camera (e.g. the Moon seen from the Earth) while it has one;
-        give the scenario's view back when it stops."""
+        give the drawing's own view back when it stops."""
         d = self.drawing
         follow = d.follow if d is not None else None
-        want = None
-        if follow is not None:
-            want = dict(position=tuple(float(x) for x in follow.position[self.view.frame]), look_at=follow.look_at,
-                        up=follow.up, fov_deg=follow.fov_deg)
         cam = self.client.camera
-        if want is None:
+        if follow is None:
             if getattr(self, "_following", False):
                 self._following = False
-                cam.fov = np.radians(75.0)  # viser's default
-                self._set_camera(self.spec)
+                self._set_camera(d)
             return
         self._following = True
-        if want.get("fov_deg") is not None and abs(getattr(cam, "fov", 0.0) - np.radians(want["fov_deg"])) > 1e-6:
-            cam.fov = np.radians(want["fov_deg"])
-        cam.up_direction = want.get("up", (0.0, 0.0, 1.0))
-        cam.position = want["position"]
-        cam.look_at = want.get("look_at", (0.0, 0.0, 0.0))
+        if follow.fov_deg is not None and abs((getattr(cam, "fov", 0.0) or 0.0) - np.radians(follow.fov_deg)) > 1e-6:
+            cam.fov = np.radians(follow.fov_deg)
+        cam.up_direction = tuple(follow.up)
+        cam.position = tuple(float(x) for x in follow.position[self.view.frame])
+        cam.look_at = tuple(follow.look_at)
 
-    def _set_camera(self, spec) -> None:
-        position, look_at = gallery.camera_view(spec)
+    def _set_camera(self, drawing) -> None:
+        """The drawing's camera (the scenario's curated view, or the one an option asks for)."""
+        if drawing is None:
+            return
+        c = drawing.camera
         cam = self.client.camera
-        cam.position = position
-        cam.look_at = look_at
-        cam.up_direction = (0.0, 0.0, 1.0)
+        cam.up_direction = tuple(float(x) for x in c.up)
+        cam.position = tuple(float(x) for x in c.position)
+        cam.look_at = tuple(float(x) for x in c.look_at)
+        fov = np.radians(c.fov_deg if c.fov_deg is not None else 75.0)  # viser's default is 75°
+        if abs((getattr(cam, "fov", None) or 0.0) - fov) > 1e-6:
+            try:
+                cam.fov = float(fov)
+            except Exception:
+                pass
+        self._camera_shown = c
+
+    def _set_camera_from_link(self, c: tuple) -> None:
+        cam = self.client.camera
+        if len(c) == 9:
+            cam.up_direction = tuple(c[6:9])
+        cam.position = tuple(c[0:3])
+        cam.look_at = tuple(c[3:6])
 
     # ---- presets -----------------------------------------------------------------------------
     @staticmethod
     def _preset_options(spec) -> list[str]:
         return gallery.preset_names(spec) + [gallery.CUSTOM]
+
+    def _set_preset_for(self, values: dict) -> None:
+        """Show the preset whose values these are, else "(your own values)"."""
+        name = gallery.CUSTOM
+        for n in self.spec.presets:
+            try:
+                if self.spec.preset(n) == values:
+                    name = n
+                    break
+            except ParameterError:
+                continue
+        self._pguard = True
+        try:
+            self.presets.value = name
+        finally:
+            self._pguard = False
 
     def _on_preset(self) -> None:
         """A preset chosen: its values (validated by Scenario.resolve) go into the controls and
@@ -175,7 +331,12 @@ class ClientSession:
             self._pguard = False
         self.request(dict(values))
 
-    def _on_param(self, name: str) -> None:
+    def _preset_key(self, k: int) -> None:
+        names = gallery.preset_names(self.spec)
+        if 1 <= k <= len(names):
+            self.presets.value = names[k - 1]
+
+    def _on_param(self, name: str, debounce: bool = False) -> None:
         """A parameter moved by hand: the preset no longer describes the values."""
         if self._pguard:
             return
@@ -185,32 +346,70 @@ class ClientSession:
                 self.presets.value = gallery.CUSTOM
             finally:
                 self._pguard = False
+        if self._debounce is not None:
+            self._debounce.cancel()
+            self._debounce = None
+        now = time.perf_counter()
+        if debounce and now - self._slider_at < SLIDER_DEBOUNCE_S:
+            # a slider being dragged: its first value ran at once; the values in between are dropped
+            # and the last one runs when the drag pauses (the last value wins, nothing queues)
+            self._slider_at = now
+            self._debounce = threading.Timer(SLIDER_DEBOUNCE_S, lambda: self._safe(self.request))
+            self._debounce.daemon = True
+            self._debounce.start()
+            return
+        if debounce:
+            self._slider_at = now
         self.request()
 
+    # ---- messages ----------------------------------------------------------------------------
     def notify(self, title: str, body: str, color: str = "red") -> None:
         try:
             self.client.add_notification(title, body, auto_close_seconds=8.0, color=color)
         except Exception:
             pass
 
+    def _words_for(self, e: ParameterError, spec=None) -> tuple[str, str]:
+        """(the control's name in words, what is allowed) for a refused value."""
+        spec = spec or self.spec
+        allowed = str(e.allowed)
+        try:
+            p = spec.param(e.name)
+            who = p.display()
+            if p.unit:
+                allowed = allowed.replace(f" {p.unit}", f" {p.unit_text()}" if p.unit_text() else "")
+        except KeyError:
+            who = {"parameters": "These values", "preset": "Preset", "scenario": "Scene"}.get(e.name, e.name)
+        return who, allowed
+
+    def _notify_bad(self, e: ParameterError, tail: str = "", spec=None) -> None:
+        who, allowed = self._words_for(e, spec)
+        self.notify(f"Not allowed: {who}", f"“{show_value(e.value)}”: {allowed}{tail}")
+
     def _safe(self, fn, *args) -> None:
         """Run a callback; no exception reaches viser's loop."""
         try:
             fn(*args)
         except ParameterError as e:
-            self.notify(f"Bad value for {e.name}", str(e))
+            self._notify_bad(e)
         except Exception as e:  # a bug in a scenario or the scene must not kill the server
             traceback.print_exc()
             self.notify("Error", f"{type(e).__name__}: {e}")
 
+    def _set_title(self) -> None:
+        browser.call(self.client, "title", f"theoria — {self.spec.name}")
+
+    # ---- scenario ------------------------------------------------------------------------------
     def _on_scenario(self) -> None:
         name = self._labels[self.dd.value]
         if name == self.spec.name:
             return
         self.spec = self.scenarios[name]
         self.controls.remove()
-        with self.params_parent:
-            self.controls = ParamControls(self.client.gui, self.spec, on_change=self._on_param)
+        self.controls = self._make_controls()
+        if self.present:
+            for h in self.controls._containers:
+                h.visible = False
         self._pguard = True
         try:
             options = self._preset_options(self.spec)
@@ -218,24 +417,62 @@ class ClientSession:
             self.presets.value = options[0]
         finally:
             self._pguard = False
-        self.info.content = info_markdown(self.spec)
+        self.heading.content = heading_markdown(self.spec)
+        self.read.content = read_markdown(self.spec)
+        self.errata.content = ""
+        self._set_title()
         self.good_values = None
-        self.view_opts = View()
+        self.view_opts = View(exaggerate=self.view_opts.exaggerate)
+        self._restore = None
         self.request()
 
+    # ---- playback controls -----------------------------------------------------------------------
+    def _on_playback(self, which: str) -> None:
+        if self._guard:
+            return
+        if which in (PLAY, PAUSE):
+            self._toggle_play()
+        elif which == RESET:
+            self._reset()
+        elif which == BACK:
+            self._step(-1)
+        elif which == FORWARD:
+            self._step(1)
+
+    def _set_playing(self, on: bool) -> None:
+        self.playing = bool(on)
+        self._guard = True
+        try:
+            self.playback.options = [PAUSE if self.playing else PLAY, RESET, BACK, FORWARD]
+        except Exception:
+            pass
+        finally:
+            self._guard = False
+
     def _toggle_play(self) -> None:
-        self.playing = not self.playing
-        self.play_btn.label = "Pause" if self.playing else "Play"
+        self._set_playing(not self.playing)
 
     def _reset(self) -> None:
+        """The clock back to the start of the run, playing or paused."""
         self.clock = 0.0
         self._show_clock(force=True)
+        self._time_gui()
+
+    def _step(self, sign: int) -> None:
+        """Pause and move the clock by STEP_FRACTION of the run (at least one frame)."""
+        self._set_playing(False)
+        n = self.drawing.n_frames if self.drawing is not None else 100
+        step = max(STEP_FRACTION, 1.0 / max(n - 1, 1))
+        self.clock = float(np.clip(self.clock + sign * step, 0.0, 1.0))
+        self._show_clock(force=True)
+        self._time_gui()
 
     def _on_scrub(self) -> None:
         if self._guard:
             return
         self.clock = float(self.scrub.value) / 100.0
         self._show_clock()
+        self._time_gui(scrub=False)
 
     def _on_exaggerate(self) -> None:
         if self.result is None:
@@ -249,11 +486,41 @@ class ClientSession:
         with self._view_lock, self.client.atomic():
             self.view.set_overlay(key, self.toggles[key].value)
 
+    # ---- presenter mode ------------------------------------------------------------------------
+    def _on_present_cb(self) -> None:
+        if not self._guard:
+            self._set_present(bool(self.present_cb.value))
+
+    def _set_present(self, on: bool) -> None:
+        if on == self.present:
+            return
+        self.present = on
+        self._guard = True
+        try:
+            self.present_cb.value = on
+        finally:
+            self._guard = False
+        self._apply_present()
+        if self.result is not None:
+            self._redraw()
+
+    def _apply_present(self) -> None:
+        """Presenter mode: large type in the panel and the scene, controls hidden (the keys play,
+        step and pick presets)."""
+        for h in self._present_hidden + list(self.controls._containers):
+            try:
+                h.visible = not self.present
+            except Exception:
+                pass
+        self.view.label_scale = PRESENT_LABEL_SCALE if self.present else 1.0
+        browser.call(self.client, "present", self.present)
+
     # ---- simulation worker -----------------------------------------------------------------
     def request(self, given: dict | None = None) -> None:
-        """Post (scenario, raw values) for simulation; only the newest request is kept."""
+        """Post (scenario, values) for simulation; only the newest request is kept."""
         given = self.controls.values() if given is None else given
-        self._status(f"simulating {self.spec.name}…")
+        self._status("Computing the scene…")
+        self._tick_text(f"*simulating {self.spec.name}…*")
         self.worker.submit(self.spec, given)
 
     @property
@@ -264,12 +531,16 @@ class ClientSession:
 
     def _failed(self, req, e: Exception) -> None:
         name = req.spec.name
+        if self.updates == 0:  # nothing drawn: the panel (with the error) replaces the loading line
+            page.set_loading(self.client, None)
         if isinstance(e, ParameterError):
-            self.notify(f"Bad value for {e.name}", f"{e} — keeping the last good state")
-            self._status("bad value: " + str(e))
+            self._notify_bad(e, " — keeping the last good state", spec=req.spec)
+            who, allowed = self._words_for(e, req.spec)
+            self._status(f"Not allowed: {who} ({allowed}); the scene shows the last good values.")
         else:
-            self.notify(f"Error in {name}", f"{type(e).__name__}: {e} — keeping the last good state")
-            self._status(f"error: {type(e).__name__}: {e}")
+            self.notify(f"Error in {req.spec.title}", f"{type(e).__name__}: {e} — keeping the last good state")
+            self._status(f"Error: {type(e).__name__}; the scene shows the last good values.")
+        self._tick_text(f"*simulation failed: {name}*")
 
     def _show_progress(self, pct: float | None, text: str | None = None) -> None:
         """Progress of a long run in the panel (None hides the bar)."""
@@ -280,14 +551,21 @@ class ClientSession:
             self.progress.value = pct
             if not self.progress.visible:
                 self.progress.visible = True
-            if text:
-                self._status(text)
+            self._status(text or f"Computing the scene… {pct:.0f} %")
+            if self.updates == 0:  # nothing drawn yet: the line over the page says what is happening
+                page.set_loading(self.client, "theoria — " + (text or f"computing the scene… {pct:.0f} %"))
         except Exception:
             pass
 
     def _status(self, text: str) -> None:
         try:
-            self.status.content = f"*{text}*"
+            self.status.content = f"*{text}*" if text else ""
+        except Exception:
+            pass
+
+    def _tick_text(self, text: str) -> None:
+        try:
+            self._tick.content = text
         except Exception:
             pass
 
@@ -297,12 +575,14 @@ class ClientSession:
         with self._view_lock, self.client.atomic():
             if not self.worker.current(req) or spec.name != self.spec.name:
                 return  # a newer request, or another scenario chosen meanwhile
-            drawing = spec.drawing(result, self.view_opts)
+            restore = self._restore if (self._restore is not None and
+                                        self._restore.scenario in (None, spec.name)) else None
+            drawing = drawing_of(spec, result, self.view_opts)
             new_scenario = self.drawing_spec != spec.name
             if new_scenario:  # the scenario's own overlay defaults and camera
                 overlays = dict(drawing.overlays)
-                if self.drawing_spec is not None:
-                    self._set_camera(spec)
+                if restore is not None:
+                    overlays.update({k: v for k, v in restore.overlays.items() if k in self.toggles})
                 for k, cb in self.toggles.items():
                     self._guard = True
                     try:
@@ -312,25 +592,59 @@ class ClientSession:
             else:
                 overlays = {k: bool(cb.value) for k, cb in self.toggles.items()}
             self.view.show(drawing, overlays)
+            old = self.drawing
             self.drawing, self.drawing_spec = drawing, spec.name
+            if new_scenario or old is None or old.camera != drawing.camera:
+                self._set_camera(drawing)
             self._sync_scene_options()
             self.result, self.good_values = result, values
-            self.table.content = comparison_markdown(result)
+            self._show_result_text(result)
             self._update_plot(result)
+            if restore is not None:
+                self._restore = None
+                if restore.time is not None and drawing.n_frames > 1:
+                    t = drawing.times
+                    self.clock = float(np.clip((restore.time - t[0]) / ((t[-1] - t[0]) or 1.0), 0.0, 1.0))
+                self._set_playing(restore.playing)
+                if restore.speed is not None:
+                    self.speed.value = float(np.clip(restore.speed, 0.1, 10.0))
+                if restore.camera is not None:
+                    self._set_camera_from_link(restore.camera)
             self.view.set_frame(self._frame_index())
             self._follow_camera()
+            self._time_gui()
             req.stamps["shown"] = time.perf_counter()
+            if self.updates == 0:
+                page.set_loading(self.client, None)
             self.updates += 1
-            self._status(f"simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
-                         f"(update #{self.updates})")
+            warn = result.warnings
+            self._status("⚠ This run comes with a note: see the Compare tab." if warn else "")
+            if getattr(req, "preview", False):
+                self._status("Quick preview; computing the full run…")
+                self._tick_text(f"*quick preview ({len(result.trajectory.t)} samples); computing the full run… "
+                                f"(update #{self.updates})*")
+            else:
+                self._tick_text(f"*simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
+                                f"(update #{self.updates})*")
+
+    def _show_result_text(self, result) -> None:
+        self.compare.content = compare_html(result)
+        errata, other = split_notes(result.notes)
+        self.notes_md.content = "\n\n".join(f"*{_md(n)}*" for n in other if n not in result.warnings)
+        self.errata.content = ("**Where the printed text is wrong**\n\n" + "\n\n".join(f"- {_md(n)}" for n in errata)
+                               if errata else "")
+        self.numbers.content = numbers_markdown(result)
 
     def _redraw(self) -> None:
-        """The same run drawn again (a scene option or the shape exaggeration changed)."""
+        """The same run drawn again (a scene option, the shape exaggeration or presenter mode changed)."""
         if self.result is None:
             return
         with self._view_lock, self.client.atomic():
-            self.drawing = self.spec.drawing(self.result, self.view_opts)
+            old = self.drawing
+            self.drawing = drawing_of(self.spec, self.result, self.view_opts)
             self.view.show(self.drawing, {k: bool(cb.value) for k, cb in self.toggles.items()})
+            if old is None or old.camera != self.drawing.camera:
+                self._set_camera(self.drawing)
             self._update_plot()
             self.view.set_frame(self._frame_index())
             self._follow_camera()
@@ -346,9 +660,14 @@ class ClientSession:
         self._option_handles = []
         with self.options_folder:
             for k, opt in spec.options.items():
-                cb = self.client.gui.add_checkbox(opt.label, initial_value=self.view_opts.option(k, spec))
+                label = opt.label[:1].upper() + opt.label[1:]
+                cb = self.client.gui.add_checkbox(label, initial_value=self.view_opts.option(k, spec))
                 cb.on_update(lambda e, k=k, cb=cb: self._safe(self._on_option, k, cb))
                 self._option_handles.append(cb)
+        try:
+            self.options_folder.visible = bool(spec.options)
+        except Exception:
+            pass
 
     def _on_option(self, key: str, cb) -> None:
         self.view_opts.options[key] = bool(cb.value)
@@ -360,8 +679,9 @@ class ClientSession:
         series = dict(d.plot) or {"energy": self.result.trajectory.energy}
         idx = np.unique(np.linspace(0, len(t) - 1, min(UPLOT_POINTS, len(t))).round().astype(int))
         data = (np.asarray(t)[idx],) + tuple(np.asarray(v, float)[idx] for v in series.values())
-        ser = ({"label": f"t [{d.time_unit}]"},) + tuple(
-            {"label": k, "stroke": "rgb(%d,%d,%d)" % palette(i), "width": 1.5} for i, k in enumerate(series))
+        ser = ({"label": f"t ({d.time_unit})"},) + tuple(
+            {"label": series_label(k), "stroke": "rgb(%d,%d,%d)" % palette(i), "width": 1.5}
+            for i, k in enumerate(series))
         key = tuple(s["label"] for s in ser)
         axes = ({}, {"size": y_axis_px(data[1:])})  # the default 50 px cut "-" and leading digits off
         if self.plot is not None and getattr(self, "_plot_key", None) == key:
@@ -373,8 +693,7 @@ class ClientSession:
             self.plot.remove()
         with self.plot_folder:
             # x is the simulation time, not a date (uPlot's default x scale is a clock)
-            self.plot = self.client.gui.add_uplot(data, ser, title=self.spec.name, aspect=1.6,
-                                                  scales={"x": {"time": False}}, axes=axes)
+            self.plot = self.client.gui.add_uplot(data, ser, aspect=1.6, scales={"x": {"time": False}}, axes=axes)
 
     # ---- playback ----------------------------------------------------------------------------
     def _frame_index(self) -> int:
@@ -393,33 +712,141 @@ class ClientSession:
                 self.view.set_frame(i)
                 self._follow_camera()
 
-    def _play(self) -> None:
-        last = time.perf_counter()
-        last_gui = 0.0
-        while not self._closed:
-            now = time.perf_counter()
-            dt, last = now - last, now
+    def wants_ticks(self) -> bool:
+        """Playing a finished run, or the address bar due to follow the view (the playback thread
+        skips a session with nothing to do)."""
+        if self._closed:
+            return False
+        now = time.perf_counter()
+        if not (self.playing and self.result is not None):
+            self._last_tick = None
+            return now - self._link_time > LINK_EVERY_S
+        return True
+
+    def _tick(self, now: float) -> None:
+        """One frame of playback (called by app/playback.py's thread): the clock advances by the
+        real time since the last frame, so fewer frames a second never slow the run down. The
+        address bar follows the view at most every LINK_EVERY_S (1 s while playing)."""
+        if self._closed:
+            return
+        if self.playing and self.result is not None:
+            last, self._last_tick = self._last_tick, now
+            if last is not None:
+                self.clock = (self.clock + (now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
+                self._show_clock()
+                if now - self._last_gui > CLOCK_TEXT_EVERY:
+                    self._last_gui = now
+                    self._time_gui()
+        if now - self._link_time > (1.0 if self.playing else LINK_EVERY_S):
+            self._link_time = now
+            self._sync_link()
+
+    def _time_gui(self, scrub: bool = True) -> None:
+        """The scrubber and the time read-out follow the clock (playing or not)."""
+        d = self.drawing
+        if d is None:
+            return
+        if scrub:
+            self._guard = True
             try:
-                if self.playing and self.result is not None:
-                    self.clock = (self.clock + dt * float(self.speed.value) / RUN_SECONDS) % 1.0
-                    self._show_clock()
-                    if now - last_gui > 0.25:
-                        last_gui = now
-                        d = self.drawing
-                        self._guard = True
-                        try:
-                            self.scrub.value = round(100 * self.clock, 1)
-                        finally:
-                            self._guard = False
-                        self.time_md.content = f"t = {d.times[self.view.frame]:.4g} {d.time_unit}"
-            except Exception:
-                if self._closed:
-                    return
-                traceback.print_exc()
-            time.sleep(max(0.0, 1.0 / playback_hz(ClientSession.active) - (time.perf_counter() - now)))
+                self.scrub.value = round(100 * self.clock, 1)
+            finally:
+                self._guard = False
+        t = d.times
+        now = t[min(self.view.frame, len(t) - 1)]
+        self.time_md.content = f"t = {human_number(now)} of {human_number(t[-1])} {_unit_words(d.time_unit)}"
+
+    # ---- the view as a link ------------------------------------------------------------------
+    def link_state(self) -> linkmod.LinkState | None:
+        """The view now: what the address bar holds."""
+        d, values = self.drawing, self.good_values
+        if d is None or values is None or self.drawing_spec != self.spec.name:
+            return None
+        params = {p.name: linkmod.param_text(p, values[p.name]) for p in self.spec.params if p.name in values}
+        cam = None
+        c = self.client.camera
+        try:
+            if c.position is not None and c.look_at is not None:
+                cam = tuple(float(x) for x in (*c.position, *c.look_at))
+                up = tuple(float(x) for x in c.up_direction)
+                if np.linalg.norm(np.subtract(up, (0.0, 0.0, 1.0))) > 1e-6:
+                    cam = cam + up
+        except Exception:
+            cam = None
+        overlays = {k: bool(cb.value) for k, cb in self.toggles.items() if bool(cb.value) != d.overlays.get(k, True)}
+        options = {k: self.view_opts.option(k, self.spec) for k in self.spec.options
+                   if self.view_opts.option(k, self.spec) != self.spec.options[k].default}
+        return linkmod.LinkState(scenario=self.spec.name, params=params,
+                                 time=float(d.times[min(self.view.frame, d.n_frames - 1)]),
+                                 playing=self.playing, camera=cam, options=options, overlays=overlays,
+                                 present=self.present, speed=float(self.speed.value))
+
+    def link_query(self) -> str | None:
+        st = self.link_state()
+        return None if st is None else linkmod.to_query(st, self.spec)
+
+    def _sync_link(self) -> None:
+        """Keep the address bar on the view, and the class's link and QR code on the scene."""
+        st = self.link_state()
+        if st is None:
+            return
+        q = linkmod.to_query(st, self.spec)
+        if q != self._link_sent:
+            if browser.call(self.client, "url", q):
+                self._link_sent = q
+        self._sync_class_link(st)
+
+    def _sync_class_link(self, st) -> None:
+        try:
+            host, port = self.server.get_host(), self.server.get_port()
+        except Exception:
+            return
+        base = linkmod.class_link(host, port, self.address)
+        shared = linkmod.LinkState(scenario=st.scenario, params=st.params, options=st.options,
+                                   overlays=st.overlays)
+        key = (base, linkmod.to_query(shared, self.spec))
+        if key == self._class_key:
+            return
+        self._class_key = key
+        if base is None:
+            self.class_html.content = ("<p style='color:#666;font-size:0.9em'>Students on the same network can open "
+                                       "this scene when the server is started with <b>--host 0.0.0.0</b>.</p>")
+            return
+        url = base + "?" + key[1]
+        self.class_html.content = (
+            "<div style='font-size:0.9em'><b>Students open</b><br>"
+            f"<a href='{_attr(url)}' style='word-break:break-all'>{_html(url)}</a><br>"
+            f"<img alt='QR code of the class link' src='{linkmod.qr_svg_uri(url)}' "
+            "style='width:180px;height:180px;margin-top:4px;image-rendering:pixelated'></div>")
 
     def close(self) -> None:
         if not self._closed:
             ClientSession.active = max(0, ClientSession.active - 1)
         self._closed = True
+        playback.ticker().remove(self)
+        if self._debounce is not None:
+            self._debounce.cancel()
         self.worker.close()
+
+
+def _md(text: str) -> str:
+    return str(text).replace("*", "\\*").replace("_", "\\_")
+
+
+def _html(text: str) -> str:
+    import html
+
+    return html.escape(text)
+
+
+def _attr(text: str) -> str:
+    import html
+
+    return html.escape(text, quote=True)
+
+
+_TIME_WORDS = {"s": "s", "yr": "years", "d": "days", "day": "days"}
+
+
+def _unit_words(unit: str) -> str:
+    return _TIME_WORDS.get(unit, unit)

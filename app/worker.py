@@ -1,27 +1,1063 @@
-"""Simulations for one browser, off the event loop: the newest request wins.
+"""Simulations for every browser of a server: a bounded pool of processes, a run cache, and for
+each browser a `SimulationWorker` in which the newest request wins.
 
-A `SimulationWorker` takes requests (scenario, raw values). A newer request supersedes an older
-one: a run in progress is cancelled from its progress callback (`Cancelled`), and a run that
-finishes after a newer request arrived is dropped. The outcome goes to the session through three
-callbacks: `on_result(request, run, seconds)`, `on_error(request, exception)` and
-`on_progress(percent or None, text)` (throttled: runs shorter than PROGRESS_SHOW_AFTER never show
-a bar, longer ones send at most 1/PROGRESS_EVERY updates a second).
+Why processes. The server's event loop, the drawing of every scene and the 60 Hz pose stream run
+in one Python process and share its interpreter lock. Numba compiles (13-80 s on first use) and a
+scenario's own Python and scipy work hold that lock; in a thread they stalled every browser. In a
+child process they cost the server nothing but a pipe. A child is also the only run that can be
+stopped for certain: a run cancelled by a closed tab or a newer request stops at its next progress
+call, and a child that has not answered within CANCEL_GRACE_S is killed (the CPU is idle within a
+second or two whatever the scenario's loop does).
+
+- `SimPool` (one per server process, `shared_pool()`): `slots` children sized to the machine
+  (one per core, at least one), each fed by a thread of this process. Jobs are keyed by
+  (scenario, resolved values): runs are deterministic, so thirty students asking for the same
+  preset make one job, and a finished run is kept in a server-wide LRU `RunCache` (bounded in
+  bytes) and, for the defaults and presets computed in the background at start-up, on disk
+  (`RunStore`, keyed by a digest of the physics and scenario sources, so a changed model is
+  never served stale). Fairness: a browser has at most one job of its own waiting (a newer
+  request replaces it), jobs are taken oldest first, and background jobs only take a slot no
+  browser's job is waiting for. A flood of callbacks from one browser therefore costs the others
+  nothing but its one job.
+- Limits: a run is refused before it starts when the scenario's budget says so
+  (`Scenario.check_budget`, when the scenario module has one), and stopped after
+  RUN_SECONDS_LIMIT of wall-clock time; a closed tab cancels its job at once.
+- First use on a machine (empty numba cache): a scenario whose compiled code is not on disk yet
+  is run by an extra child with numba's JIT switched off (pure Python: a fraction of a second for
+  the rotation scenes' previews) while the compiling children warm the cache in the background;
+  `warm` marks which scenarios have been compiled on this machine.
+- `SimulationWorker` (one per browser) keeps the interface the session uses: `submit(spec,
+  given)`, `adopt(spec, values)`, `current(req)`, `close()`, and calls back `on_result(req, run,
+  seconds)`, `on_error(req, exc)` and `on_progress(percent or None, text)` (throttled: runs
+  shorter than PROGRESS_SHOW_AFTER never show a bar). A run expected to take longer than
+  PREVIEW_AFTER_S (its scenario's last measured time) is shown first from the scenario's
+  `preview` values, then refined (`req.preview` is True for the coarse one).
 """
 from __future__ import annotations
 
+import ctypes
+import hashlib
+import itertools
+import logging
+import os
+import pickle
+import select
+import signal
+import subprocess
+import sys
 import threading
 import time
 import traceback
-from dataclasses import dataclass, field
+from collections import OrderedDict
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, fields, is_dataclass
+from multiprocessing.connection import Connection
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
-from theoria.physics.errors import Cancelled
+from theoria.physics.errors import Cancelled, ParameterError, show_value
+
+log = logging.getLogger("theoria.server")
 
 PROGRESS_SHOW_AFTER = 0.4  # s
 PROGRESS_EVERY = 0.15  # s
+RUN_SECONDS_LIMIT = 60.0  # wall-clock seconds one run may take on the server
+CANCEL_GRACE_S = 1.0  # a cancelled child that has not stopped by then is killed
+KILL_GRACE_S = 5.0  # beyond the run limit, a child that never calls progress is killed
+NOJIT_SECONDS_LIMIT = 20.0
+COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes to a compiling one  # a pure-Python run longer than this goes back to a compiling child
+PREVIEW_AFTER_S = 1.0  # a run expected to take longer shows its scenario's preview first
+SLOW_JOB_S = 1.0  # a job expected to take longer (or never timed here) may not take the last free slot
+CACHE_BYTES = 400e6  # finished runs kept in memory by the server (LRU)
+MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
+CHILD_NICE = 5  # children run below the server: the event loop and the pose stream come first
 
+
+class TimeLimit(Exception):
+    """A run stopped at the server's wall-clock limit (RUN_SECONDS_LIMIT)."""
+
+
+# ---- keys, sizes, the cache ------------------------------------------------------------------
+
+def _canon(v):
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))
+    if isinstance(v, (tuple, list, np.ndarray)):
+        return tuple(_canon(x) for x in v)
+    return str(v)
+
+
+def run_key(name: str, values: dict) -> str:
+    """The cache key of a run: its scenario and its resolved values (runs are deterministic)."""
+    items = tuple(sorted((k, _canon(v)) for k, v in values.items()))
+    return name + ":" + hashlib.blake2b(repr(items).encode(), digest_size=16).hexdigest()
+
+
+def nbytes(obj, _depth: int = 0) -> int:
+    """Bytes held by the numpy arrays of a Run (its trajectory, series, extras), roughly."""
+    if _depth > 6:
+        return 0
+    if isinstance(obj, np.ndarray):
+        return int(obj.nbytes)
+    if isinstance(obj, dict):
+        return sum(nbytes(v, _depth + 1) for v in obj.values())
+    if isinstance(obj, (list, tuple)):
+        return sum(nbytes(v, _depth + 1) for v in obj[:10000])
+    if is_dataclass(obj) and not isinstance(obj, type):
+        return sum(nbytes(getattr(obj, f.name, None), _depth + 1) for f in fields(obj) if f.name != "spec")
+    return 0
+
+
+class RunCache:
+    """Finished runs by key, least recently used dropped first, at most `max_bytes` of arrays."""
+
+    def __init__(self, max_bytes: float = CACHE_BYTES):
+        self.max_bytes = max_bytes
+        self._d: OrderedDict[str, tuple[Any, int, float]] = OrderedDict()
+        self._bytes = 0
+        self._lock = threading.Lock()
+        self.hits = self.misses = 0
+
+    def get(self, key: str):
+        with self._lock:
+            hit = self._d.get(key)
+            if hit is None:
+                self.misses += 1
+                return None
+            self._d.move_to_end(key)
+            self.hits += 1
+            return hit[0], hit[2]
+
+    def put(self, key: str, run, seconds: float) -> None:
+        size = nbytes(run)
+        if size > self.max_bytes / 4:  # one huge run would push out the whole class's presets
+            return
+        with self._lock:
+            old = self._d.pop(key, None)
+            if old is not None:
+                self._bytes -= old[1]
+            self._d[key] = (run, size, seconds)
+            self._bytes += size
+            while self._bytes > self.max_bytes and len(self._d) > 1:
+                _, (_, s, _) = self._d.popitem(last=False)
+                self._bytes -= s
+
+    @property
+    def size_bytes(self) -> int:
+        return self._bytes
+
+    def __len__(self) -> int:
+        return len(self._d)
+
+
+def cache_root() -> Path:
+    """Where theoria keeps what it computed for this machine: $THEORIA_CACHE_DIR, else the user's
+    cache directory (~/.cache/theoria)."""
+    d = os.environ.get("THEORIA_CACHE_DIR")
+    if d:
+        return Path(d)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "theoria"
+
+
+_CODE_KEY: str | None = None
+
+
+def code_key() -> str:
+    """A digest of everything a run depends on: the physics and scenario sources and the versions
+    of the numerical libraries. A stored run made by other code is never served."""
+    global _CODE_KEY
+    if _CODE_KEY is None:
+        import importlib
+
+        h = hashlib.blake2b(digest_size=10)
+        # (theoria.scenarios the attribute is the front door's function; the package is in sys.modules)
+        for pkg in (importlib.import_module("theoria.physics"), importlib.import_module("theoria.scenarios")):
+            for root in pkg.__path__:
+                for p in sorted(Path(root).rglob("*.py")):
+                    h.update(str(p.relative_to(root)).encode())
+                    h.update(p.read_bytes())
+        for mod in ("numpy", "scipy", "numba", "rebound"):
+            m = sys.modules.get(mod)
+            h.update(f"{mod}={getattr(m, '__version__', '?')}".encode())
+        _CODE_KEY = h.hexdigest()
+    return _CODE_KEY
+
+
+class RunStore:
+    """Runs kept on disk between servers: the defaults and presets precomputed in the background,
+    so that the next start serves every first scene without computing. Files are written whole
+    (a temporary file renamed) and read only from this user's cache directory."""
+
+    def __init__(self, root: Path | None = None):
+        self.root = (root or cache_root()) / "runs" / code_key()
+
+    def _path(self, key: str) -> Path:
+        name, digest = key.split(":", 1)
+        return self.root / name / f"{digest}.pkl.zst"
+
+    def get(self, key: str):
+        p = self._path(key)
+        try:
+            import zstandard
+
+            data = zstandard.ZstdDecompressor().decompress(p.read_bytes())
+            run, seconds = pickle.loads(data)
+            return run, seconds
+        except FileNotFoundError:
+            return None
+        except Exception as e:  # a damaged or foreign file: ignored, recomputed
+            log.info("stored run %s unreadable (%s): recomputing", p.name, type(e).__name__)
+            return None
+
+    def put(self, key: str, run, seconds: float) -> None:
+        p = self._path(key)
+        try:
+            import zstandard
+
+            p.parent.mkdir(parents=True, exist_ok=True)
+            data = zstandard.ZstdCompressor(level=3).compress(pickle.dumps((_portable(run), seconds), protocol=5))
+            tmp = p.with_suffix(f".tmp{os.getpid()}")
+            tmp.write_bytes(data)
+            os.replace(tmp, p)
+        except Exception as e:  # a full or read-only disk: the run is simply not kept
+            log.info("could not store a run (%s: %s)", type(e).__name__, e)
+
+
+def _portable(run):
+    """The run without its Scenario (functions do not travel; the receiver sets it again)."""
+    if getattr(run, "spec", None) is not None:
+        import copy
+
+        run = copy.copy(run)
+        run.spec = None
+    return run
+
+
+class WarmMarks:
+    """Which scenarios' compiled code is on this machine's numba cache: a file per scenario,
+    written after a compiling child has run it, in the numba cache directory when one is set."""
+
+    def __init__(self):
+        d = os.environ.get("NUMBA_CACHE_DIR")
+        self.root = (Path(d) / "theoria-warm" if d else cache_root() / "warm") / code_key()
+        self._known: set[str] = set()
+
+    def __contains__(self, name: str) -> bool:
+        if name in self._known:
+            return True
+        if (self.root / name).exists():
+            self._known.add(name)
+            return True
+        return False
+
+    def add(self, name: str) -> None:
+        if name in self._known:
+            return
+        self._known.add(name)
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            (self.root / name).touch()
+        except OSError:
+            pass
+
+
+# ---- errors across the pipe ------------------------------------------------------------------
+
+def _error_payload(e: BaseException) -> tuple:
+    if isinstance(e, ParameterError):
+        return ("param", type(e).__module__, type(e).__qualname__, e.name, show_value(e.value), e.allowed)
+    if isinstance(e, TimeLimit):
+        return ("timelimit", str(e))
+    tb = "".join(traceback.format_exception(type(e), e, e.__traceback__))[-3000:]
+    return ("error", type(e).__name__, str(e)[:500], tb)
+
+
+class RemoteError(Exception):
+    """An exception raised by a scenario in a child process (its type name and message kept)."""
+
+    def __init__(self, type_name: str, message: str, tb: str = ""):
+        super().__init__(message)
+        self.type_name, self.remote_traceback = type_name, tb
+
+    def __str__(self) -> str:
+        return super().__str__()
+
+
+def _rebuild_error(payload: tuple, spec) -> BaseException:
+    kind = payload[0]
+    if kind == "param":
+        _, mod, qual, name, value, allowed = payload
+        cls = ParameterError
+        try:
+            import importlib
+
+            c = getattr(importlib.import_module(mod), qual)
+            if isinstance(c, type) and issubclass(c, ParameterError):
+                cls = c
+        except Exception:
+            pass
+        try:
+            return cls(name, value, allowed)
+        except Exception:
+            return ParameterError(name, value, allowed)
+    if kind == "timelimit":
+        return time_limit_error(spec)
+    _, type_name, message, tb = payload
+    e = RemoteError(type_name, message, tb)
+    e.__class__ = type(type_name, (RemoteError,), {})  # the notification names the scenario's own error type
+    return e
+
+
+def time_limit_error(spec) -> ParameterError:
+    names = [p.name for p in getattr(spec, "params", ())]
+    name = next((n for n in ("duration", "years", "turns", "days") if n in names), "parameters")
+    return ParameterError(name, "these values", f"a run may take at most {RUN_SECONDS_LIMIT:g} s of computing on "
+                          "this server and this one was stopped; try a shorter duration or a larger step")
+
+
+# ---- the child process -----------------------------------------------------------------------
+
+def _die_with_parent() -> None:
+    """Linux: the kernel sends SIGKILL to this child when the server process dies."""
+    try:
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except Exception:
+        pass
+
+
+def child_main(read_fd: int, write_fd: int) -> None:
+    """A simulation child: reads ("run", job id, scenario, values, limit s) and answers
+    ("done", id, run, seconds) | ("cancelled", id) | ("failed", id, payload), with
+    ("progress", id, fraction) in between. SIGUSR1 cancels the run in progress."""
+    _die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in the terminal stops the server, which stops us
+    cancel = {"flag": False}
+
+    def on_usr1(signum, frame):
+        cancel["flag"] = True
+
+    signal.signal(signal.SIGUSR1, on_usr1)
+    sys.stdout = sys.stderr  # the pipe carries frames only
+    inbox, outbox = Connection(read_fd, writable=False), Connection(write_fd, readable=False)
+    from theoria.scenarios import get
+    from theoria.scenarios.base import load_all
+
+    load_all()
+    outbox.send(("ready", os.getpid()))
+    while True:
+        try:
+            msg = inbox.recv()
+        except (EOFError, OSError):
+            return
+        if msg[0] == "quit":
+            return
+        _, jid, name, values, limit = msg
+        cancel["flag"] = False
+        t0 = time.perf_counter()
+        last = [0.0]
+
+        def progress(frac, jid=jid):
+            if cancel["flag"]:
+                raise Cancelled()
+            now = time.perf_counter()
+            if now - t0 > limit:
+                raise TimeLimit(f"stopped after {limit:g} s")
+            if now - last[0] > 0.1:
+                last[0] = now
+                try:
+                    outbox.send(("progress", jid, float(frac)))
+                except Exception:
+                    pass
+
+        try:
+            run = get(name).simulate_fn(values, progress=progress)
+            dt = time.perf_counter() - t0
+            run.spec = None
+            outbox.send(("done", jid, run, dt))
+        except Cancelled:
+            outbox.send(("cancelled", jid))
+        except BaseException as e:  # noqa: BLE001 — every failure goes back as a message
+            try:
+                outbox.send(("failed", jid, _error_payload(e)))
+            except Exception:
+                outbox.send(("failed", jid, ("error", type(e).__name__, "the result could not be sent", "")))
+
+
+# ---- jobs and the pool -----------------------------------------------------------------------
+
+_ids = itertools.count(1)
+
+
+@dataclass(eq=False)
+class Job:
+    key: str
+    spec: Any
+    values: dict
+    background: bool = False
+    preview: bool = False
+    id: int = field(default_factory=lambda: next(_ids))
+    created: float = field(default_factory=time.perf_counter)
+    waiters: list = field(default_factory=list)  # SimulationWorkers waiting for it
+    state: str = "queued"  # queued, running, done
+    slot: Any = None
+    started: float | None = None
+    cancel: bool = False
+    preempted: bool = False  # a background job stopped to free its child for a browser (queued again)
+    nojit_tried: bool = False
+    progress: float | None = None
+
+    @property
+    def cache_key(self) -> str:
+        """The run's key in the caches (a warming job has a key of its own so that it is never
+        merged with a browser's job, which a pure-Python child may be running)."""
+        return self.key.split("#", 1)[0]
+
+    @property
+    def local(self) -> bool:
+        """Run in a thread of this process: a scenario defined outside theoria's scenarios
+        package (a test's, a notebook's) is unknown to a child."""
+        mod = getattr(self.spec.simulate_fn, "__module__", "") or ""
+        return not mod.startswith("theoria.scenarios.")
+
+
+class _Slot:
+    """One simulation child and the thread of this process that feeds it."""
+
+    def __init__(self, pool: "SimPool", index: int, jit: bool = True, use_process: bool = True):
+        self.pool, self.index, self.jit, self.use_process = pool, index, jit, use_process
+        self.proc: subprocess.Popen | None = None
+        self.inbox: Connection | None = None  # child → us
+        self.outbox: Connection | None = None
+        self.job: Job | None = None
+        self.busy_since: float | None = None
+        self.runs = 0
+        self.kills = 0
+        self.ready = not use_process  # a child is up and has imported the scenarios
+        self._thread = threading.Thread(target=self._loop, daemon=True,
+                                        name=f"theoria-sim-{'jit' if jit else 'nojit'}-{index}")
+        self._thread.start()
+
+    # the child ----------------------------------------------------------------------------
+    def _start(self) -> bool:
+        r1, w1 = os.pipe()  # us → child
+        r2, w2 = os.pipe()  # child → us
+        env = dict(os.environ)
+        if not self.jit:
+            env["NUMBA_DISABLE_JIT"] = "1"
+        code = ("import os,sys; os.nice(int(sys.argv[3])) if hasattr(os,'nice') else None; "
+                "from theoria.app.worker import child_main; child_main(int(sys.argv[1]), int(sys.argv[2]))")
+        try:
+            self.proc = subprocess.Popen([sys.executable, "-c", code, str(r1), str(w2),
+                                          str(CHILD_NICE if self.jit else max(0, CHILD_NICE - 3))],
+                                         pass_fds=(r1, w2), env=env, stdin=subprocess.DEVNULL,
+                                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                         close_fds=True)
+        except OSError as e:
+            log.warning("could not start a simulation process (%s); running in threads", e)
+            for fd in (r1, w1, r2, w2):
+                os.close(fd)
+            self.use_process = False
+            return False
+        os.close(r1)
+        os.close(w2)
+        self.outbox = Connection(w1, readable=False)
+        self.inbox = Connection(r2, writable=False)
+        threading.Thread(target=self._stderr, args=(self.proc,), daemon=True,
+                         name=f"theoria-sim-log-{self.index}").start()
+        if not self._wait_ready():
+            self._kill("did not start")
+            return False
+        self.ready = True
+        return True
+
+    def _wait_ready(self, limit: float = 300.0) -> bool:
+        t0 = time.perf_counter()
+        while time.perf_counter() - t0 < limit and not self.pool.closed:
+            if self.proc.poll() is not None:
+                return False
+            if self.inbox.poll(0.2):
+                try:
+                    msg = self.inbox.recv()
+                except (EOFError, OSError):
+                    return False
+                return msg[0] == "ready"
+        return False
+
+    def _stderr(self, proc) -> None:
+        for line in iter(proc.stderr.readline, b""):
+            self.pool.logger.line(f"simulation process: {line.decode(errors='replace').rstrip()}")
+
+    def _kill(self, why: str) -> None:
+        p = self.proc
+        self.proc = None
+        if p is not None and p.poll() is None:
+            try:
+                p.kill()
+                p.wait(5)
+            except Exception:
+                pass
+            self.kills += 1
+            log.info("simulation process %d stopped: %s", p.pid, why)
+        for c in (self.inbox, self.outbox):
+            try:
+                if c is not None:
+                    c.close()
+            except Exception:
+                pass
+        self.inbox = self.outbox = None
+
+    def close(self) -> None:
+        p = self.proc
+        if p is not None and p.poll() is None:
+            try:
+                self.outbox.send(("quit",))
+            except Exception:
+                pass
+            try:
+                p.wait(1.0)
+            except Exception:
+                pass
+        self._kill("server stopped")
+
+    @property
+    def pid(self) -> int | None:
+        return self.proc.pid if self.proc is not None and self.proc.poll() is None else None
+
+    # the loop ------------------------------------------------------------------------------
+    def _loop(self) -> None:
+        if self.use_process and not self.pool.closed:
+            self._start()  # ready before the first job: a child takes seconds to import numpy and scipy
+        while True:
+            job = self.pool._take(self)
+            if job is None:
+                return
+            self.busy_since = time.perf_counter()
+            try:
+                if job.local or not self.use_process:
+                    self._run_here(job)
+                else:
+                    self._run_child(job)
+            except Exception:  # a bug here must not lose the slot
+                self.pool.logger.line("simulation slot error:\n" + traceback.format_exc())
+                self.pool._failed(job, ("error", "RuntimeError", "internal error in the simulation pool", ""), self)
+            finally:
+                self.busy_since = None
+                self.job = None
+
+    def _run_here(self, job: Job) -> None:
+        t0 = time.perf_counter()
+
+        def progress(frac):
+            if job.cancel or job.preempted or self.pool.closed:
+                raise Cancelled()
+            if time.perf_counter() - t0 > RUN_SECONDS_LIMIT:
+                raise TimeLimit()
+            self.pool._progress(job, frac)
+
+        try:
+            run = job.spec.simulate_fn(job.values, progress=progress)
+        except Cancelled:
+            self.pool._cancelled(job)
+            return
+        except BaseException as e:  # noqa: BLE001
+            self.pool._failed(job, _error_payload(e), self, exc=e)
+            return
+        self.pool._done(job, run, time.perf_counter() - t0, self)
+
+    def _run_child(self, job: Job) -> None:
+        if self.proc is None or self.proc.poll() is not None:
+            self._kill("exited")
+            if not self._start():
+                if not self.use_process:
+                    return self._run_here(job)
+                self.pool._requeue(job)
+                time.sleep(1.0)
+                return
+        limit = RUN_SECONDS_LIMIT if self.jit else NOJIT_SECONDS_LIMIT
+        self.outbox.send(("run", job.id, job.spec.name, job.values, limit))
+        t0 = time.perf_counter()
+        signalled = None
+        while True:
+            now = time.perf_counter()
+            if (job.cancel or job.preempted or self.pool.closed) and signalled is None:
+                signalled = now
+                try:
+                    os.kill(self.proc.pid, signal.SIGUSR1)
+                except (OSError, AttributeError):
+                    pass
+            if signalled is not None and now - signalled > CANCEL_GRACE_S:
+                self._kill("a cancelled run did not stop")  # e.g. numba compiling: no progress call
+                self.pool._cancelled(job)
+                return
+            if now - t0 > limit + KILL_GRACE_S:
+                self._kill("over the time limit without a progress call")
+                self.pool._failed(job, ("timelimit", "killed"), self)
+                return
+            try:
+                ready = self.inbox.poll(0.05)
+            except (OSError, EOFError, AttributeError):
+                ready = False
+            if self.proc is None:  # killed meanwhile (the pool closing)
+                self.pool._cancelled(job)
+                return
+            if not ready:
+                if self.proc.poll() is not None:
+                    self._kill("died")
+                    self.pool._failed(job, ("error", "RuntimeError", "the simulation process stopped unexpectedly", ""),
+                                      self)
+                    return
+                continue
+            try:
+                msg = self.inbox.recv()
+            except (EOFError, OSError, pickle.UnpicklingError) as e:
+                self._kill(f"unreadable answer ({type(e).__name__})")
+                self.pool._failed(job, ("error", "RuntimeError", "the simulation process stopped unexpectedly", ""), self)
+                return
+            kind = msg[0]
+            if msg[1] != job.id:
+                continue
+            if kind == "progress":
+                self.pool._progress(job, msg[2])
+            elif kind == "done":
+                self.runs += 1
+                self.pool._done(job, msg[2], msg[3], self)
+                return
+            elif kind == "cancelled":
+                self.pool._cancelled(job)
+                return
+            elif kind == "failed":
+                payload = msg[2]
+                if not self.jit and payload[0] == "timelimit":  # too slow without numba: compile instead
+                    job.nojit_tried = True
+                    self.pool._requeue(job)
+                    return
+                self.pool._failed(job, payload, self)
+                return
+
+
+class RateLimitedLog:
+    """Server log lines, at most `per_minute` a minute; the rest are counted and summarised."""
+
+    def __init__(self, per_minute: int = 30, stream=None):
+        self.per_minute = per_minute
+        self.stream = stream
+        self._window = 0.0
+        self._n = 0
+        self._dropped = 0
+        self._once: set = set()
+        self._lock = threading.Lock()
+
+    def line(self, text: str, once_key=None) -> bool:
+        with self._lock:
+            if once_key is not None:
+                if once_key in self._once:
+                    return False
+                if len(self._once) < 10000:
+                    self._once.add(once_key)
+            now = time.monotonic()
+            if now - self._window > 60.0:
+                if self._dropped:
+                    self._emit(f"theoria: {self._dropped} more log lines in the last minute were not shown")
+                self._window, self._n, self._dropped = now, 0, 0
+            if self._n >= self.per_minute:
+                self._dropped += 1
+                return False
+            self._n += 1
+        self._emit(text[:2000])
+        return True
+
+    def _emit(self, text: str) -> None:
+        stream = self.stream or sys.stderr
+        try:
+            stream.write(text.rstrip("\n") + "\n")
+            stream.flush()
+        except Exception:
+            pass
+
+
+class SimPool:
+    """The server's simulations: `slots` compiling children, one pure-Python child while some
+    scenario is not compiled on this machine yet, a run cache and a disk store."""
+
+    def __init__(self, slots: int | None = None, use_processes: bool | None = None, store: bool = True,
+                 cache_bytes: float = CACHE_BYTES):
+        if use_processes is None:
+            use_processes = os.name == "posix" and os.environ.get("THEORIA_SIM_PROCESSES", "1") != "0"
+        # one per core and one more: a child stays free for quick runs while the others do slow
+        # ones (they run below the server's priority, so the cores are shared, not oversubscribed
+        # at the expense of the event loop)
+        self.slots_n = slots or max(2, min(5, (os.cpu_count() or 1) + 1))
+        self.use_processes = use_processes
+        self.cache = RunCache(cache_bytes)
+        self.store = RunStore() if store else None
+        self.warm = WarmMarks()
+        self.logger = RateLimitedLog()
+        self.closed = False
+        self._cv = threading.Condition()
+        self._jobs: dict[str, Job] = {}  # key → queued or running job
+        self._queue: list[Job] = []
+        self._seconds: dict[str, float] = {}  # scenario → seconds of its last full run
+        self._apply = ThreadPoolExecutor(max_workers=4, thread_name_prefix="theoria-apply")
+        self._timers: list = []
+        self._timer_cv = threading.Condition()
+        self._timer_thread = None
+        self.slots = [_Slot(self, i, True, use_processes) for i in range(self.slots_n)]
+        self.nojit: _Slot | None = None
+        self.stats = {"jobs": 0, "coalesced": 0, "cache_hits": 0, "store_hits": 0, "cancelled": 0, "failed": 0}
+
+    def prepare(self, first: str | None) -> None:
+        """Start the pure-Python child at once when the first scenario browsers will ask for is
+        not compiled on this machine yet (a fresh install): it shows the first scene while the
+        compiling children warm numba's cache."""
+        if first is None or not self.use_processes:
+            return
+        with self._cv:
+            if first not in self.warm and self.nojit is None:
+                self.nojit = _Slot(self, len(self.slots), jit=False)
+            try:
+                from theoria.scenarios import get
+
+                if first not in self.warm:
+                    self._warm_soon(get(first))
+            except Exception:
+                pass
+            self._cv.notify_all()
+
+    # ---- what the workers call ------------------------------------------------------------
+    def lookup(self, name: str, values: dict):
+        """A finished run of these values, from memory or disk: (run, seconds) or None."""
+        key = run_key(name, values)
+        hit = self.cache.get(key)
+        if hit is None and self.store is not None:
+            hit = self.store.get(key)
+            if hit is not None:
+                self.cache.put(key, hit[0], hit[1])
+                self._seconds.setdefault((name, False), hit[1])
+                self.stats["store_hits"] += 1
+        elif hit is not None:
+            self.stats["cache_hits"] += 1
+        return hit
+
+    def expected_seconds(self, name: str, preview: bool = False) -> float | None:
+        return self._seconds.get((name, preview))
+
+    def job_for(self, spec, values: dict, waiter, preview: bool = False) -> Job:
+        """The job computing these values (an existing one is shared), with `waiter` attached."""
+        key = run_key(spec.name, values)
+        with self._cv:
+            job = self._jobs.get(key)
+            if job is not None and job.state != "done" and not job.cancel:
+                self.stats["coalesced"] += 1
+                if waiter not in job.waiters:
+                    job.waiters.append(waiter)
+                if job.background:  # a browser waits for it now: it goes before the background jobs
+                    job.background = False
+                    job.preempted = False
+                    if job.state == "queued":
+                        job.created = time.perf_counter()
+                        self._preempt()
+                self._cv.notify_all()
+                return job
+            job = Job(key, spec, dict(values), preview=preview, waiters=[waiter])
+            self._add(job)
+            return job
+
+    def detach(self, job: Job, waiter) -> None:
+        """`waiter` no longer wants `job`; a job nobody waits for is cancelled (unless it is
+        background work: it then finishes for the cache)."""
+        with self._cv:
+            if waiter in job.waiters:
+                job.waiters.remove(waiter)
+            if job.waiters or job.state == "done" or job.background:
+                return
+            if job.state == "queued":
+                self._drop(job)
+                self.stats["cancelled"] += 1
+            else:
+                job.cancel = True
+            self._cv.notify_all()
+
+    def precompute(self, specs, first: str | None = None) -> int:
+        """Background jobs for the defaults and every preset of `specs` (the `first` scenario
+        first) not cached yet; returns how many were queued."""
+        n = 0
+        specs = sorted(specs, key=lambda s: s.name != first)
+        for s in specs:
+            wanted = [{}] + [dict(v) for v in s.presets.values()]
+            for given in wanted:
+                try:
+                    values = s.resolve(given)
+                except Exception:
+                    continue
+                key = run_key(s.name, values)
+                if self.lookup(s.name, values) is not None:
+                    continue
+                with self._cv:
+                    if key in self._jobs:
+                        continue
+                    self._add(Job(key, s, values, background=True))
+                n += 1
+        return n
+
+    def ready(self) -> bool:
+        """Every compiling child is up (they take seconds to import numpy, scipy and numba)."""
+        return all(s.ready for s in self.slots)
+
+    def pending_background(self) -> int:
+        with self._cv:
+            return sum(1 for j in self._jobs.values() if j.background)
+
+    def busy(self) -> bool:
+        with self._cv:
+            return bool(self._jobs)
+
+    def child_pids(self) -> list[int]:
+        return [p for p in (s.pid for s in self.slots + ([self.nojit] if self.nojit else [])) if p]
+
+    def close(self) -> None:
+        with self._cv:
+            self.closed = True
+            for j in self._jobs.values():
+                j.cancel = True
+            self._cv.notify_all()
+        for s in self.slots + ([self.nojit] if self.nojit else []):
+            s.close()
+        self._apply.shutdown(wait=False, cancel_futures=True)
+
+    # ---- scheduling -------------------------------------------------------------------------
+    def _add(self, job: Job) -> None:
+        self._jobs[job.key] = job
+        self._queue.append(job)
+        self.stats["jobs"] += 1
+        if self._cold(job):
+            if self.nojit is None:
+                self.nojit = _Slot(self, len(self.slots), jit=False)
+            self._warm_soon(job.spec)
+        if not job.background:
+            self._preempt()
+        self._cv.notify_all()
+
+    def _preempt(self) -> None:
+        """A browser's job is waiting and every compiling child is busy: a background job (not
+        one compiling a scenario for the first time) is stopped and queued again."""
+        if any(s.job is None for s in self.slots):
+            return
+        for s in self.slots:
+            j = s.job
+            if j is not None and j.background and not j.key.endswith("#warm") and not j.preempted \
+                    and j.spec.name in self.warm:
+                j.preempted = True
+                return
+
+    def _warm_soon(self, spec) -> None:
+        """Compile `spec`'s code in the background (a run of its preview), before other background work."""
+        try:
+            values = spec.resolve(dict(spec.preview))
+        except Exception:
+            return
+        key = run_key(spec.name, values) + "#warm"
+        job = self._jobs.get(key)
+        if job is None:
+            job = Job(key, spec, values, background=True, preview=True)
+            self._jobs[key] = job
+            self._queue.append(job)
+        if job.background and job.state == "queued":
+            job.created = -1.0  # first among the background jobs
+
+    def _drop(self, job: Job) -> None:
+        if self._jobs.get(job.key) is job:
+            del self._jobs[job.key]
+        if job in self._queue:
+            self._queue.remove(job)
+        job.state = "done"
+
+    def _cold(self, job: Job) -> bool:
+        """A browser's job the pure-Python child should take: its scenario is not compiled here yet."""
+        return (self.use_processes and not job.background and not job.local and not job.nojit_tried
+                and job.spec.name not in self.warm)
+
+    def _slow(self, job: Job) -> bool:
+        t = self._seconds.get((job.spec.name, job.preview))
+        return t is None or t > SLOW_JOB_S
+
+    def _running(self) -> tuple[int, int]:
+        """(background jobs, slow browser jobs) running in the compiling children."""
+        jobs = [s.job for s in self.slots if s.job is not None and s.job.state == "running"]
+        now = time.perf_counter()
+        # a run that has gone on for longer than a quick one is slow, whatever was expected of it
+        # (a slider can make a quick scene's run long: a duration at its maximum)
+        return (sum(1 for j in jobs if j.background),
+                sum(1 for j in jobs if not j.background and (self._slow(j) or now - (j.started or now) > SLOW_JOB_S)))
+
+    def _eligible(self, slot: _Slot, job: Job) -> bool:
+        """Which job a child may take. One compiling child is always kept for browsers' quick runs
+        (a slider on a quick scene): background work and slow runs share the others, and a
+        background job gives way to a browser's (`_preempt`)."""
+        if not slot.jit:
+            return self._cold(job)
+        keep = max(1, len(self.slots) - 1)
+        bg, slow = self._running()
+        if job.background:
+            if bg + slow >= keep:
+                return False
+            # a browser waiting goes first; compiling a scenario a browser waits for (a warm job) does not wait
+            if not job.key.endswith("#warm") and any(not j.background and not self._cold(j) for j in self._queue):
+                return False
+        elif self._slow(job) and slow >= keep:
+            return False
+        # compiling children leave a cold job to the idle pure-Python child (they warm the
+        # scenario with a background job meanwhile)
+        nj = self.nojit
+        if not (self._cold(job) and nj is not None and nj.use_process):
+            return True
+        return nj.job is not None and time.perf_counter() - job.created > COLD_WAIT_S
+
+    def _take(self, slot: _Slot) -> Job | None:
+        with self._cv:
+            while True:
+                if self.closed:
+                    return None
+                # browsers' jobs first, oldest first; then background jobs (the cache, warming)
+                best, best_key = None, None
+                for job in self._queue:
+                    if not self._eligible(slot, job):
+                        continue
+                    key = (job.background, self._slow(job), job.created)  # quick jobs before slow ones
+                    if best is None or key < best_key:
+                        best, best_key = job, key
+                if best is not None:
+                    self._queue.remove(best)
+                    best.state, best.slot, best.started = "running", slot, time.perf_counter()
+                    slot.job = best
+                    return best
+                self._cv.wait(1.0)
+
+    def _requeue(self, job: Job) -> None:
+        with self._cv:
+            if job.cancel or not (job.waiters or job.background):
+                self._drop(job)
+                return
+            job.state, job.slot = "queued", None
+            self._queue.insert(0, job)
+            self._cv.notify_all()
+
+    # ---- outcomes (called from slot threads) --------------------------------------------------
+    def _progress(self, job: Job, frac: float) -> None:
+        job.progress = frac
+        for w in list(job.waiters):
+            w._job_progress(job, frac)
+
+    def _finish(self, job: Job) -> list:
+        with self._cv:
+            self._drop(job)
+            self._cv.notify_all()
+            return list(job.waiters)
+
+    def _done(self, job: Job, run, seconds: float, slot: _Slot) -> None:
+        run.spec = job.spec
+        if slot.jit and slot.use_process and not job.local:
+            self.warm.add(job.spec.name)
+        if slot.jit:  # a pure-Python time says nothing about the compiled run
+            self._seconds[(job.spec.name, job.preview)] = seconds
+        self.cache.put(job.cache_key, run, seconds)
+        if job.background and self.store is not None and not job.local:
+            self.store.put(job.cache_key, run, seconds)
+        for w in self._finish(job):
+            w._job_done(job, run, seconds)
+
+    def _cancelled(self, job: Job) -> None:
+        self.stats["cancelled"] += 1
+        if job.preempted and not self.closed and not job.cancel:
+            job.preempted = False
+            with self._cv:
+                job.state, job.slot = "queued", None
+                self._queue.append(job)
+                self._cv.notify_all()
+            return
+        if job.background and not self.closed and not job.cancel:
+            return self._requeue(job)
+        with self._cv:
+            if job.waiters and not job.cancel and not self.closed:  # cancelled by the pool, wanted again
+                job.state = "queued"
+                self._queue.insert(0, job)
+                self._cv.notify_all()
+                return
+        self._finish(job)
+
+    def _failed(self, job: Job, payload: tuple, slot, exc: BaseException | None = None) -> None:
+        self.stats["failed"] += 1
+        err = exc if isinstance(exc, ParameterError) else _rebuild_error(payload, job.spec)
+        if isinstance(exc, TimeLimit):
+            err = time_limit_error(job.spec)
+        if payload[0] == "error" and job.background:
+            self.logger.line(f"theoria: precomputing {job.spec.name} failed: {payload[1]}: {payload[2]}",
+                             once_key=("bg", job.key))
+        for w in self._finish(job):
+            w._job_failed(job, err)
+
+    def call_later(self, delay: float, fn: Callable) -> None:
+        """`fn()` after `delay` seconds on the pool's timer thread (kept short: it only posts)."""
+        import heapq
+
+        with self._timer_cv:
+            heapq.heappush(self._timers, (time.perf_counter() + delay, next(_ids), fn))
+            if self._timer_thread is None:
+                self._timer_thread = threading.Thread(target=self._timer_loop, daemon=True, name="theoria-timers")
+                self._timer_thread.start()
+            self._timer_cv.notify()
+
+    def _timer_loop(self) -> None:
+        import heapq
+
+        while not self.closed:
+            with self._timer_cv:
+                while not self._timers and not self.closed:
+                    self._timer_cv.wait(1.0)
+                if self.closed:
+                    return
+                when = self._timers[0][0]
+                now = time.perf_counter()
+                if when > now:
+                    self._timer_cv.wait(when - now)
+                    continue
+                _, _, fn = heapq.heappop(self._timers)
+            try:
+                fn()
+            except Exception:
+                self.logger.line("theoria: timer error:\n" + traceback.format_exc())
+
+    def submit_apply(self, fn: Callable, *args) -> None:
+        try:
+            self._apply.submit(fn, *args)
+        except RuntimeError:  # shut down
+            pass
+
+
+_SHARED: SimPool | None = None
+_SHARED_LOCK = threading.Lock()
+
+
+def shared_pool() -> SimPool:
+    """The pool of this process (created on first use, closed at exit)."""
+    global _SHARED
+    with _SHARED_LOCK:
+        if _SHARED is None or _SHARED.closed:
+            import atexit
+
+            _SHARED = SimPool()
+            atexit.register(_SHARED.close)
+        return _SHARED
+
+
+# ---- one browser's requests ------------------------------------------------------------------
 
 @dataclass
 class Request:
@@ -30,32 +1066,109 @@ class Request:
     given: dict
     values: dict | None = None
     stamps: dict[str, float] = field(default_factory=dict)  # perf_counter times (bench, tests)
+    preview: bool = False  # True for the coarse first picture of a run still being refined
+
+
+def check_text_lengths(given: dict) -> None:
+    """A parameter given as text longer than MAX_TEXT_CHARS is refused before anything parses it
+    (the message shows the start only)."""
+    for k, v in given.items():
+        if isinstance(v, str) and len(v) > MAX_TEXT_CHARS:
+            raise ParameterError(str(k)[:40], v, f"a value of at most {MAX_TEXT_CHARS} characters")
+        if isinstance(v, (tuple, list)) and (len(v) > 16 or any(isinstance(x, str) and len(x) > MAX_TEXT_CHARS
+                                                                  for x in v)):
+            raise ParameterError(str(k)[:40], v, "a short list of numbers")
 
 
 class SimulationWorker:
-    def __init__(self, name: str, on_result: Callable, on_error: Callable, on_progress: Callable):
+    """One browser's simulations on the shared pool: the newest request wins; an older job this
+    browser alone waited for is cancelled."""
+
+    def __init__(self, name: str, on_result: Callable, on_error: Callable, on_progress: Callable,
+                 pool: SimPool | None = None):
+        self.name = name
         self.on_result, self.on_error, self.on_progress = on_result, on_error, on_progress
-        self._cv = threading.Condition()
-        self._pending: Request | None = None
+        self.pool = pool or shared_pool()
+        self._lock = threading.RLock()
         self._gen = 0
         self._closed = False
         self.last: Request | None = None
-        self._thread = threading.Thread(target=self._loop, daemon=True, name=name)
-        self._thread.start()
+        self._jobs: dict[int, tuple[Job, Request]] = {}  # job id → (job, the request it serves)
+        self._pending = None  # the newest (fn, args) for the apply thread
+        self._applying = False
+        self._shown = {"t": 0.0, "pct": -1.0}
 
+    # ---- the session's side ---------------------------------------------------------------
     def submit(self, spec, given: dict) -> Request:
         """Post a request; any older one still waiting or running is superseded."""
-        with self._cv:
+        with self._lock:
             self._gen += 1
             req = Request(self._gen, spec, dict(given), stamps={"request": time.perf_counter()})
-            self._pending = self.last = req
-            self._cv.notify()
+            self.last = req
+            self._release_jobs()
+            self._shown = {"t": 0.0, "pct": -1.0}
+        try:
+            check_text_lengths(req.given)
+            req.values = spec.resolve(req.given)
+            budget = getattr(spec, "check_budget", None)
+            if budget is not None:  # steps and memory, before anything runs
+                budget(req.values)
+        except Exception as e:
+            self._deliver(self.on_error, req, e)
             return req
+        hit = self.pool.lookup(spec.name, req.values)
+        if hit is not None:
+            run, seconds = hit
+            req.stamps["start"] = req.stamps["simulated"] = time.perf_counter()
+            req.stamps["cached"] = 1.0
+            self._deliver(self.on_result, req, run, seconds)
+            return req
+        with self._lock:
+            if not self.current(req):
+                return req
+            expected = self.pool.expected_seconds(spec.name)
+            if spec.preview and (expected is None or expected > PREVIEW_AFTER_S):
+                self._preview(spec, req)
+            job = self.pool.job_for(spec, req.values, self)
+            self._jobs[job.id] = (job, req)
+        self.pool.call_later(PROGRESS_SHOW_AFTER, lambda: self._still_running(req))
+        return req
+
+    def _still_running(self, req: Request) -> None:
+        """A run still going after PROGRESS_SHOW_AFTER that has reported nothing yet (a set-up
+        phase, a compile) shows the bar at 0."""
+        with self._lock:
+            waiting = self.current(req) and any(r is req for _, r in self._jobs.values())
+            if not waiting or self._shown["pct"] >= 0:
+                return
+            self._shown.update(t=time.perf_counter(), pct=0.0)
+        try:
+            self.on_progress(0.0, f"simulating {req.spec.name}…")
+        except Exception:
+            pass
+
+    def _preview(self, spec, req: Request) -> None:
+        """The coarse first picture of a slow run: the preview values over the given ones, from
+        the cache, else as a job of its own ahead of the full run."""
+        try:
+            pvals = spec.resolve({**req.given, **dict(spec.preview)})
+        except Exception:
+            return
+        if run_key(spec.name, pvals) == run_key(spec.name, req.values):
+            return
+        preq = Request(req.gen, spec, req.given, pvals, {"request": req.stamps["request"]}, preview=True)
+        hit = self.pool.lookup(spec.name, pvals)
+        if hit is not None:
+            self._deliver(self.on_result, preq, hit[0], hit[1])
+        else:
+            job = self.pool.job_for(spec, pvals, self, preview=True)
+            self._jobs[job.id] = (job, preq)
 
     def adopt(self, spec, values: dict) -> Request:
         """A request for a run computed elsewhere (shown as if this worker had run it)."""
-        with self._cv:
+        with self._lock:
             self._gen += 1
+            self._release_jobs()
             self.last = Request(self._gen, spec, dict(values), dict(values), {"request": time.perf_counter()})
             return self.last
 
@@ -63,69 +1176,130 @@ class SimulationWorker:
         return req.gen == self._gen and not self._closed
 
     def close(self) -> None:
-        with self._cv:
+        with self._lock:
             self._closed = True
-            self._cv.notify()
+            self._pending = None
+            self._release_jobs()
 
-    def _loop(self) -> None:
-        while True:
-            with self._cv:
-                while self._pending is None and not self._closed:
-                    self._cv.wait()
-                if self._closed:
-                    return
-                req, self._pending = self._pending, None
-            try:
-                self._run(req)
-            except Cancelled:
-                continue
-            except Exception as e:  # a bad value or a bug in a scenario never reaches viser's loop
-                if not isinstance(e, ValueError):
-                    traceback.print_exc()
-                self.on_error(req, e)
+    def _release_jobs(self) -> None:
+        jobs, self._jobs = [j for j, _ in self._jobs.values()], {}
+        for job in jobs:
+            self.pool.detach(job, self)
 
-    def _run(self, req: Request) -> None:
-        spec = req.spec
-        req.values = spec.resolve(req.given)
-        req.stamps["start"] = t0 = time.perf_counter()
-        shown = {"t": 0.0, "pct": -1.0, "done": False}
-        lock = threading.Lock()
+    # ---- the pool's side (slot threads) -------------------------------------------------------
+    def _take_req(self, job: Job, pop: bool) -> Request | None:
+        with self._lock:
+            item = self._jobs.pop(job.id, None) if pop else self._jobs.get(job.id)
+            if item is None or not self.current(item[1]):
+                return None
+            return item[1]
 
-        def progress(frac):
-            if not self.current(req):
-                raise Cancelled()
-            now = time.perf_counter()
-            if now - t0 < PROGRESS_SHOW_AFTER or now - shown["t"] < PROGRESS_EVERY:
-                return
-            try:
-                pct = min(max(100.0 * float(frac), 0.0), 100.0)
-            except (TypeError, ValueError):
-                return
-            if not np.isfinite(pct) or abs(pct - shown["pct"]) < 0.5:
-                return
-            with lock:
-                if not shown["done"]:
-                    shown["t"], shown["pct"] = now, pct
-                    self.on_progress(pct, f"simulating {spec.name}… {pct:.0f}%")
-
-        def still_running():  # a long run with no progress yet (a setup phase) shows the bar at 0
-            with lock:
-                if not shown["done"] and shown["pct"] < 0 and self.current(req):
-                    shown["pct"] = 0.0
-                    self.on_progress(0.0, f"simulating {spec.name}…")
-
-        timer = threading.Timer(PROGRESS_SHOW_AFTER, still_running)
-        timer.daemon = True
-        timer.start()
+    def _job_progress(self, job: Job, frac: float) -> None:
+        req = self._take_req(job, pop=False)
+        if req is None or req.preview:
+            return
+        req.stamps.setdefault("start", job.started or time.perf_counter())
+        now = time.perf_counter()
+        if now - req.stamps["request"] < PROGRESS_SHOW_AFTER or now - self._shown["t"] < PROGRESS_EVERY:
+            return
         try:
-            run = spec.simulate_fn(req.values, progress=progress)
-        finally:
-            timer.cancel()
-            with lock:
-                shown["done"] = True
-                if shown["pct"] >= 0:
-                    self.on_progress(None, None)
+            pct = min(max(100.0 * float(frac), 0.0), 100.0)
+        except (TypeError, ValueError):
+            return
+        if not np.isfinite(pct) or abs(pct - self._shown["pct"]) < 0.5:
+            return
+        self._shown.update(t=now, pct=pct)
+        try:
+            self.on_progress(pct, f"simulating {req.spec.name}… {pct:.0f}%")
+        except Exception:
+            pass
+
+    def _hide_progress(self) -> None:
+        if self._shown["pct"] >= 0:
+            self._shown["pct"] = -1.0
+            try:
+                self.on_progress(None, None)
+            except Exception:
+                pass
+
+    def _job_done(self, job: Job, run, seconds: float) -> None:
+        req = self._take_req(job, pop=True)
+        if req is None:
+            return
+        req.stamps.setdefault("start", job.started or req.stamps["request"])
         req.stamps["simulated"] = time.perf_counter()
-        if not self.current(req):
-            raise Cancelled()
-        self.on_result(req, run, req.stamps["simulated"] - t0)
+        if req.preview:
+            with self._lock:
+                full_pending = any(not r.preview and r.gen == req.gen for _, r in self._jobs.values())
+            if not full_pending:
+                return  # the full run came first (or failed): the coarse one is not shown after it
+        else:
+            self._hide_progress()
+        self._deliver(self.on_result, req, run, seconds)
+
+    def _job_failed(self, job: Job, err: BaseException) -> None:
+        req = self._take_req(job, pop=True)
+        if req is None or req.preview:  # a preview's failure: the full run will say what is wrong
+            return
+        self._hide_progress()
+        self._deliver(self.on_error, req, err)
+
+    # ---- showing, off the pool's threads, newest first ---------------------------------------
+    def _deliver(self, fn, *args) -> None:
+        with self._lock:
+            if self._closed:
+                return
+            self._pending = (fn, args)
+            if self._applying:
+                return
+            self._applying = True
+        self.pool.submit_apply(self._drain)
+
+    def _drain(self) -> None:
+        while True:
+            with self._lock:
+                item, self._pending = self._pending, None
+                if item is None or self._closed:
+                    self._applying = False
+                    return
+            fn, args = item
+            if not self.current(args[0]):
+                continue
+            try:
+                fn(*args)
+            except Exception:
+                self.pool.logger.line("theoria: error showing a result:\n" + traceback.format_exc())
+
+
+DRAWINGS_PER_RUN = 3
+
+
+def limits_text() -> str:
+    """The limits a browser's runs are held to, in a sentence for the panel (docs/classroom.md)."""
+    budget = ""
+    try:
+        from theoria.scenarios.budget import MAX_MEMORY, MAX_STEPS  # the step and memory budget, when present
+
+        budget = f", at most {MAX_STEPS:.0e} integrator steps and {MAX_MEMORY / 1e9:g} GB".replace("e+0", "e")
+    except ImportError:
+        pass
+    return (f"*This server runs one simulation per browser at a time (a newer request replaces it){budget}, "
+            f"each for at most {RUN_SECONDS_LIMIT:g} s of computing.*")
+
+
+def drawing_of(spec, run, view=None):
+    """`spec.drawing(run, view)`, kept with the run: thirty browsers shown the same cached run with
+    the same view options share one Drawing (a Drawing is plain data, read and never changed by
+    the renderers)."""
+    from theoria.scenarios.drawing import View
+
+    view = view or View()
+    key = (spec.name, repr(sorted(view.options.items())), float(view.exaggerate))
+    store = run.__dict__.setdefault("_theoria_drawings", OrderedDict())
+    d = store.get(key)
+    if d is None:
+        d = spec.drawing(run, view)
+        store[key] = d
+        while len(store) > DRAWINGS_PER_RUN:
+            store.popitem(last=False)
+    return d

@@ -128,9 +128,9 @@ def slider_latency():
             ctx, page = _open(b, f"http://127.0.0.1:{srv.get_port()}/?fixedDpr=1")
             session = list(sessions.values())[-1]
             _wait_updates(session, 1)
-            uuid = session.controls.handles["perturbation"]._impl.uuid
+            uuid = session.controls.handles["spin"]._impl.uuid  # a slider (the nudge is a typed field)
             lat, server = [], []
-            for k, v in enumerate([0.05, 0.02, 0.1, 0.03, 0.2, 0.04, 0.15, 0.06]):
+            for k, v in enumerate([5.0, 6.5, 4.2, 7.1, 3.3, 8.0, 5.5, 6.2]):
                 ms = page.evaluate(LATENCY_JS, [uuid, v])
                 if k > 0 and ms > 0:  # the first one warms up the path
                     lat.append(ms / 1000.0)
@@ -228,7 +228,7 @@ def _theoria_playback(b, viewport) -> dict:
                 session.view.set_overlay(k, False)
         time.sleep(1.0)
         out["no_paths"] = page.evaluate(FPS_JS, 3)
-        out["trail_points"] = int(len(session.view._idx))
+        out["trail_points"] = int(session.drawing.n_frames)  # frames drawn of the run (a trail grows over them)
         out["samples"] = len(session.result.trajectory.t)
         ctx.close()
     finally:

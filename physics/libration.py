@@ -454,8 +454,11 @@ def _section_run(theta, thetadot, k, s2f, c2f, h, n_orbits, ck, dk, out_theta, o
         ddot[i] -= 2.0 * g * (c0 * c2f[0, 0] + s0 * s2f[0, 0]) * dth[i]
 
 
+SECTION_CHUNKS = 40  # with a progress callback: the orbits in this many compiled pieces
+
+
 def spin_orbit_section(theta0, thetadot0, e, omega0, n_orbits, steps_per_orbit=128, lyapunov=False,
-                       scheme="blanes-moan4"):
+                       scheme="blanes-moan4", progress=None):
     """Surface of section of the planar spin–orbit problem θ̈ = −(ω₀²/2)(a/r)³ sin 2(θ − f)
     (time unit 1/n, periapse at t = 0, 2π, …), for an ensemble of starts at periapse.
 
@@ -463,7 +466,9 @@ def spin_orbit_section(theta0, thetadot0, e, omega0, n_orbits, steps_per_orbit=1
     orbit tabulated once per period; compiled with numba, one loop over the ensemble. Returns
     (θ, θ̇) of shape (N, n_orbits) at the periapse passages 1..n_orbits (θ unwrapped; take
     mod π to plot) and, if `lyapunov`, the largest Lyapunov exponent per start (per unit time,
-    n = 1) from the tangent map renormalised every orbit."""
+    n = 1) from the tangent map renormalised every orbit. `progress(frac)`, if given, is called
+    between pieces of about 1/SECTION_CHUNKS of the orbits (it may raise to stop the run); a
+    piece ends with the periapse kick applied and the next starts without it, the same map."""
     ck, dk = SCHEMES[scheme]
     th = np.array(theta0, float).ravel().copy()
     wd = np.broadcast_to(np.asarray(thetadot0, float), th.shape).astype(float).copy()
@@ -476,7 +481,17 @@ def spin_orbit_section(theta0, thetadot0, e, omega0, n_orbits, steps_per_orbit=1
     a = np.ones(N)
     b = np.zeros(N)
     lsum = np.zeros(N)
-    _section_run(th, wd, k, s2f, c2f, h, int(n_orbits), ck, dk, out_t, out_w, bool(lyapunov), a, b, lsum)
+    if progress is None:
+        _section_run(th, wd, k, s2f, c2f, h, int(n_orbits), ck, dk, out_t, out_w, bool(lyapunov), a, b, lsum)
+    else:
+        per = max(1, int(n_orbits) // SECTION_CHUNKS)
+        for start in range(0, int(n_orbits), per):
+            m = min(per, int(n_orbits) - start)
+            pt, pw = np.empty((N, m)), np.empty((N, m))
+            _section_run(th, wd, k, s2f, c2f, h, m, ck, dk, pt, pw, bool(lyapunov), a, b, lsum)
+            out_t[:, start:start + m] = pt
+            out_w[:, start:start + m] = pw
+            progress((start + m) / n_orbits)
     if lyapunov:
         return out_t, out_w, lsum / (2.0 * np.pi * n_orbits)
     return out_t, out_w

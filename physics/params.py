@@ -14,7 +14,14 @@ from .errors import ParameterError
 
 @dataclass(frozen=True)
 class Param:
-    """One scenario parameter: name, unit, range, default, help; kind float | int | vec3 | choice."""
+    """One scenario parameter: name, unit, range, default, help; kind float | int | vec3 | choice.
+
+    `name` is the key scripts and the command line use (`--set spin=6`); `label` is what a person
+    reads in the app ("Spin rate"), shown with its unit by `display()` ("Spin rate (rad/s)");
+    `choice_labels` are the words shown for `choices` (same order); `advanced` marks a numerical
+    setting or modelling detail (a step, a sample spacing, an ephemeris) that the app keeps out of
+    the first screen.
+"""
 
     name: str
     default: Any
@@ -26,6 +33,36 @@ class Param:
     step: float | None = None
     choices: tuple = field(default_factory=tuple)
     exclusive_min: bool = False  # the minimum itself is not allowed (e.g. a step > 0)
+    label: str = ""
+    choice_labels: tuple = field(default_factory=tuple)
+    advanced: bool = False
+
+    def title(self) -> str:
+        """The human name: `label`, else the key with its underscores as spaces."""
+        return self.label or self.name.replace("_", " ")
+
+    def unit_text(self) -> str:
+        """The unit as printed ("kg·m²", "1/s²"); empty for a pure number."""
+        return pretty_unit(self.unit)
+
+    def display(self) -> str:
+        """The control's label: "Spin rate (rad/s)"."""
+        u = self.unit_text()
+        return f"{self.title()} ({u})" if u else self.title()
+
+    def choice_text(self, choice: Any) -> str:
+        """The words shown for one of `choices`."""
+        for c, text in zip(self.choices, self.choice_labels):
+            if str(c) == str(choice):
+                return str(text)
+        return str(choice)
+
+    def choice_of(self, text: str) -> str:
+        """The choice whose words (or key) are `text`."""
+        for c in self.choices:
+            if self.choice_text(c) == text or str(c) == text:
+                return str(c)
+        return text
 
     def allowed(self) -> str:
         unit = f" {self.unit}" if self.unit and self.unit != "1" else ""
@@ -81,6 +118,26 @@ class Param:
             raise ParameterError(self.name, whole, self.allowed())
         if self.maximum is not None and v > self.maximum:
             raise ParameterError(self.name, whole, self.allowed())
+
+
+_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+# units whose symbol means little on a panel, in words
+_UNIT_WORDS = {"deg": "°", "d": "days", "day": "days", "1/yr": "per year", "G=1 mass": "mass units, G = 1",
+               "G=1 units": "units, G = 1", "rad/unit": "rad per time unit", "b": "× the Moon's distance b",
+               "n": "× the mean motion n"}
+
+
+def pretty_unit(unit: str) -> str:
+    """A unit as a person writes it: "kg m^2" → "kg·m²", "m^3/s^2" → "m³/s²", "1" → ""."""
+    import re
+
+    u = (unit or "").strip()
+    if u in ("", "1"):
+        return ""
+    if u in _UNIT_WORDS:
+        return _UNIT_WORDS[u]
+    u = re.sub(r"\^(-?\d+)", lambda m: m.group(1).translate(_SUPERSCRIPT), u)
+    return re.sub(r"(?<=[A-Za-z²³])\s+(?=[A-Za-z])", "·", u)
 
 
 def resolve(params: Sequence[Param], given: dict[str, Any] | None) -> dict[str, Any]:

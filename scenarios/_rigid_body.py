@@ -15,7 +15,7 @@ MAX_SAMPLES = 20000  # states kept for drawing; the integrator steps finer
 
 
 INERTIA_PARAM = dict(kind="vec3", minimum=1e-6, maximum=1e6, unit="kg m^2",
-                help="principal moments A, B, C about the body x, y, z axes")
+                help="principal moments A, B, C about the body x, y, z axes", label="Moments of inertia A, B, C")
 
 
 def check_body(values):

@@ -26,7 +26,7 @@ from ..physics.errors import Diverged, ParameterError
 from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
 from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
-from .drawing import Camera, Drawing, Option, View, standard
+from .drawing import Camera, Drawing, Option, View, declutter_labels, standard
 
 
 @dataclass(frozen=True)
@@ -450,7 +450,9 @@ class Scenario:
     def drawing(self, run: Run, view: View | None = None) -> Drawing:
         """What `run` draws (the one list the app, the recording and the HTML replay render)."""
         view = view or View()
-        return (self.draw or standard)(run, self, view)
+        d = (self.draw or standard)(run, self, view)
+        declutter_labels(d)  # labels that stay put turned so that none covers another
+        return d
 
     def param(self, name: str) -> Param:
         for p in self.params:

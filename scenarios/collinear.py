@@ -46,7 +46,7 @@ def _collinear(values, progress=None):
     motion = values["motion"]
     nsamp = N_SAMPLES
     if motion == "restricted":
-        return _restricted(values, alpha)
+        return _restricted(values, alpha, progress)
     if motion == "rotating":
         Om = col.rotation_rate(A, B, C, alpha, 1.0)
         vel0 = np.zeros((3, 3))
@@ -67,7 +67,7 @@ def _collinear(values, progress=None):
         vel0 = np.zeros((3, 3))
         vel0[:, 0] = x * math.sqrt(2 * (E + K / 1.0)) / 1.0  # v_i = x_i ṗ/p, p = 1
     t_asked = t
-    t, P, V = integrate_dop853([A, B, C], pos0, vel0, t)
+    t, P, V = integrate_dop853([A, B, C], pos0, vel0, t, progress=progress)
     # DOP853 gives up when its step underflows (found by tests/test_fuzz.py: masses 125846, 1e-6, 1e-6
     # expanding, 13 of 600 samples): keep the part it did and say so, like a diverged run
     stopped = len(t) < len(t_asked)
@@ -150,7 +150,7 @@ def _collinear(values, progress=None):
     return result
 
 
-def _restricted(values, alpha):
+def _restricted(values, alpha, progress=None):
     """Primary, secondary (mass_ratio) and a massless satellite released at rest in the turning
     frame at one Lagrange point; markers L1–L5 turn with the primaries (inertial frame, unit
     distance). L1–L3 are unstable: the satellite drifts off after a few turns; L4/L5 hold for
@@ -163,7 +163,7 @@ def _restricted(values, alpha):
     vel = np.zeros((3, 3))
     vel[:, 0], vel[:, 1] = -pos[:, 1], pos[:, 0]  # rate 1 about z
     t = np.linspace(0.0, values["turns"] * 2 * math.pi, N_SAMPLES_RESTRICTED)
-    t, P, V = integrate_dop853([1 - mu, mu, 0.0], pos, vel, t)
+    t, P, V = integrate_dop853([1 - mu, mu, 0.0], pos, vel, t, progress=progress)
     c, s = np.cos(t), np.sin(t)
     bodies = {"primary": P[:, 0], "secondary": P[:, 1], "satellite": P[:, 2]}
     for k, (x, y) in pts.items():
@@ -311,20 +311,25 @@ register(Scenario(
             "L3."),
     params=(
         Param("masses", (3.0, 1.0, 2.0), 1e-6, 1e6, "G=1 mass", "masses A, B, C in their order on the line",
-              kind="vec3"),
+              kind="vec3", label="Masses A, B, C in order on the line"),
         Param("motion", "rotating", unit="",
               help="rigid rotation, Case II collapse from rest, Case I expansion, or the restricted problem "
                    "(a massless satellite at a Lagrange point of primary + secondary)",
-              kind="choice", choices=("rotating", "collapse", "expansion", "restricted")),
+              kind="choice", choices=("rotating", "collapse", "expansion", "restricted"),
+              label="Motion",
+              choice_labels=("turning as a rigid line", "collapse from rest", "flying apart", "a satellite at a Lagrange point")),
         Param("lagrange_point", "L1", kind="choice", choices=("L1", "L2", "L3", "L4", "L5"),
-              help="restricted: where the satellite is released"),
-        Param("turns", 2.0, 0.1, 20.0, "turns", "rotating: number of turns shown"),
-        Param("phi_max_deg", 80.0, 1.0, 89.0, "deg", "collapse: stop at this φ (φ = 90° is the collision)"),
+              help="restricted: where the satellite is released", label="Lagrange point"),
+        Param("turns", 2.0, 0.1, 20.0, "turns", "rotating: number of turns shown", label="Turns shown"),
+        Param("phi_max_deg", 80.0, 1.0, 89.0, "deg", "collapse: stop at this φ (φ = 90° is the collision)",
+              label="Collapse: stop at φ"),
         Param("energy", 0.5, 1e-3, 100.0, "G=1 units", "expansion: energy per unit reduced mass (> 0)",
-              exclusive_min=True),
+              exclusive_min=True, label="Flying apart: energy"),
         Param("mass_ratio", MOON_EARTH_MASS_RATIO, 1e-9, 1.0, "1",
-              "restricted case: secondary/primary mass (Moon/Earth, IAU 2009: 0.0123000371)"),
-        Param("distance_km", EARTH_MOON_DISTANCE_KM, 1.0, 1e10, "km", "restricted case: primary–secondary distance"),
+              "restricted case: secondary/primary mass (Moon/Earth, IAU 2009: 0.0123000371)",
+              label="Satellite case: Moon/Earth mass ratio"),
+        Param("distance_km", EARTH_MOON_DISTANCE_KM, 1.0, 1e10, "km", "restricted case: primary–secondary distance",
+              label="Satellite case: Earth–Moon distance"),
     ),
     camera=Camera((0.0, -0.9, 3.4), (0.0, 0.0, 0.0)),  # from above: L1–L5, zero-velocity curves
     simulate_fn=_collinear,

@@ -154,12 +154,19 @@ class Arrows(Item):
     STATIC_NDIM: ClassVar[dict] = {"vectors": 2}
 
 
+LABEL_ANCHORS = ("top-left", "top-center", "top-right", "center-left", "center-center", "center-right",
+                 "bottom-left", "bottom-center", "bottom-right")
+
+
 @dataclass(kw_only=True)
 class Label(Item):
-    """Text at a point: fixed, or a string per frame (a read-out)."""
+    """Text at a point: fixed, or a string per frame (a read-out). `anchor` says which point of the
+    text box sits on `position` ("top-left": the text runs right of and below the point,
+    "center-right": it ends left of the point, ...; LABEL_ANCHORS)."""
 
     text: Any  # str, or F strings
     position: np.ndarray = (0.0, 0.0, 0.0)
+    anchor: str = "top-left"
     STATIC_NDIM: ClassVar[dict] = {"text": 0, "position": 1}
 
 
@@ -290,6 +297,30 @@ def segments(path) -> np.ndarray:
     return np.stack([path[:-1], path[1:]], axis=1)
 
 
+def quat_from_matrix(m) -> np.ndarray:
+    """Unit quaternions (w, x, y, z) of rotation matrices (..., 3, 3) (Shepperd's method: the
+    largest of w, x, y, z found first, so no division by a small number)."""
+    m = np.asarray(m, float)
+    t = np.stack([m[..., 0, 0] + m[..., 1, 1] + m[..., 2, 2], m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]], -1)
+    k = np.argmax(np.stack([t[..., 0], t[..., 1] - t[..., 2] - t[..., 3], t[..., 2] - t[..., 1] - t[..., 3],
+                            t[..., 3] - t[..., 1] - t[..., 2]], -1), axis=-1)
+    q = np.empty(m.shape[:-2] + (4,))
+    r01, r10, r02, r20, r12, r21 = (m[..., 0, 1], m[..., 1, 0], m[..., 0, 2], m[..., 2, 0], m[..., 1, 2],
+                                    m[..., 2, 1])
+    cases = [
+        (1 + t[..., 0], (1 + t[..., 0], r21 - r12, r02 - r20, r10 - r01)),
+        (1 + t[..., 1] - t[..., 2] - t[..., 3], (r21 - r12, 1 + t[..., 1] - t[..., 2] - t[..., 3], r01 + r10, r02 + r20)),
+        (1 + t[..., 2] - t[..., 1] - t[..., 3], (r02 - r20, r01 + r10, 1 + t[..., 2] - t[..., 1] - t[..., 3], r12 + r21)),
+        (1 + t[..., 3] - t[..., 1] - t[..., 2], (r10 - r01, r02 + r20, r12 + r21, 1 + t[..., 3] - t[..., 1] - t[..., 2])),
+    ]
+    for j, (_, comps) in enumerate(cases):
+        sel = k == j
+        v = np.stack([c[sel] if np.ndim(c) else np.full(sel.sum(), c) for c in comps], -1)
+        q[sel] = v
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    return q * np.where(q[..., :1] < 0, -1.0, 1.0)
+
+
 def z_to_many(v) -> tuple[np.ndarray, np.ndarray]:
     """Unit quaternions (w, x, y, z) turning +z onto each row of v (N, 3) (identity where v is zero
     or not finite) and the lengths: (N, 4), (N,)."""
@@ -313,6 +344,62 @@ def shape_semi_axes(inertia, exaggerate: float = 1.0) -> np.ndarray:
     ax = mean + exaggerate * (ax - mean)
     ax = ax / ax.max()
     return np.clip(ax, 0.12, None)  # a flat body (A + B = C) keeps a visible thickness
+
+
+def box_semi_axes(inertia, exaggerate: float = 1.0) -> np.ndarray:
+    """Half-sides of the homogeneous box with the moments (A, B, C), normalised to a largest of 1:
+    A = m(b² + c²)/12 and its cyclic versions give a² ∝ B + C − A (full sides a, b, c along body
+    x, y, z). Departures from the mean multiplied by `exaggerate`; a plate (A + B = C) keeps a
+    visible thickness."""
+    I = np.asarray(inertia, float)
+    sq = np.clip(np.array([I[1] + I[2] - I[0], I[0] + I[2] - I[1], I[0] + I[1] - I[2]]), 0.0, None)
+    ax = np.sqrt(sq)
+    ax = ax / ax.max()
+    mean = ax.mean()
+    ax = mean + exaggerate * (ax - mean)
+    ax = ax / ax.max()
+    return np.clip(ax, 0.12, None)
+
+
+BOX_COLORS = ((225, 150, 140), (150, 205, 150), (140, 170, 225))  # faces normal to A, B, C (the axes' hues, lighter)
+
+
+@functools.lru_cache(maxsize=1)
+def box_parts():
+    """A cube of half-side 1 as three plain meshes, one colour per pair of opposite faces (normal
+    to body x, y, z), so that a turning brick shows which face is which."""
+    parts = []
+    for axis in range(3):
+        v, f = [], []
+        for sign in (1.0, -1.0):
+            u, w = (axis + 1) % 3, (axis + 2) % 3
+            corners = []
+            for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                p = np.zeros(3)
+                p[axis], p[u], p[w] = sign, a, b
+                corners.append(p)
+            base = len(v)
+            v.extend(corners)
+            quad = [base, base + 1, base + 2, base + 3] if sign > 0 else [base, base + 3, base + 2, base + 1]
+            f.extend([[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]])
+        parts.append((np.asarray(v, np.float32), np.asarray(f, np.uint32), BOX_COLORS[axis]))
+    return tuple(parts)
+
+
+def box_edges(semi) -> np.ndarray:
+    """The 12 edges of the box with half-sides `semi` as line segments (12, 2, 3)."""
+    s = np.asarray(semi, float)
+    segs = []
+    for axis in range(3):
+        u, w = (axis + 1) % 3, (axis + 2) % 3
+        for a in (-1, 1):
+            for b in (-1, 1):
+                p, q = np.zeros(3), np.zeros(3)
+                p[axis], q[axis] = -s[axis], s[axis]
+                p[u] = q[u] = a * s[u]
+                p[w] = q[w] = b * s[w]
+                segs.append([p, q])
+    return np.asarray(segs, np.float32)
 
 
 BAND_LIGHT, BAND_BLUE = (200, 190, 170), (120, 140, 175)
@@ -448,7 +535,7 @@ def omega_scale(traj) -> float:
     return float(k)
 
 
-def rigid_body(d: Drawing, run, view: View) -> np.ndarray:
+def rigid_body(d: Drawing, run, view: View, shape: str = "ellipsoid") -> np.ndarray:
     """The body and Poinsot's construction (§805–808) in their overlay groups; returns the
     semi-axes drawn (scene units).
 
@@ -463,10 +550,14 @@ def rigid_body(d: Drawing, run, view: View) -> np.ndarray:
     """
     tr, f = run.trajectory, d.frames
     at = np.arange(len(f), dtype=float)
-    semi = shape_semi_axes(tr.inertia, view.exaggerate)
+    box = shape == "box"
+    semi = box_semi_axes(tr.inertia, view.exaggerate) if box else shape_semi_axes(tr.inertia, view.exaggerate)
     d.add(Frame(name="body", group="body", wxyz=tr.quat_wxyz[f]))
-    for k, (v, fc, rgb) in enumerate(banded_sphere_parts()):
+    for k, (v, fc, rgb) in enumerate(box_parts() if box else banded_sphere_parts()):
         d.add(Mesh(name=f"body/mesh/{k}", group="body", vertices=v, faces=fc, color=rgb, scale=tuple(semi)))
+    if box:
+        d.add(Segments(name="body/edges", group="body", points=box_edges(semi * 1.002), colors=(60, 60, 70),
+                       thickness=0.012))
     ends = np.diag(semi * 1.35)
     d.add(Arrows(name="body/axes", group="axes", origins=np.zeros((3, 3)), vectors=ends, colors=AXIS_COLORS,
                  shaft_radius=0.018, head_radius=0.05, head_length=0.1))
@@ -486,7 +577,10 @@ def rigid_body(d: Drawing, run, view: View) -> np.ndarray:
     ok = nw[:, 0] > 0
     if np.count_nonzero(ok) >= 2:
         u = w[ok] / nw[ok]
-        s = 1.0 / np.sqrt(np.sum((u / semi) ** 2, axis=1, keepdims=True))
+        if box:  # where the ray along ω leaves the box
+            s = 1.0 / np.max(np.abs(u) / semi, axis=1, keepdims=True)
+        else:
+            s = 1.0 / np.sqrt(np.sum((u / semi) ** 2, axis=1, keepdims=True))
         d.add(Path(name="body/polhode", group="polhode", points=1.015 * s * u, color=POLHODE_COLOR, thickness=0.02,
                    at=at[ok]))
     E, Lmag = float(tr.energy[0]), float(tr.momentum_norm[0])
@@ -555,11 +649,94 @@ def other_bodies(d: Drawing, run, bodies: Mapping[str, np.ndarray] | None = None
     return k
 
 
-def standard(run, spec, view: View) -> Drawing:
+# ---- labels that do not overlap -----------------------------------------------------------------
+
+LABEL_PX_PER_CHAR, LABEL_PX_HEIGHT, LABEL_PAD_PX = 7.2, 18.0, 4.0  # viser's label at 1280×800
+ANCHOR_TRIES = ("top-left", "bottom-left", "center-left", "top-right", "bottom-right", "center-right",
+                "bottom-center", "top-center")
+
+
+def _project(points, camera: Camera, width: float = 1280.0, height: float = 800.0):
+    """Pixel coordinates (x right, y down) and depth of scene points seen from `camera`."""
+    P, L = np.asarray(camera.position, float), np.asarray(camera.look_at, float)
+    f = unit(L - P)
+    r = unit(np.cross(f, np.asarray(camera.up, float)))
+    u = np.cross(r, f)
+    v = np.atleast_2d(points) - P
+    depth = v @ f
+    t = np.tan(np.radians(camera.fov_deg if camera.fov_deg is not None else 75.0) / 2)
+    x = (v @ r) / np.maximum(depth, 1e-9) / (t * width / height)
+    y = (v @ u) / np.maximum(depth, 1e-9) / t
+    return np.stack([(x + 1) * width / 2, (1 - y) * height / 2], 1), depth
+
+
+def _box(xy, text: str, anchor: str) -> tuple[float, float, float, float]:
+    w = LABEL_PX_PER_CHAR * len(text) + 2 * LABEL_PAD_PX
+    h = LABEL_PX_HEIGHT
+    vert, horiz = anchor.split("-")
+    x0 = {"left": xy[0], "center": xy[0] - w / 2, "right": xy[0] - w}[horiz]
+    y0 = {"top": xy[1], "center": xy[1] - h / 2, "bottom": xy[1] - h}[vert]
+    return x0, y0, x0 + w, y0 + h
+
+
+def _overlap(a, b) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def _static_world(d: Drawing, it: Item) -> np.ndarray | None:
+    """The scene position of a label that does not move (its frames static too), else None."""
+    if it.animated():
+        return None
+    pos = np.asarray(it.position, float)
+    parts = it.name.split("/")
+    for k in range(len(parts) - 1, 0, -1):
+        try:
+            fr = d.item("/".join(parts[:k]))
+        except KeyError:
+            continue
+        if not isinstance(fr, Frame):
+            continue
+        if fr.animated():
+            return None
+        from ..physics import quaternion as quat
+
+        pos = quat.rotate(np.asarray(fr.wxyz, float), pos) + np.asarray(fr.position, float)
+    return pos
+
+
+def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -> int:
+    """Labels that stay put are seen from the drawing's camera; one that would cover an earlier
+    one is turned to another side of its point (its `anchor`; the point stays where the physics
+    puts it). Moving labels (on a turning body, a read-out that follows a body) are left as they
+    are. Returns how many labels were turned."""
+    placed, turned = [], 0
+    for it in d.items:
+        if not isinstance(it, Label) or not isinstance(it.text, str):
+            continue
+        pos = _static_world(d, it)
+        if pos is None:
+            continue
+        xy, depth = _project(pos, d.camera, width, height)
+        if depth[0] <= 0:
+            continue
+        for anchor in (it.anchor,) + tuple(a for a in ANCHOR_TRIES if a != it.anchor):
+            box = _box(xy[0], it.text, anchor)
+            if not any(_overlap(box, b) for b in placed):
+                if anchor != it.anchor:
+                    it.anchor = anchor
+                    turned += 1
+                break
+        else:
+            box = _box(xy[0], it.text, it.anchor)
+        placed.append(box)
+    return turned
+
+
+def standard(run, spec, view: View, shape: str = "ellipsoid") -> Drawing:
     """The drawing of a scenario that declares none of its own: Poinsot's construction for a
-    rotation scene, and the other bodies."""
+    rotation scene (the body an ellipsoid, or a box with `shape="box"`), and the other bodies."""
     d = new_drawing(run, spec)
     if d.rotation:
-        rigid_body(d, run, view)
+        rigid_body(d, run, view, shape)
     other_bodies(d, run)
     return d

@@ -236,8 +236,8 @@ def _earth(values, progress=None):
 
     comps = [
         Comparison("luni-solar precession", eul, sim(rate), LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY / 100, "arcsec/yr",
-                   "modern: IAU 2006 ψ_A (fixed ecliptic; includes 0.019″/yr geodesic precession). "
-                   f"General precession p_A = {GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100:.5f}″/yr adds the ecliptic's motion (planets, not modelled). "
+                   "modern: IAU 2006 ψA (fixed ecliptic; includes 0.019″/yr geodesic precession). "
+                   f"General precession pA = {GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100:.5f}″/yr adds the ecliptic's motion (planets, not modelled). "
                    "Euler: Σ N cos n, circles in the ecliptic, A for C in N"),
         Comparison("  solar part", -mod["euler_sun"] / ARCSEC_RAD * YR, sim(parts["sun"]), -mod["sun"] / ARCSEC_RAD * YR, "arcsec/yr",
                    "modern: orbit-averaged formula (e☉ = 0.0167)"),
@@ -282,7 +282,7 @@ def _earth(values, progress=None):
         f"Solar part {parts['sun']:.3f}″/yr, lunar part {parts['moon']:.3f}″/yr (each from a run with that body alone); "
         f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr." if lunar_ok else
         f"Euler's formula (§846, centres on circles in the ecliptic) gives {eul:.3f}″/yr.",
-        "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψ_A, not the general precession p_A.",
+        "No planets: the ecliptic is fixed, so the rate to compare is the luni-solar ψA, not the general precession pA.",
         "Moon's orbit: the osculating a, e, i at J2000 are calibrated so that the integrated mean month, e and i equal "
         "the observed ones; the node then regresses " + (f"with period {node_period:.3f} yr" if long_enough else "")
         + f" (observed {NODE_PERIOD_SIDEREAL_YR:.4f} yr against the fixed ecliptic, {NODE_PERIOD_YR:.3f} yr from the "
@@ -355,8 +355,19 @@ def _check_earth(values):
                              f"{MIN_STEPS} steps of step_days = {values['step_days']:g})")
 
 
+NUTATION_PLOT = ("nutation in longitude Δψ (arcsec)", "nutation in longitude Δψ, Euler (arcsec)",
+                 "obliquity − ε₀ (arcsec)", "obliquity − ε₀, Euler (arcsec)")
+
+
 def _draw(run, spec, view):
-    return earth_scene(run, spec, view, long_view=False)
+    """The Earth among the stars (earth_scene); the plot shows the nutation alone, the precession
+    taken out: over a century the 18.6-year nod (17″ in longitude, 9″ in obliquity) stands out,
+    and Euler's curves (his centres move in the ecliptic: no node, no such term, §844) stay near
+    zero with only the half-year and half-month nods. With the precession in, its 5000″ a century
+    flattened the nod."""
+    d = earth_scene(run, spec, view, long_view=False)
+    d.plot = {k: run.plot_series[k] for k in NUTATION_PLOT if k in run.plot_series}
+    return d
 
 
 def _cost(values):
@@ -385,13 +396,14 @@ register(Scenario(
             "obliquity with the Moon's node, 1.3″ twice a year, 0.2″ twice a month. The table puts "
             "each term beside the IAU value and Euler's."),
     params=(
-        Param("years", 100.0, 0.0, 400.0, "yr", "length of the run from J2000", exclusive_min=True, step=1.0),
+        Param("years", 100.0, 0.0, 400.0, "yr", "length of the run from J2000", exclusive_min=True, step=1.0,
+              label="Length of the run"),
         Param("step_days", 0.5, 0.0, 3.0, "day", "integrator step (the spin is solved exactly; resolve the month)",
-              exclusive_min=True, step=0.1),
+              exclusive_min=True, step=0.1, label="Integrator step", advanced=True),
         Param("H", EARTH_DYNAMICAL_ELLIPTICITY, 0.0, 0.05, "1", "dynamical ellipticity (C − A)/C (IAU 2000: 0.0032737949)",
-              exclusive_min=True),
+              exclusive_min=True, label="Dynamical ellipticity H"),
         Param("obliquity_deg", math.degrees(OBLIQUITY_J2000_RAD), 0.0, 89.0, "deg", "obliquity at J2000 (IAU 2006: 23.4392794°)",
-              exclusive_min=True),
+              exclusive_min=True, label="Obliquity at J2000"),
     ),
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
     preview={'years': 10.0, 'step_days': 1.0},

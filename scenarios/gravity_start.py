@@ -104,11 +104,15 @@ register(Scenario(
             "(§820); with F in the plane of the A and B axes it starts about C (§821). Watch the "
             "rotation axis drift from Euler's starting axis as the body turns."),
     params=(
-        Param("inertia", (2.0, 3.0, 4.0), 1e-6, 1e6, "kg m^2", "principal moments A, B, C", kind="vec3"),
-        Param("direction", (1.0, 0.6, 0.4), -1.0, 1.0, "", "direction of F in the body frame (x, y, z)", kind="vec3"),
-        Param("distance", 10.0, 1e-3, 1e9, "m", "distance s of F from the centre", exclusive_min=True),
-        Param("gm", 1000.0, 0.0, 1e20, "m^3/s^2", "G·M of F", exclusive_min=True),
-        Param("turn_deg", 10.0, 1e-3, 90.0, "deg", "simulate until the body would have turned this far"),
+        Param("inertia", (2.0, 3.0, 4.0), 1e-6, 1e6, "kg m^2", "principal moments A, B, C", kind="vec3",
+              label="Moments of inertia A, B, C"),
+        Param("direction", (1.0, 0.6, 0.4), -1.0, 1.0, "", "direction of F in the body frame (x, y, z)", kind="vec3",
+              label="Direction of F in the body"),
+        Param("distance", 10.0, 1e-3, 1e9, "m", "distance s of F from the centre", exclusive_min=True,
+              label="Distance s of F"),
+        Param("gm", 1000.0, 0.0, 1e20, "m^3/s^2", "G·M of F", exclusive_min=True, label="Attraction G·M of F"),
+        Param("turn_deg", 10.0, 1e-3, 90.0, "deg", "simulate until the body would have turned this far",
+              label="Run until the body has turned"),
     ),
     camera=Camera((1.2, -4.4, 2.4), (0.0, 0.0, 0.0)),  # across F (default direction (1, 0.6, 0.4)), not along it
     simulate_fn=_gravity_start,

@@ -42,7 +42,7 @@ def ensemble_starts(n_starts, max_rate=3.0):
     return th, wd
 
 
-def probe_lyapunov(theta_deg, rate, e, omega0, n_orbits, steps_per_orbit):
+def probe_lyapunov(theta_deg, rate, e, omega0, n_orbits, steps_per_orbit, progress=None):
     """Largest Lyapunov exponent (per unit time, n = 1) of starts at periapse (θ in degrees, θ̇/n),
     each with its own ω₀, on one orbit: the batched planar kernel (physics.spin_orbit_batch,
     Blanes & Moan's 4th-order scheme, the tangent map renormalised every orbit). A body's result
@@ -51,7 +51,7 @@ def probe_lyapunov(theta_deg, rate, e, omega0, n_orbits, steps_per_orbit):
     w0 = np.asarray(omega0, float)
     out = planar_batch(np.radians(np.asarray(theta_deg, float)), rate, 0.5 * w0**2, orb, 2 * np.pi / steps_per_orbit,
                        int(n_orbits) * int(steps_per_orbit), scheme="blanes-moan4", lyapunov=True,
-                       renorm=int(steps_per_orbit))
+                       renorm=int(steps_per_orbit), progress=progress)
     return out["lyapunov"]
 
 
@@ -59,7 +59,9 @@ def _hyperion(values, progress=None):
     e, w0 = values["eccentricity"], values["omega0"]
     ns, no = values["n_starts"], values["n_orbits"]
     th0, wd0 = ensemble_starts(ns)
-    T, W, lyap = lib.spin_orbit_section(th0, wd0, e, w0, no, steps_per_orbit=values["steps_per_orbit"], lyapunov=True)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    T, W, lyap = lib.spin_orbit_section(th0, wd0, e, w0, no, steps_per_orbit=values["steps_per_orbit"], lyapunov=True,
+                                        progress=part(0.0, 0.6))
     # the probe start, as a full rigid body (the integrator of physics.integrator)
     gamma = w0**2 / 3.0
     I = planar_moments(gamma)
@@ -71,12 +73,12 @@ def _hyperion(values, progress=None):
     t, L, q = integrate(I, [0, 0, values["probe_rate"]], probe_orbits * P, probe_orbits * P / n_steps,
                         q0=quat.from_axis_angle([0, 0, 1], values["probe_theta_deg"] * np.pi / 180),
                         masses=[PointMass(1.0, orbit.position)], scheme="yoshida4",
-                        stride=n_steps // S, progress=progress)
+                        stride=n_steps // S, progress=part(0.6, 0.8))
     pos = orbit.position(t)
     traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
     zeta = zeta_of(q, pos)
     lp = probe_lyapunov([values["probe_theta_deg"]], [values["probe_rate"]], e, [w0], max(no, 100),
-                        values["steps_per_orbit"])
+                        values["steps_per_orbit"], progress=part(0.8, 0.9))
     m = {
         "lyapunov_probe_per_unit_time": float(lp[0]),
         "lyapunov_probe_per_orbit": float(lp[0] * P),
@@ -271,14 +273,20 @@ register(Scenario(
             "regular motion; the scattered sea of dots is chaos (Wisdom, Peale & Mignard 1984). The "
             "body drawn follows one start, the probe."),
     params=(
-        Param("eccentricity", 0.1, 0.0, 0.5, "", "orbital eccentricity (Hyperion 0.1)"),
-        Param("omega0", 0.89, 0.0, 1.5, "", "ω₀ = √(3(B−A)/C) (Hyperion ≈ 0.89, WPM 1984)", exclusive_min=True),
-        Param("n_starts", 60, 2, 400, "", "starts in the ensemble", kind="int"),
-        Param("n_orbits", 300, 10, 3000, "", "periapse passages per start", kind="int"),
-        Param("steps_per_orbit", 48, 16, 2048, "", "integrator steps per orbit (4th-order Blanes–Moan)", kind="int"),
-        Param("probe_theta_deg", 0.0, -90.0, 90.0, "deg", "the drawn body: θ at periapse"),
-        Param("probe_rate", 1.4, -1.0, 4.0, "n", "the drawn body: θ̇/n at periapse"),
-        Param("probe_orbits", 20.0, 1.0, 200.0, "", "orbits drawn"),
+        Param("eccentricity", 0.1, 0.0, 0.5, "", "orbital eccentricity (Hyperion 0.1)", label="Orbital eccentricity"),
+        Param("omega0", 0.89, 0.0, 1.5, "", "ω₀ = √(3(B−A)/C) (Hyperion ≈ 0.89, WPM 1984)", exclusive_min=True,
+              label="Out-of-roundness ω₀ = √(3(B − A)/C)"),
+        Param("n_starts", 60, 2, 400, "", "starts in the ensemble", kind="int",
+              label="Starts in the section", advanced=True),
+        Param("n_orbits", 300, 10, 3000, "", "periapse passages per start", kind="int",
+              label="Orbits per start", advanced=True),
+        Param("steps_per_orbit", 48, 16, 2048, "", "integrator steps per orbit (4th-order Blanes–Moan)", kind="int",
+              label="Integrator steps per orbit", advanced=True),
+        Param("probe_theta_deg", 0.0, -90.0, 90.0, "deg", "the drawn body: θ at periapse",
+              label="Drawn body: angle θ at periapse"),
+        Param("probe_rate", 1.4, -1.0, 4.0, "n", "the drawn body: θ̇/n at periapse",
+              label="Drawn body: spin θ̇/n at periapse"),
+        Param("probe_orbits", 20.0, 1.0, 200.0, "", "orbits drawn", label="Orbits drawn"),
     ),
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
     preview={'n_starts': 12, 'n_orbits': 60},

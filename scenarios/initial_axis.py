@@ -10,7 +10,7 @@ from ..physics.euler_ch15 import initial_axis
 from ..physics.inertia import validate_moments
 from ..physics.integrator import integrate
 from ..physics.params import Param, ParameterError
-from .drawing import Camera
+from .drawing import Arrows, Camera, Label, Segments, _project, standard
 from .base import Comparison, Run, Scenario, register
 from . import _validity
 from scipy.integrate import solve_ivp
@@ -62,6 +62,34 @@ def _initial_axis(values, progress=None):
                   plot_series={"|ω|": np.linalg.norm(traj.omega_body, axis=1)})
 
 
+TORQUE_COLOR = (45, 45, 45)  # apart from ω (orange) and L (purple), which starts along the torque
+EULER_AXIS_COLOR = (0, 150, 140)
+
+
+def _draw(run, spec, view):
+    """The body and Poinsot's picture, with what §806 is about, both fixed in the body: the torque
+    (P, Q, R) as an arrow, and the axis Euler predicts the body starts to turn about (cosines
+    ∝ P/A : Q/B : R/C) as a line through the centre. At the start ω (orange) lies on Euler's axis,
+    not on the torque; then it wanders off as the body gains speed."""
+    d = standard(run, spec, view)
+    tr = run.trajectory
+    tau = np.asarray(run.params["torque"], float)
+    t_hat = tau / np.linalg.norm(tau)
+    axis, _ = initial_axis(tau, tr.inertia)
+    axis = axis / np.linalg.norm(axis)
+    reach = 1.7
+    # name the axis at the end the camera sees farther from the body, its text running outward
+    ends, _ = _project(np.array([reach * axis, -reach * axis, np.zeros(3)]), d.camera)
+    far = 0 if np.linalg.norm(ends[0] - ends[2]) >= np.linalg.norm(ends[1] - ends[2]) else 1
+    tip = (reach + 0.05) * axis * (1 if far == 0 else -1)
+    side = "center-left" if ends[far][0] >= ends[2][0] else "center-right"
+    d.add(Arrows(name="body/torque", origins=np.zeros((1, 3)), vectors=(1.45 * t_hat)[None], colors=(TORQUE_COLOR,),
+                 shaft_radius=0.03, head_radius=0.075, head_length=0.14),
+          Label(name="body/torque/label", text="torque (P, Q, R)", position=1.58 * t_hat, anchor="bottom-right"),
+          Segments(name="body/euler_axis", points=np.array([[-reach * axis, reach * axis]], np.float32),
+                   colors=EULER_AXIS_COLOR, thickness=0.02),
+          Label(name="body/euler_axis/label", text="Euler's axis: P/A : Q/B : R/C (§806)", position=tip, anchor=side))
+    return d
 def _cost(values):
     """The run over `duration` at `step`, the probe run (probe_time in 4 steps) and |ω| kept."""
     return body_cost(values, extra_steps=4, series=1)
@@ -80,14 +108,18 @@ register(Scenario(
     params=(
         Param("inertia", (1.0, 2.0, 2.5), **INERTIA_PARAM),
         Param("torque", (1.0, 1.0, 1.0), kind="vec3", minimum=-1e3, maximum=1e3, unit="N m",
-              help="moments P, Q, R about the body axes (constant in the body)"),
+              help="moments P, Q, R about the body axes (constant in the body)",
+              label="Torques P, Q, R about the body axes"),
         Param("probe_time", 1e-3, 0.0, 1.0, "s", "how long after the start the axis is measured",
-              exclusive_min=True, step=1e-4),
-        Param("duration", 5.0, 0.0, 1e5, "s", "length of the run", exclusive_min=True, step=0.5),
-        Param("step", 0.002, 0.0, 1.0, "s", "integrator step", exclusive_min=True, step=0.001),
+              exclusive_min=True, step=1e-4, label="Axis measured after", advanced=True),
+        Param("duration", 5.0, 0.0, 1e5, "s", "length of the run", exclusive_min=True, step=0.5,
+              label="Length of the run"),
+        Param("step", 0.002, 0.0, 1.0, "s", "integrator step", exclusive_min=True, step=0.001,
+              label="Integrator step", advanced=True),
     ),
     camera=Camera((2.6, 2.6, 1.9), (0.0, 0.0, 0.0)),
     simulate_fn=_initial_axis,
+    draw=_draw,
     cost_fn=_cost,
     check=_check_initial,
     euler_formula=("cos α : cos β : cos γ = P/aa : Q/bb : R/cc (§806)\n"

@@ -38,11 +38,13 @@ def _lunar(values, progress=None):
     days = values["duration_yr"] * JULIAN_YEAR_DAYS
     h, ds = values["step_days"], values["sample_days"]
     series = values["solar_force"] == "euler-series"
-    t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series, progress=part(0.1, 0.5))
     if progress:
         progress(0.5)
     r0, v0 = le.elements_to_cartesian(el0, mu)
-    _, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), days, h, ds, mu, mus, sun)
+    _, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), days, h, ds, mu, mus, sun,
+                            progress=part(0.5, 0.9))
     if progress:
         progress(0.9)
     P = le.elements_to_position(E)
@@ -265,14 +267,20 @@ register(Scenario(
             "years while its tilt nods between 5.0° and 5.3°, and the perigee advances once in 8.85 "
             "years, twice as fast as first-order theory gives."),
     params=(
-        Param("duration_yr", 40.0, 1.0, 200.0, "yr", "length of the run"),
-        Param("step_days", 0.025, 0.005, 0.2, "d", "fixed RK4 step (the error scales as step⁴)"),
-        Param("sample_days", 0.5, 0.05, 10.0, "d", "spacing of the stored states"),
-        Param("eccentricity", MOON_MEAN_ECCENTRICITY, 0.005, 0.3, "1", "Moon's mean eccentricity"),
-        Param("inclination_deg", MOON_MEAN_INCLINATION_DEG, 0.1, 60.0, "deg", "Moon's mean inclination to the ecliptic"),
-        Param("sun_eccentricity", SUN_ECCENTRICITY, 0.0, 0.3, "1", "eccentricity of the Sun's apparent orbit"),
+        Param("duration_yr", 40.0, 1.0, 200.0, "yr", "length of the run", label="Length of the run"),
+        Param("step_days", 0.025, 0.005, 0.2, "d", "fixed RK4 step (the error scales as step⁴)",
+              label="Integrator step", advanced=True),
+        Param("sample_days", 0.5, 0.05, 10.0, "d", "spacing of the stored states",
+              label="Spacing of the stored states", advanced=True),
+        Param("eccentricity", MOON_MEAN_ECCENTRICITY, 0.005, 0.3, "1", "Moon's mean eccentricity",
+              label="Moon's eccentricity"),
+        Param("inclination_deg", MOON_MEAN_INCLINATION_DEG, 0.1, 60.0, "deg", "Moon's mean inclination to the ecliptic",
+              label="Moon's inclination"),
+        Param("sun_eccentricity", SUN_ECCENTRICITY, 0.0, 0.3, "1", "eccentricity of the Sun's apparent orbit",
+              label="Sun's eccentricity"),
         Param("solar_force", "exact", kind="choice", choices=("exact", "euler-series"),
-              help="exact 1/w³, or Euler's §XXXIII expansion to second order in v/u in the element equations"),
+              help="exact 1/w³, or Euler's §XXXIII expansion to second order in v/u in the element equations",
+              label="Sun's force", choice_labels=("exact, 1/w³", "Euler's series (§XXXIII)")),
     ),
     camera=Camera((0.9, -3.1, 2.1), (0.0, 0.0, 0.35)),  # oblique: orbit plane, node line, normal
     preview={'duration_yr': 4.0, 'step_days': 0.05},

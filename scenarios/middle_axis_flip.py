@@ -10,7 +10,7 @@ from ..physics.euler_ch15 import flip_interval_808
 from ..physics.inertia import validate_moments
 from ..physics.params import Param, ParameterError
 from ..physics.torque_free_exact import free_motion
-from .drawing import Camera
+from .drawing import Camera, standard
 from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
@@ -62,21 +62,29 @@ register(Scenario(
     title="Brick: the flip about the middle axis",
     section="§805, §808",
     group="ch. 15",
-    summary=("Spin a brick (or a tennis racket) about the axis of its middle moment B and it cannot "
+    summary=("Spin a brick (here 3 : 2 : 1, drawn with the proportions its moments give) about the axis "
+            "of its middle moment B and it cannot "
             "stay there: after a quiet while it turns over, then again, at regular intervals (the "
             "Dzhanibekov or tennis-racket effect). Watch the body flip while L stays fixed. The time "
             "between flips follows from Euler's quadrature of §808 (in modern terms 2K(k)/λ, with "
             "Jacobi's complete elliptic integral K); the smaller the first nudge, the longer the wait."),
     params=(
-        Param("inertia", (1.0, 2.0, 3.0), **INERTIA_PARAM),
-        Param("spin", 6.0, -50.0, 50.0, "rad/s", "initial rate about the middle axis", step=0.1),
+        # a homogeneous 3 : 2 : 1 brick: A = m(b² + c²)/12 and its cyclic versions, ∝ 5 : 10 : 13
+        # ((1, 2, 3) would be a flat plate, A + B = C)
+        Param("inertia", (5.0, 10.0, 13.0), **INERTIA_PARAM),
+        Param("spin", 6.0, -50.0, 50.0, "rad/s", "initial rate about the middle axis", step=0.1,
+              label="Spin rate about the middle axis"),
         Param("perturbation", 0.01, 1e-15, 0.5, "1",
-              "rates about the other two axes, as a fraction of the spin", step=0.001),
-        Param("duration", 30.0, 0.0, 1e6, "s", "length of the run", exclusive_min=True, step=1.0),
-        Param("step", 0.005, 0.0, 10.0, "s", "integrator step", exclusive_min=True, step=0.001),
+              "rates about the other two axes, as a fraction of the spin", step=0.001,
+              label="Nudge to the other axes (fraction of the spin)"),
+        Param("duration", 30.0, 0.0, 1e6, "s", "length of the run", exclusive_min=True, step=1.0,
+              label="Length of the run"),
+        Param("step", 0.005, 0.0, 10.0, "s", "integrator step", exclusive_min=True, step=0.001,
+              label="Integrator step", advanced=True),
     ),
     camera=Camera((3.4, 1.2, 1.6), (0.0, 0.0, 0.0)),  # B (green) axis across the view: the flip is seen
     simulate_fn=_middle_axis_flip,
+    draw=lambda run, spec, view: standard(run, spec, view, shape="box"),
     cost_fn=body_cost,
     check=_check_flip,
     euler_formula=("dt = −𝔄 dx √(𝔅ℭ) / [ √(𝔄xx − 𝔄a² + 𝔅b²) · √(𝔄xx − 𝔄a² + ℭc²) ] (§808)"),
@@ -130,9 +138,9 @@ def _flip_interval_decimal(inertia, omega0, digits=40):
                 "of k²)", "§808, modern")
 def e2_separatrix():
     nudge, spin = 1e-9, 6.0
-    r = get("middle-axis-flip").simulate(perturbation=nudge, duration=40.0)
+    r = get("middle-axis-flip").simulate(inertia=(1.0, 2.0, 3.0), spin=spin, perturbation=nudge, duration=40.0)
     m = r.metrics
-    ref, gap = _flip_interval_decimal((1.0, 2.0, 3.0), (nudge * spin, spin, nudge * spin))
+    ref, gap = _flip_interval_decimal(r.params["inertia"], (nudge * spin, spin, nudge * spin))
     rel = max(abs(m[k] / ref - 1) for k in ("flip_interval", "flip_interval_exact", "flip_interval_euler_808"))
     return dict(euler=m["flip_interval_euler_808"], simulated=m["flip_interval"], modern=m["flip_interval_exact"],
                 rel_error=rel, tolerance=1e-12, unit="s", passed=rel <= 1e-12 and not r.warnings,
@@ -145,11 +153,11 @@ def e2_separatrix():
 @register_check("E2.aliasing", "a step too coarse for the spin and the flips: said, and the interval not measured",
                 "§808")
 def e2_aliasing():
-    r = get("middle-axis-flip").simulate(step=2.0, duration=200.0)
+    r = get("middle-axis-flip").simulate(inertia=(1.0, 2.0, 3.0), spin=6.0, step=2.0, duration=200.0)
     warned = [w for w in r.warnings if "too sparse" in w]
     ok = len(warned) == 2 and not np.isfinite(r.metrics["flip_interval"])
     return dict(euler=r.metrics["flip_interval_euler_808"], simulated=r.metrics["flip_interval"],
                 modern=r.metrics["flip_interval_exact"], rel_error=0.0 if ok else 1.0, tolerance=0.0, passed=ok,
-                unit="s", note="step 2 s, samples 2 s apart against a spin period of 0.91 s and flips every 3.26 s "
+                unit="s", note="moments 1 : 2 : 3, spin 6 rad/s, step 2 s, samples 2 s apart against a spin period of 0.91 s and flips every 3.26 s "
                 "(Nyquist: 2 samples per period): the run warns twice and reports no measured interval. "
                 + (warned[0] if warned else "NO WARNING"))

@@ -36,8 +36,8 @@ from ..physics.integrator import Degree3Field, PointMass, integrate, samples_kep
 from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, register
-from .drawing import Follow, Light, Mesh, Option, Segments, segments, unit
-from ._ch16_drawing import body_scene, line_from_centre, moon_surface_parts
+from .drawing import Follow, Frame, Label, Light, Mesh, Option, Segments, quat_from_matrix, segments, unit
+from ._ch16_drawing import body_scene, camera_basis, line_from_centre, moon_surface_parts
 from .budget import Cost, trajectory_bytes
 
 
@@ -528,6 +528,25 @@ def _check_moon(values):
 
 EYE_RADII = 2.3  # the Earth-view camera's distance in Moon radii (drawn 1): the disc spans ~52° of the view
 EYE_FOV_DEG = 60.0
+FACE_AT = 3.3  # the face seen from the Earth: this far right of the Moon on the screen (scene units)
+FACE_SCALE = 0.8
+FACE_COLOR_LINE = (230, 60, 40)
+
+
+def face_attitude(q_moon, earth_dir, toward_camera):
+    """Attitudes (F, 4) of a copy of the Moon that shows the camera what the Earth sees: each frame
+    turns the Earth's direction e(t) (from the Moon) onto `toward_camera`, with the ecliptic north
+    kept up, then applies the Moon's own attitude. So the copy's wobble on the screen is the
+    libration seen from the Earth, while the Moon beside it turns in space."""
+    z = np.array([0.0, 0.0, 1.0])
+
+    def basis(a):  # columns a, the part of z ⊥ a, and their cross product
+        a = unit(np.atleast_2d(a))
+        n = unit(z - (a @ z)[:, None] * a)
+        return np.stack([a, n, np.cross(a, n)], axis=2)
+
+    R = basis(toward_camera)[0] @ np.transpose(basis(earth_dir), (0, 2, 1))
+    return quat_from_matrix(R @ quat.to_matrix(np.asarray(q_moon, float)))
 
 
 def _draw(run, spec, view):
@@ -575,7 +594,32 @@ def _draw(run, spec, view):
         if "zeta_euler_rad" in ps:
             d.plot["ζ, Euler §833 (deg)"] = np.degrees(ps["zeta_euler_rad"])
     d.plot = d.plot or dict(ps)
+    if not from_earth and view.option("face", spec):
+        _face_from_earth(d, run, spec, semi, e)
     return d
+
+
+def _face_from_earth(d, run, spec, semi, e) -> None:
+    """Beside the Moon in space, a copy showing its face as the Earth sees it (face_attitude),
+    with the maria, the prime meridian and the equator: the wobble of their crossing on that disc
+    is the optical libration plotted over time."""
+    cam = d.camera
+    right, up, look = camera_basis(cam)
+    centre = look + FACE_AT * right
+    toward = unit(np.asarray(cam.position, float) - centre)
+    wxyz = face_attitude(run.trajectory.quat_wxyz[d.frames], e, toward)
+    d.add(Frame(name="face", wxyz=wxyz, position=centre))
+    for k, (v, fc, rgb) in enumerate(moon_surface_parts()):
+        d.add(Mesh(name=f"face/mesh/{k}", vertices=v, faces=fc, color=rgb, scale=tuple(FACE_SCALE * semi)))
+    th = np.linspace(-np.pi / 2, np.pi / 2, 61)
+    mer = np.stack([np.cos(th), np.zeros_like(th), np.sin(th)], 1)
+    equ = np.stack([np.cos(th), np.sin(th), np.zeros_like(th)], 1)
+    d.add(Segments(name="face/prime_meridian", colors=FACE_COLOR_LINE, thickness=0.01,
+                   points=1.01 * FACE_SCALE * np.concatenate([segments(mer), segments(equ)]) * semi),
+          Label(name="face_label", text="the face seen from the Earth", anchor="bottom-center",
+                position=centre + (FACE_SCALE + 0.25) * up),
+          Label(name="space_label", text="the Moon in space", anchor="bottom-center",
+                position=look + 1.35 * up))
 
 
 def _cost(values):
@@ -601,31 +645,39 @@ register(Scenario(
             "sky: started from JPL's DE421 Moon and pulled by DE421's Earth and Sun, the model stays "
             "within a few arcseconds of DE421's Moon for years (time plot: difference from DE421)."),
     params=(
-        Param("years", 6.0, 0.2, 40.0, "yr", "time span"),
-        Param("start_year", 2025.0, 1900.0, 2190.0, "yr", "start epoch (TDB, years; DE421 covers 1900.01–2200.09)"),
-        Param("step_days", 0.25, 0.01, 2.0, "day", "integrator step"),
-        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)"),
-        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (LLR: 227.7e-6)"),
-        Param("equator_inclination_deg", C.MOON_EQUATOR_INCLINATION_DEG, 0.0, 10.0, "deg", "lunar equator to ecliptic (1.54242°)"),
+        Param("years", 6.0, 0.2, 40.0, "yr", "time span", label="Time span"),
+        Param("start_year", 2025.0, 1900.0, 2190.0, "yr", "start epoch (TDB, years; DE421 covers 1900.01–2200.09)",
+              label="Start year"),
+        Param("step_days", 0.25, 0.01, 2.0, "day", "integrator step", label="Integrator step", advanced=True),
+        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)", label="β = (C − A)/B"),
+        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (LLR: 227.7e-6)", label="γ = (B − A)/C"),
+        Param("equator_inclination_deg", C.MOON_EQUATOR_INCLINATION_DEG, 0.0, 10.0, "deg", "lunar equator to ecliptic (1.54242°)",
+              label="Equator to ecliptic"),
         Param("start", "de421", kind="choice", choices=("de421", "forced", "uniform"),
               help="'de421': DE421's attitude and spin (the real Moon); 'forced': the mean Cassini frame plus "
                    "Euler's forced libration (small free libration); 'uniform': the mean frame rotating "
-                   "uniformly (a large free libration, period ~2.9 yr)"),
+                   "uniformly (a large free libration, period ~2.9 yr)",
+                   label="Start", choice_labels=("as DE421 has it", "on the forced libration", "turning uniformly (free libration)")),
         Param("ephemeris", "de421", kind="choice", choices=("de421", "lunar-theory"),
               help="where the Earth and the Sun are: JPL DE421, or the main terms of the lunar theory (Meeus ch. 47) "
-                   "with the Sun on its mean ellipse"),
+                   "with the Sun on its mean ellipse",
+                   label="Where the Earth and the Sun are", advanced=True, choice_labels=("JPL DE421", 'lunar theory (main terms)')),
         Param("field", "degree-3", kind="choice", choices=("degree-3", "quadrupole"),
               help="the Moon's gravity field the torques act on: quadrupole (β, γ; Euler's §815) or with DE421's "
-                   "degree-3 harmonics"),
-        Param("sun_torque", "on", kind="choice", choices=("on", "off"), help="the Sun's torque on the Moon's figure"),
+                   "degree-3 harmonics",
+                   label="The Moon's gravity field", advanced=True,
+                   choice_labels=("with DE421's degree-3 terms", 'quadrupole only (Euler)')),
+        Param("sun_torque", "on", kind="choice", choices=("on", "off"), help="the Sun's torque on the Moon's figure",
+              label="The Sun's torque", advanced=True, choice_labels=("on", "off")),
         Param("core_fraction", C.MOON_CORE_MOMENT_FRACTION_DE421, 0.0, 0.05, "", "fluid core's share of C, not turning "
-              "with the mantle (DE421: 0.0007; 0: rigid)"),
+              "with the mantle (DE421: 0.0007; 0: rigid)", label="Fluid core's share of C", advanced=True),
     ),
     camera=Camera((4.2, -3.6, 2.4), (0.0, 0.0, 0.0)),
     preview={'years': 1.0},
     simulate_fn=_moon,
     draw=_draw,
-    options={"earth_view": Option("view from the Earth (camera follows)"),
+    options={"face": Option("beside it, the face seen from the Earth"),
+             "earth_view": Option("the whole view from the Earth (camera follows)", False),
              "maria": Option("maria on the Moon"),
              "earth_line": Option("direction to the Earth + sub-Earth meridian"),
              "plot_physical": Option("time plot: physical libration (″) instead of the face's wobble (°)", False),

@@ -18,7 +18,7 @@ from .budget import Cost, trajectory_bytes
 from .base import get
 from .checks import register_check
 from ._precession import MAX_SAMPLES
-from .drawing import Label, Option, Path, Segments, Sphere, segments, unit
+from .drawing import Label, Option, Path, Segments, Sphere, segments, unit, wire_sphere
 from ._ch16_drawing import (WIGGLE_COLOR, body_scene, centre_line, centre_of_force, magnified_about_start, nice_step,
                             path_samples)
 
@@ -128,6 +128,10 @@ def _draw(run, spec, view):
         d.add(Path(name="body/pole_path", points=path[idx], color=WIGGLE_COLOR, thickness=0.02, at=at),
               Sphere(name="body/pole_now", radius=0.04, color=WIGGLE_COLOR, position=path[d.frames]))
         _pole_scale(d, u[0], float(np.degrees(np.max(np.arccos(np.clip(u @ u[0], -1, 1))))), k)
+        # the sphere the path is drawn on, fixed in the body: parallels about A and meridians through it,
+        # so that the path is seen on the turning body rather than floating in space
+        grid = wire_sphere(POLE_RADIUS, n_lat=5, n_lon=6)[..., [2, 0, 1]]
+        d.add(Segments(name="body/pole_sphere", points=grid, colors=(175, 175, 190), thickness=0.003))
     centre_line(d, run, spec, view)
     return d
 
@@ -177,16 +181,23 @@ register(Scenario(
             "simulated ones."),
     params=(
         Param("moments", (1.2, 1.0, 1.0), kind="vec3", minimum=1e-6, maximum=1e6, unit="kg m^2",
-              help="Euler's aa, bb, cc: moments about A (the spin axis, body x), B, C"),
+              help="Euler's aa, bb, cc: moments about A (the spin axis, body x), B, C",
+              label="Moments A (spin axis), B, C"),
         # at least 1e-6 rad/s (found by tests/test_fuzz.py: spin 1.6e-171 with moments 1e-6 underflowed
         # |ω|² to 0 and the rate fit got NaN)
-        Param("spin", 10.0, 1e-6, 1e4, "rad/s", "spin γ' about A"),
-        Param("tidal", 1.0, 0.0, 1e6, "1/s^2", "GM/s³ of the centre of force", exclusive_min=True),
-        Param("zeta_deg", 40.0, 0.0, 180.0, "deg", "arc AF from the spin axis to the centre"),
-        Param("azimuth_deg", 30.0, -180.0, 180.0, "deg", "azimuth of F around A, from B toward C"),
-        Param("offset_deg", 0.0, 0.0, 10.0, "deg", "initial arc AO of the pole from A (toward B)"),
-        Param("duration_turns", 5.0, 0.0, 1e4, "turns", "length of the drawn run", exclusive_min=True),
-        Param("steps_per_turn", 200, 4, 1e5, "1", "integrator steps per turn", kind="int"),
+        Param("spin", 10.0, 1e-6, 1e4, "rad/s", "spin γ' about A", label="Spin rate γ′ about A"),
+        Param("tidal", 1.0, 0.0, 1e6, "1/s^2", "GM/s³ of the centre of force", exclusive_min=True,
+              label="Pull of F, GM/s³"),
+        Param("zeta_deg", 40.0, 0.0, 180.0, "deg", "arc AF from the spin axis to the centre",
+              label="Arc AF from the spin axis"),
+        Param("azimuth_deg", 30.0, -180.0, 180.0, "deg", "azimuth of F around A, from B toward C",
+              label="Azimuth of F about A"),
+        Param("offset_deg", 0.0, 0.0, 10.0, "deg", "initial arc AO of the pole from A (toward B)",
+              label="Pole's start away from A"),
+        Param("duration_turns", 5.0, 0.0, 1e4, "turns", "length of the drawn run", exclusive_min=True,
+              label="Length of the run"),
+        Param("steps_per_turn", 200, 4, 1e5, "1", "integrator steps per turn", kind="int",
+              label="Integrator steps per turn", advanced=True),
     ),
     camera=Camera((4.6, 1.6, 1.4), (0.8, 0.0, 0.0)),  # nearly down the spin axis A (body x): the pole path beyond it face-on
     overlays={'celestial': False, 'axis_trail': False, 'polhode': False},

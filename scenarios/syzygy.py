@@ -45,14 +45,15 @@ def _syzygy(values, progress=None):
     modes = sz.linear_modes(m, side)
     # the displayed run: Euler's start (or the exact linear mode) + optional seed of the escape
     s0 = sz.initial_state(m, A, side, values["start"], values["escape_seed"])
-    t, S, _ = sz.integrate(m, s0, 2 * math.pi * values["duration_yr"], n_samples=N_SAMPLES)
+    part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
+    t, S, _ = sz.integrate(m, s0, 2 * math.pi * values["duration_yr"], n_samples=N_SAMPLES, progress=part(0.0, 0.5))
     eta, v = sz.eta_and_distance(S, side)
     left = t[-1] < 2 * math.pi * values["duration_yr"] * (1 - 1e-9)
     # a clean measurement: the exact linear mode at a tiny amplitude plus a tinier seed of the
     # escape; fit η = a cos ωt + b sin ωt + c e^{λt} + d e^{−λt} in the linear regime
     A_meas = 1e-6
     tm, Sm, _ = sz.integrate(m, sz.initial_state(m, A_meas, side, "linear-mode", 1e-9), 2 * math.pi * 2.0,
-                             n_samples=8000)
+                             n_samples=8000, progress=part(0.5, 1.0))
     etam, _ = sz.eta_and_distance(Sm, side)
     w_meas, lam_meas, fit_res = sz.fit_swing_and_escape(tm, etam, A_meas,
                                                          guess=(modes["frequency"], modes["escape_exponent"]))
@@ -143,16 +144,24 @@ def _syzygy_params():
 
     return (
         Param("side", "conjunction", kind="choice", choices=("conjunction", "opposition"),
-              help="Moon between Earth and Sun (§7) or beyond the Earth (§9)"),
-        Param("amplitude_deg", 0.05, 0.0, 20.0, "deg", "A: amplitude of η, the Moon's angle from the Sun line"),
+              help="Moon between Earth and Sun (§7) or beyond the Earth (§9)",
+              label="Side",
+              choice_labels=("conjunction: Moon between Earth and Sun", "opposition: Moon beyond the Earth")),
+        Param("amplitude_deg", 0.05, 0.0, 20.0, "deg", "A: amplitude of η, the Moon's angle from the Sun line",
+              label="Swing amplitude A"),
         Param("start", "linear-mode", kind="choice", choices=("euler", "linear-mode"),
-              help="Euler's first-order solution at ω = 0, or the exact linear centre mode"),
-        Param("escape_seed", 0.0, 0.0, 0.1, "b", "extra displacement along the unstable direction"),
-        Param("duration_yr", 1.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)"),
+              help="Euler's first-order solution at ω = 0, or the exact linear centre mode",
+              label="Start", choice_labels=("Euler's first-order start", "exact small-swing mode")),
+        Param("escape_seed", 0.0, 0.0, 0.1, "b", "extra displacement along the unstable direction",
+              label="Push along the escape direction"),
+        Param("duration_yr", 1.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)",
+              label="Length of the run"),
         Param("mass_ratio", sz.EARTH_SUN_MASS_RATIO, 1e-9, 1.0, "1",
-              "m = M_earth/M_sun (IAU 2009: 3.0035e-6); Euler's n²c³/a³ is m/(1 + m)"),
+              "m = M_earth/M_sun (IAU 2009: 3.0035e-6); Euler's n²c³/a³ is m/(1 + m)",
+              label="Earth/Sun mass ratio m", advanced=True),
         Param("moon_revolutions_per_year", sz.MOON_REVOLUTIONS_PER_YEAR, 1.0, 100.0, "1/yr",
-              "n: sidereal months per sidereal year (13.369; Euler: √175 = 13.23); sets the lunar unit"),
+              "n: sidereal months per sidereal year (13.369; Euler: √175 = 13.23); sets the lunar unit",
+              label="Months per year n", advanced=True),
     )
 
 

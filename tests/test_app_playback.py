@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from theoria.app.scene import REPEAT_CELL, SceneView, drop_repeats
+from theoria.app.scene import REPEAT_CELL, TRAIL_CHUNKS, SceneView, drop_repeats
 from theoria.physics.quaternion import rotate
 from theoria.scenarios import get
 from theoria.scenarios.drawing import omega_scale, z_to_many
@@ -67,7 +67,7 @@ def test_periodic_polhode_sends_fewer_points_and_arrows_move_by_pose():
     sent = {n: len(h.points) for n, h in view._h.items() if h.kind == "add_point_cloud"}
     polhode = sum(v for n, v in sent.items() if n.startswith("/world/body/polhode/"))
     assert polhode < 0.5 * 10000  # 9 flips retrace the same two loops
-    assert len([n for n in sent if n.startswith("/world/body/polhode/")]) == 24
+    assert len([n for n in sent if n.startswith("/world/body/polhode/")]) == TRAIL_CHUNKS  # a growing trail
     # the ω / L arrows: direction by the frame's pose, geometry only when the length changes
     scene.log.clear()
     n = d.n_frames

@@ -200,7 +200,7 @@ def test_hyperion_section_points_and_resonance_lines(runs):
 
 
 def test_moon_view_from_the_earth(runs):
-    run, d = _drawing(runs, "moon")
+    run, d = _drawing(runs, "moon", earth_view=True)
     tr = run.trajectory
     e = _unit(tr.bodies["earth"][d.frames])
     assert isinstance(d.follow, Follow)
@@ -375,6 +375,9 @@ def test_session_applies_the_moons_camera_and_gives_the_view_back():
 
     with _session("moon") as (s, client):
         _wait(lambda: s.updates >= 1)
+        assert s.drawing.follow is None and "face" in s.drawing.names()  # by default: space, the face beside
+        on = [h for h in s._option_handles if "view from the earth" in h.label.lower()][0]
+        on.value = True
         with s._view_lock:
             s.view.set_frame(17)
             s._follow_camera()
@@ -383,7 +386,7 @@ def test_session_applies_the_moons_camera_and_gives_the_view_back():
             assert np.allclose(pos / np.linalg.norm(pos), e / np.linalg.norm(e), atol=1e-9)
             assert client.camera.fov == pytest.approx(np.radians(60.0))
             assert "ζ, Euler §833 (deg)" in s._plot_key  # the plot shows the drawing's choice
-        cb = [h for h in s._option_handles if h.label.startswith("view from the Earth")][0]
+        cb = on
         cb.value = False  # the checkbox's callback: option off → the scenario's camera and fov back
         assert client.camera.fov == pytest.approx(np.radians(75.0))
         assert tuple(client.camera.position) != tuple(pos)

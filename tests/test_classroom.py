@@ -1,27 +1,39 @@
-"""Many browsers at once: clients that leave — even in the middle of a long
-simulation — leave nothing running, over repeated connect/disconnect cycles.
+"""A class of students on one server, tried as an attacker would: each test speaks viser's own
+websocket protocol (`theoria.benchmarks.classroom.ViserProtocolClient`: the camera handshake
+that makes the server build a ClientSession, control values as msgpack), so the server runs
+exactly as with browsers, and asserts the outcome.
 
-The clients are `theoria.benchmarks.classroom.ViserProtocolClient`: viser's own websocket protocol (the
-camera handshake that makes the server build a ClientSession, GUI updates as msgpack), so the
-server side runs exactly as with a browser."""
+- a share-link request (and every message type the app does not use) is dropped and logged
+  once; no process is started, no name looked up, no socket opened to anything but loopback;
+- a run that would take minutes, then a closed tab: the simulation processes are idle again
+  within a couple of seconds;
+- a flood of control updates from one client reaches the app coalesced (newest value wins) and
+  another client's slider still gets its redraw;
+- sockets that never open the app are closed, and one address cannot hold more than its share;
+- a parameter value longer than a sane length is dropped before it is parsed, never echoed;
+- a small class switching scenarios with an abusive client among them: every student gets a
+  first scene and every action its redraw, and nothing runs on after they leave.
+
+No test asserts a wall-clock latency (the machine is shared); timeouts are generous.
+"""
 from __future__ import annotations
 
 import asyncio
 import contextlib
 import io
+import random
+import socket
 import threading
 import time
 
+import numpy as np
 import pytest
 
-from theoria.benchmarks.classroom import ViserProtocolClient, _free_port
-from theoria.app.server import make_server
+from theoria.app import worker as worker_mod
+from theoria.app.server import GUI_BURST, GUI_RATE, Limits, make_server
+from theoria.benchmarks.classroom import SLIDER, ViserProtocolClient, _free_port
 
-CYCLES = 6
-
-
-def _session_threads():
-    return [t for t in threading.enumerate() if t.name.startswith(("sim-", "play-")) and t.is_alive()]
+psutil = pytest.importorskip("psutil")
 
 
 def _wait(cond, limit=120.0):
@@ -33,70 +45,355 @@ def _wait(cond, limit=120.0):
     return True
 
 
-@pytest.fixture()
-def server():
+@contextlib.contextmanager
+def _server(scenario="middle-axis-flip", **kw):
     with contextlib.redirect_stdout(io.StringIO()):
-        srv, sessions = make_server(port=_free_port(), host="127.0.0.1", scenario="middle-axis-flip", verbose=False)
-    yield srv, sessions
-    with contextlib.redirect_stdout(io.StringIO()):
-        srv.stop()
+        srv, sessions = make_server(port=_free_port(), host="127.0.0.1", scenario=scenario, verbose=False, **kw)
+    log = io.StringIO()
+    srv._theoria_door.log.stream = log
+    try:
+        yield srv, sessions, f"ws://127.0.0.1:{srv.get_port()}", log
+    finally:
+        with contextlib.redirect_stdout(io.StringIO()):
+            srv.stop()
 
 
-def test_disconnect_mid_simulation_leaves_nothing_running(server):
-    srv, sessions = server
-    url = f"ws://127.0.0.1:{srv.get_port()}"
-    base_threads = threading.active_count()
-    seen_threads = set()
-
-    async def cycle(k):
-        c = ViserProtocolClient(url)
-        await c.connect()
-        assert await c.wait_for(lambda: c.update_no >= 1, 120), "no first scene"
-        seen_threads.update(t.name for t in _session_threads())
-        # a long run (duration 3000 s at step 0.005: 6e5 steps, seconds of work), then leave at once
-        await c.send_gui(c.uuid_of("duration"), 3000.0)
-        await asyncio.sleep(0.3 if k % 2 else 0.0)
-        await c.close()
-
-    for k in range(CYCLES):
-        asyncio.run(cycle(k))
-    assert len(seen_threads) >= 2 * CYCLES  # each browser had its own worker and player
-    # every session is closed and its worker and player threads end (the running integration is
-    # abandoned from its progress callback, not finished)
-    assert _wait(lambda: not sessions and not _session_threads()), [t.name for t in _session_threads()]
-    assert _wait(lambda: threading.active_count() <= base_threads + 2), threading.enumerate()
+def _children_cpu(pool) -> float:
+    """CPU seconds used so far by the pool's simulation processes."""
+    total = 0.0
+    for pid in pool.child_pids():
+        try:
+            c = psutil.Process(pid).cpu_times()
+            total += c.user + c.system
+        except psutil.Error:
+            pass
+    return total
 
 
-def test_concurrent_clients_each_get_their_own_redraw(server):
-    """Five clients moving the same slider at once: each gets its own scene back, with its own value."""
-    srv, sessions = server
-    url = f"ws://127.0.0.1:{srv.get_port()}"
+def _idle_within(pool, seconds: float, window: float = 1.0, threshold: float = 0.03) -> bool:
+    """True when, within `seconds`, a `window` passes in which the simulation processes use less
+    than `threshold` CPU seconds."""
+    t_end = time.time() + seconds
+    while time.time() < t_end:
+        c0 = _children_cpu(pool)
+        time.sleep(window)
+        if _children_cpu(pool) - c0 < threshold:
+            return True
+    return False
 
-    async def main():
-        cs = [ViserProtocolClient(url) for _ in range(5)]
-        for c in cs:
+
+def test_share_request_is_dropped_and_nothing_leaves_the_machine(monkeypatch):
+    """The ShareUrlRequest that makes a plain viser server open a public tunnel, and message
+    types the app does not offer, from a raw websocket peer: no child process, no name lookup,
+    no socket to anything but loopback; each refusal logged once."""
+    lookups, connects = [], []
+    real_gai, real_cc = socket.getaddrinfo, socket.create_connection
+
+    def gai(host, *a, **k):
+        if host not in ("127.0.0.1", "localhost", "::1", None):
+            lookups.append(host)
+        return real_gai(host, *a, **k)
+
+    def cc(address, *a, **k):
+        if address[0] not in ("127.0.0.1", "localhost", "::1"):
+            connects.append(address)
+        return real_cc(address, *a, **k)
+
+    monkeypatch.setattr(socket, "getaddrinfo", gai)
+    monkeypatch.setattr(socket, "create_connection", cc)
+    me = psutil.Process()
+    with _server() as (srv, sessions, url, log):
+        async def attack():
+            c = ViserProtocolClient(url)
             await c.connect()
-        for c in cs:
-            assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
-        lat = await asyncio.gather(*(c.move_slider("perturbation", 0.02 * (i + 1), timeout=300) for i, c in enumerate(cs)))
-        for c in cs:
+            assert await c.wait_for(lambda: c.update_no >= 1, 120)
+            before = {p.pid for p in me.children(recursive=True)}
+            for _ in range(3):
+                await c.send_raw({"type": "ShareUrlRequest"})
+                await c.send_raw({"type": "ShareUrlDisconnect"})
+            await c.send_raw({"type": "ScenePointerMessage", "event_type": "click", "ray_origin": None,
+                              "ray_direction": None, "screen_pos": [[0.0, 0.0]], "modifier": None})
+            await c.send_raw({"type": "FileTransferStartUpload", "source_component_uuid": "x", "transfer_uuid": "y",
+                              "filename": "a", "mime_type": "b", "part_count": 1, "size_bytes": 1})
+            await asyncio.sleep(3.0)
+            after = {p.pid for p in me.children(recursive=True)}
+            alive = not c._reader.done()
             await c.close()
-        return lat
+            return before, after, alive
 
-    lat = asyncio.run(main())
-    assert all(x is not None for x in lat), lat
-    assert _wait(lambda: not sessions and not _session_threads())
+        before, after, alive = asyncio.run(attack())
+        assert alive  # the server did not drop the honest part of the connection either
+        assert after <= before, f"new processes: {after - before}"
+        assert srv._share_tunnel is None
+        assert not lookups and not connects, (lookups, connects)
+        for p in [me] + me.children(recursive=True):
+            for conn in p.net_connections(kind="inet"):
+                for addr in (conn.laddr, conn.raddr):
+                    if addr:
+                        assert addr.ip in ("127.0.0.1", "::1", "0.0.0.0") or addr.ip.startswith("::ffff:127."), conn
+        text = log.getvalue()
+        assert text.count("ShareUrlRequest") == 1 and text.count("ShareUrlDisconnect") == 1, text
+        assert "ScenePointerMessage" in text and "FileTransferStartUpload" in text
+        assert srv._theoria_door.refused.get("ShareUrlRequest") == 3
+
+
+def test_closed_tab_stops_a_run_of_minutes(monkeypatch):
+    """A run that would take minutes (2·10⁷ steps of the flip), then the tab closes: the
+    simulation processes are idle within a couple of seconds, and nothing of the session stays."""
+    with _server() as (srv, sessions, url, log):
+        pool = srv._theoria_pool
+
+        async def visit():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            assert await c.wait_for(lambda: c.update_no >= 1, 120)
+            await c.enter("Length of the run", "100000")
+            await c.wait_for(lambda: "simulating" in c.status, 30)
+            await asyncio.sleep(1.5)  # the run is under way in a simulation process
+            busy = _children_cpu(pool)
+            await asyncio.sleep(1.0)
+            busy = _children_cpu(pool) - busy
+            await c.close()
+            return busy
+
+        busy = asyncio.run(visit())
+        assert busy > 0.05, "the long run was not running"  # a niced process on a loaded machine
+        t_closed = time.time()
+        assert _idle_within(pool, 6.0), "a simulation process kept working after the tab closed"
+        assert time.time() - t_closed < 6.0
+        assert _wait(lambda: not sessions, 30)
+        assert _wait(lambda: not pool.busy() or pool.pending_background(), 30)
+
+
+def test_run_beyond_the_wall_clock_limit_is_stopped(monkeypatch):
+    monkeypatch.setattr(worker_mod, "RUN_SECONDS_LIMIT", 2.0)
+    with _server() as (srv, sessions, url, log):
+        async def visit():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            assert await c.wait_for(lambda: c.update_no >= 1, 120)
+            await c.enter("Length of the run", "90000")  # within the step budget, over the time limit
+            ok = await c.wait_for(lambda: any("at most 2 s of computing" in b for _, b in c.notifications), 60)
+            await c.close()
+            return ok, c.notifications
+
+        ok, notes = asyncio.run(visit())
+        assert ok, notes
+        assert any(t.startswith("Not allowed: Length of the run") for t, _ in notes), notes
+        assert _idle_within(srv._theoria_pool, 6.0)
+
+
+def test_flood_of_updates_is_coalesced_and_does_not_starve_another_client():
+    with _server() as (srv, sessions, url, log):
+        door = srv._theoria_door
+
+        async def main():
+            abuser, student = ViserProtocolClient(url), ViserProtocolClient(url)
+            await abuser.connect()
+            await student.connect()
+            for c in (abuser, student):
+                assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
+            uuid = abuser.uuid_of(SLIDER)
+            t0 = time.monotonic()
+            for k in range(3000):
+                await abuser.send_gui(uuid, round(3.0 + 0.1 * (k % 50), 1))
+            await abuser.send_gui(uuid, 9.5)  # the last value the abuser sent
+            lat = await student.move_slider(SLIDER, 2.5, timeout=180)
+            await asyncio.sleep(2.0)
+            elapsed = time.monotonic() - t0
+            final = None
+            for _ in range(600):  # the newest value reached the abuser's session
+                values = [s.controls.values().get("spin") for s in list(sessions.values())]
+                if 9.5 in values:
+                    final = 9.5
+                    break
+                await asyncio.sleep(0.1)
+            seen = (len(sessions), list(door.gates.values()))
+            for c in (abuser, student):
+                await c.close()
+            return lat, elapsed, final, seen
+
+        lat, elapsed, final, (n_sessions, gates) = asyncio.run(main())
+        assert n_sessions == 2
+        assert lat is not None, "the other client's slider got no redraw"
+        abuser_gate = max(gates, key=lambda g: g.coalesced)
+        # the app saw at most what the rate allows; the rest was coalesced, the last value kept
+        assert abuser_gate.coalesced >= 3000 - (GUI_BURST + GUI_RATE * elapsed) - 1
+        assert final == 9.5
+
+
+def test_idle_sockets_are_closed_and_one_address_cannot_take_every_seat():
+    limits = Limits(max_connections=50, max_per_address=3, handshake_s=1.0)
+    with _server(limits=limits) as (srv, sessions, url, log):
+        async def main():
+            idle = [ViserProtocolClient(url) for _ in range(3)]
+            for c in idle:
+                await c.connect(handshake=False)  # a socket that never opens the app
+            await asyncio.sleep(3.0)
+            closed_idle = [c._reader.done() for c in idle]
+            many = [ViserProtocolClient(url) for _ in range(5)]
+            for c in many:
+                await c.connect()
+            await asyncio.sleep(3.0)
+            served = [c for c in many if not c._reader.done()]
+            for c in served:
+                assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
+            for c in idle + many:
+                await c.close()
+            # seats free again: a new student gets in
+            late = ViserProtocolClient(url)
+            await late.connect()
+            ok = await late.wait_for(lambda: late.update_no >= 1, 120)
+            await late.close()
+            return closed_idle, len(served), ok
+
+        closed_idle, served, ok = asyncio.run(main())
+        assert all(closed_idle), closed_idle
+        assert served == 3
+        assert ok
+        assert "too many from one address" in log.getvalue() and "never opened the app" in log.getvalue()
+
+
+def test_long_values_are_dropped_unparsed_and_never_echoed():
+    with _server() as (srv, sessions, url, log):
+        async def main():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            assert await c.wait_for(lambda: c.update_no >= 1, 120)
+            k = c.update_no
+            big = "9" * 10_000_000
+            await c.send_gui(c.uuid_of("Length of the run"), big)
+            await c.send_raw({"type": "GuiUpdateMessage", "uuid": c.uuid_of("Length of the run"),
+                              "updates": {"update_cb": "x", "value": 3.0}})  # not only a value
+            await c.send_gui(c.uuid_of("Length of the run"), [1.0] * 1000)
+            await asyncio.sleep(3.0)
+            alive = not c._reader.done()
+            # still served: a plain value works
+            lat = await c.move_slider(SLIDER, 7.0, timeout=120)
+            await c.close()
+            return alive, k, c, lat
+
+        alive, k, c, lat = asyncio.run(main())
+        assert alive and lat is not None
+        text = log.getvalue()
+        assert "9" * 100 not in text and all("9" * 100 not in b for _, b in c.notifications)
+        assert "longer than" in text and "other than a value" in text and "short list" in text
+
+
+def test_small_class_with_an_abusive_client():
+    """Six students switching scenario, choosing presets and moving sliders while a seventh
+    floods a slider: every student's first scene and every action's redraw arrive, and nothing
+    runs on after they leave."""
+    from theoria.benchmarks import classroom as bench
+
+    with _server(scenario="free-tumble") as (srv, sessions, url, log):
+        pool = srv._theoria_pool
+
+        # scenes whose runs take well under a second (their labels in the scenario dropdown)
+        quick = ("left to itself", "flip about the middle", "at rest set turning", "pole of rotation near",
+                 "kept in syzygy", "Three bodies on a line", "Libration in a circular")
+
+        async def main():
+            rec = {"actions": [], "first_scene": [], "never_served": [], "errors": []}
+            t_end = time.perf_counter() + 25.0
+            tasks = [asyncio.create_task(bench._abuser(url, t_end, rec))]
+            for i in range(6):
+                tasks.append(asyncio.create_task(bench._student(i, url, t_end, rec, scenarios=quick)))
+            await asyncio.gather(*tasks)
+            return rec
+
+        old = bench.REDRAW_TIMEOUT_S
+        bench.REDRAW_TIMEOUT_S = 180.0
+        try:
+            rec = asyncio.run(main())
+        finally:
+            bench.REDRAW_TIMEOUT_S = old
+        assert not rec["errors"], rec["errors"]
+        assert not rec["never_served"] and len(rec["first_scene"]) == 6
+        assert rec["actions"], "no student acted"
+        missing = [a for a in rec["actions"] if not a["answered"]]
+        assert not missing, repr(missing)
+        assert rec.get("abuse_sent", 0) >= 3000
+        assert _wait(lambda: not sessions, 30)
+        assert _idle_within(pool, 8.0), "simulations ran on after every student left"
+
+
+def test_the_same_values_are_computed_once_for_every_browser():
+    """Runs are deterministic: five browsers asking for the same new values make one job, and
+    a sixth gets the run from the cache."""
+    with _server() as (srv, sessions, url, log):
+        pool = srv._theoria_pool
+
+        async def main():
+            cs = [ViserProtocolClient(url) for _ in range(5)]
+            for c in cs:
+                await c.connect()
+            for c in cs:
+                assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
+            value = round(random.uniform(10.0, 40.0), 1)  # values no earlier test asked for
+            jobs0 = pool.stats["jobs"]
+            lat = await asyncio.gather(*(c.move_slider(SLIDER, value, timeout=180) for c in cs))
+            jobs = pool.stats["jobs"] - jobs0
+            late = ViserProtocolClient(url)
+            await late.connect()
+            await late.wait_for(lambda: late.update_no >= 1, 120)
+            hits0 = pool.stats["cache_hits"]
+            lat.append(await late.move_slider(SLIDER, value, timeout=180))
+            hits = pool.stats["cache_hits"] - hits0
+            for c in cs + [late]:
+                await c.close()
+            return lat, jobs, hits
+
+        lat, jobs, hits = asyncio.run(main())
+        assert all(x is not None for x in lat), lat
+        assert jobs <= 2  # one for the value (at most one more if a browser's request raced the first)
+        assert hits >= 1
+
+
+def test_budget_is_checked_before_the_run_starts():
+    """A scenario whose budget refuses the values: the browser is told which parameter and what
+    fits, and the simulate function never runs."""
+    from theoria.physics.errors import ParameterError
+    from theoria.physics.params import Param
+    from theoria.scenarios import base
+
+    ran = []
+
+    class Budgeted(base.Scenario):
+        def check_budget(self, values):
+            if values["x"] > 1.5:
+                raise ParameterError("x", values["x"], "this run needs 2e9 steps, over the limit of 2e7; x ≤ 1.5 fits")
+
+    def sim(values, progress=None):
+        ran.append(values["x"])
+        return base.get("free-tumble").simulate_fn(base.get("free-tumble").resolve({"duration": 2.0}))
+
+    spec = Budgeted("test-budget", "budget", "§0", "ch. 15", "a budgeted run", (Param("x", 1.0, 0.0, 2.0),), sim)
+    base.REGISTRY[spec.name] = spec
+    try:
+        with _server(scenario="test-budget") as (srv, sessions, url, log):
+            async def main():
+                c = ViserProtocolClient(url)
+                await c.connect()
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                await c.send_gui(c.uuid_of("x"), 1.9)
+                ok = await c.wait_for(lambda: any("x ≤ 1.5 fits" in b for _, b in c.notifications), 60)
+                await c.close()
+                return ok
+
+            assert asyncio.run(main())
+            assert 1.9 not in ran
+    finally:
+        base.REGISTRY.pop(spec.name, None)
 
 
 def test_app_reports_divergence_and_survives_a_raising_scenario():
     """In the app: a diverging run shows 'diverged at t=...' beside the scene (the finite part is
     drawn); a scenario that raises gives the browser a notification and the server keeps serving
     the next browser."""
-    import numpy as np
-
     from theoria.physics.params import Param
-    from theoria.scenarios import base
     from theoria.physics.trajectory import Trajectory
+    from theoria.scenarios import base
 
     def blowup(values, progress=None):
         t = np.linspace(0.0, 5.0, 51)
@@ -114,11 +411,7 @@ def test_app_reports_divergence_and_survives_a_raising_scenario():
         base.REGISTRY[s.name] = s
     try:
         for name in ("test-blowup", "test-broken"):
-            with contextlib.redirect_stdout(io.StringIO()):
-                srv, sessions = make_server(port=_free_port(), host="127.0.0.1", scenario=name, verbose=False)
-            try:
-                url = f"ws://127.0.0.1:{srv.get_port()}"
-
+            with _server(scenario=name) as (srv, sessions, url, log):
                 async def visit():
                     c = ViserProtocolClient(url)
                     await c.connect()
@@ -137,11 +430,34 @@ def test_app_reports_divergence_and_survives_a_raising_scenario():
                     if name == "test-blowup":
                         assert shown >= 1  # the finite part was drawn
                     else:
-                        assert any(t.startswith("Error in test-broken") for t, _ in notes), notes
-                assert _wait(lambda: not sessions and not _session_threads())
-            finally:
-                with contextlib.redirect_stdout(io.StringIO()):
-                    srv.stop()
+                        assert any(t.startswith("Error in ") and "broken" in t for t, _ in notes), notes  # its title
+                assert _wait(lambda: not sessions)
     finally:
         for s in specs:
             base.REGISTRY.pop(s.name, None)
+
+
+def test_playback_is_one_thread_for_every_browser():
+    """Sessions leave no thread behind; playback of every browser runs on one thread."""
+    with _server() as (srv, sessions, url, log):
+        async def cycle():
+            cs = [ViserProtocolClient(url) for _ in range(3)]
+            for c in cs:
+                await c.connect()
+            for c in cs:
+                assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
+            await asyncio.sleep(1.0)
+            names = [t.name for t in threading.enumerate()]
+            for c in cs:
+                await c.close()
+            return names
+
+        names = asyncio.run(cycle())
+        assert _wait(lambda: not sessions)
+        after_one = threading.active_count()
+        names2 = asyncio.run(cycle())
+        assert _wait(lambda: not sessions)
+        for ns in (names, names2):
+            assert ns.count("theoria-playback") == 1
+            assert not any(n.startswith(("play-", "sim-")) for n in ns)
+        assert _wait(lambda: threading.active_count() <= after_one + 1)  # three more browsers left nothing

@@ -167,6 +167,18 @@ class FakeGuiHandle:
         return cb
 
     on_click = on_update
+    on_trigger = on_update
+
+    def on_submit(self, cb):
+        object.__setattr__(self, "_submit", getattr(self, "_submit", []) + [cb])
+        return cb
+
+    def submit(self):
+        for cb in getattr(self, "_submit", []):
+            cb(types.SimpleNamespace(target=self, client=None))
+
+    def add_tab(self, label, icon=None):
+        return FakeGuiHandle("tab", label)
 
     def remove(self):
         object.__setattr__(self, "removed", True)
@@ -191,12 +203,12 @@ class FakeGui:
         kind = method[4:]
 
         def add(*args, **kw):
-            label = args[0] if args and isinstance(args[0], str) and kind not in ("markdown",) else None
+            label = args[0] if args and isinstance(args[0], str) and kind not in ("markdown", "html") else None
             if "initial_value" in kw:
                 value = kw.pop("initial_value")
-            elif kind in ("number", "vector3") and len(args) > 1:
+            elif kind in ("number", "vector3", "text") and len(args) > 1:
                 value = args[1]
-            elif kind == "dropdown":
+            elif kind in ("dropdown", "button_group"):
                 value = args[1][0]
             elif kind == "progress_bar":
                 value = args[0]
@@ -204,7 +216,7 @@ class FakeGui:
                 value = None
             if kind == "dropdown":
                 kw["options"] = tuple(args[1])
-            if kind == "markdown":
+            if kind in ("markdown", "html"):
                 kw["content"] = args[0]
             h = FakeGuiHandle(kind, label, value, **kw)
             self.handles.append(h)
@@ -295,7 +307,7 @@ def test_switching_scenario_in_the_session_updates_presets_camera_and_scene():
         assert "/world/body/mesh" not in s.view._h
         pos, look = gallery.camera_for(target)
         assert client.camera.position is not None and client.camera.up_direction == (0.0, 0.0, 1.0)
-        assert "(A+B)α⁵" in s.info.content and "$" not in s.info.content
+        assert "(A+B)α⁵" in s.read.content and "$" not in s.read.content
         with s._view_lock:
             assert set(s.view._h) == {n for n in _alive(client.scene) if n.startswith("/world")}
 

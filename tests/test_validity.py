@@ -39,7 +39,7 @@ def test_flip_interval_at_tiny_nudges_against_mpmath(nudge):
     Now the run, Jacobi's 2K/λ and Euler's quadrature all agree with mpmath to 1e-12 (asked: 1e-6),
     and nothing needs to be said."""
     spin, I = 6.0, (1.0, 2.0, 3.0)
-    r = th.scenario("middle-axis-flip").simulate(perturbation=nudge, duration=60.0)
+    r = th.scenario("middle-axis-flip").simulate(inertia=I, spin=spin, perturbation=nudge, duration=60.0)
     ref, gap = _flip_interval_mpmath(I, (nudge * spin, spin, nudge * spin))
     assert float(gap) < 1e-10
     m = r.metrics
@@ -80,7 +80,7 @@ def test_separatrix_precision_warning():
 def test_coarse_step_aliases_the_flip_and_says_so():
     """A step of 2 s stores samples farther apart than half the spin period and half the flip
     interval: flips between samples go unseen, so the measured interval is not reported."""
-    r = th.scenario("middle-axis-flip").simulate(step=2.0, duration=200.0)
+    r = th.scenario("middle-axis-flip").simulate(inertia=(1.0, 2.0, 3.0), spin=6.0, step=2.0, duration=200.0)
     assert math.isnan(r.metrics["flip_interval"])
     assert any("too sparse" in w and "middle axis" in w for w in r.warnings)
     assert any("too sparse" in w and "turn of the body" in w for w in r.warnings)

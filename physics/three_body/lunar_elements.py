@@ -170,16 +170,34 @@ def _rk4(which, y0, t0, h, nsteps, stride, mu, mus, sun, sign4, series):
     return out
 
 
+RK4_CHUNKS = 50  # with a progress callback: the run in this many compiled pieces, the callback between
+
+
 def integrate_rk4(kind: str, y0, duration_days: float, step_days: float, sample_days: float, mu, mus, sun,
-                  printed_sign: bool = False, euler_series: bool = False):
+                  printed_sign: bool = False, euler_series: bool = False, progress=None):
     """Classical RK4 at a fixed step (compiled). kind = "cartesian" | "elements".
     Returns (t, states) sampled every `sample_days` (rounded to whole steps). printed_sign /
-    euler_series: see `rhs_elements`."""
+    euler_series: see `rhs_elements`. `progress(frac)`, if given, is called between pieces of
+    about 1/RK4_CHUNKS of the run (it may raise to stop the run); the pieces restart from the
+    state and time reached, which changes the result only at the level of rounding."""
     stride = max(1, int(round(sample_days / step_days)))
     nsteps = int(math.ceil(duration_days / step_days / stride)) * stride
-    out = _rk4(0 if kind == "cartesian" else 1, np.asarray(y0, float), 0.0, step_days, nsteps, stride,
-               mu, mus, np.asarray(sun, float), -1.0 if printed_sign else 1.0,
-               1.0 if euler_series else 0.0)
+    which, sign4, ser = (0 if kind == "cartesian" else 1), (-1.0 if printed_sign else 1.0), (1.0 if euler_series else 0.0)
+    sun = np.asarray(sun, float)
+    y = np.asarray(y0, float)
+    if progress is None:
+        out = _rk4(which, y, 0.0, step_days, nsteps, stride, mu, mus, sun, sign4, ser)
+    else:
+        per = max(1, nsteps // stride // RK4_CHUNKS) * stride  # steps per piece, whole samples
+        pieces, done = [y[None, :]], 0
+        while done < nsteps:
+            n = min(per, nsteps - done)
+            part = _rk4(which, y, done * step_days, step_days, n, stride, mu, mus, sun, sign4, ser)
+            pieces.append(part[1:])
+            y = part[-1].copy()
+            done += n
+            progress(done / nsteps)
+        out = np.concatenate(pieces)
     return np.arange(out.shape[0]) * stride * step_days, out
 
 

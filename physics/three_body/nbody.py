@@ -21,9 +21,27 @@ def _accelerations(pos: np.ndarray, masses: np.ndarray, G: float) -> np.ndarray:
     return G * np.einsum("ij,ijk->ik", inv3 * masses[None, :], d)
 
 
+def with_progress(rhs, t0: float, t1: float, progress, every: int = 200):
+    """`rhs` calling `progress(fraction of [t0, t1] reached)` every `every` evaluations: an adaptive
+    scipy integration can then be cancelled (the callback raises) and shows how far it is."""
+    if progress is None:
+        return rhs
+    span = (t1 - t0) or 1.0
+    count = [0]
+
+    def f(t, y, *args):
+        count[0] += 1
+        if count[0] % every == 0:
+            progress(min(1.0, max(0.0, (t - t0) / span)))
+        return rhs(t, y, *args)
+
+    return f
+
+
 def integrate_dop853(masses, pos0, vel0, t_eval, G: float = 1.0, rtol: float = 1e-12, atol: float = 1e-14,
-                     events=None):
-    """Positions (len(t_eval), N, 3) and velocities of N point masses, DOP853."""
+                     events=None, progress=None):
+    """Positions (len(t_eval), N, 3) and velocities of N point masses, DOP853. `progress(frac)` is
+    called every 200 right-hand-side evaluations (it may raise to stop the run)."""
     masses = np.asarray(masses, float)
     n = len(masses)
     y0 = np.concatenate([np.asarray(pos0, float).ravel(), np.asarray(vel0, float).ravel()])
@@ -33,8 +51,8 @@ def integrate_dop853(masses, pos0, vel0, t_eval, G: float = 1.0, rtol: float = 1
         return np.concatenate([y[3 * n:], _accelerations(pos, masses, G).ravel()])
 
     t_eval = np.asarray(t_eval, float)
-    sol = solve_ivp(rhs, (t_eval[0], t_eval[-1]), y0, method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol,
-                    events=events)
+    sol = solve_ivp(with_progress(rhs, t_eval[0], t_eval[-1], progress), (t_eval[0], t_eval[-1]), y0,
+                    method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol, events=events)
     y = sol.y.T
     return sol.t, y[:, : 3 * n].reshape(-1, n, 3), y[:, 3 * n:].reshape(-1, n, 3)
 

@@ -304,7 +304,7 @@ def initial_state(m: float, amplitude: float, side: str = "conjunction", start: 
 
 
 def integrate(m: float, s0, t_end: float, n_samples: int = 2000, rtol: float = 1e-12, atol: float = 1e-15,
-              leave_factor: float = 3.0):
+              leave_factor: float = 3.0, progress=None):
     """Integrate the rotating-frame equations (DOP853) until t_end or until the Moon leaves
     (distance outside [b/leave_factor, b·leave_factor] or |η| > 90°). Returns t, states (N,4)."""
     b = math.hypot(s0[0], s0[1])
@@ -317,7 +317,10 @@ def integrate(m: float, s0, t_end: float, n_samples: int = 2000, rtol: float = 1
 
     leave.terminal = True
     t_eval = np.linspace(0.0, t_end, n_samples)
-    sol = solve_ivp(rhs_rotating, (0.0, t_end), np.asarray(s0, float), method="DOP853", t_eval=t_eval,
+    from .nbody import with_progress  # progress(frac) every 200 evaluations; it may raise to stop the run
+
+    sol = solve_ivp(with_progress(rhs_rotating, 0.0, t_end, progress), (0.0, t_end), np.asarray(s0, float),
+                    method="DOP853", t_eval=t_eval,
                     args=(m,), rtol=rtol, atol=atol, events=leave, dense_output=True)
     return sol.t, sol.y.T, sol
 

@@ -1,0 +1,112 @@
+"""The page a browser loads, and what the server sets on it.
+
+viser serves one self-contained `index.html` (its client inlined). theoria serves a copy with:
+
+- the tab titled "theoria" from the first byte (the session then names the scenario);
+- a visible line ("theoria — connecting…") in the page's root until viser's client replaces it,
+  so the page is never blank while the client starts and the first scene is prepared;
+- CSS that hides viser's own chrome a class has no use for from the first frame.
+
+The copy is written once per viser version into theoria's cache directory (a temporary
+directory when that is not writable) and used as viser's HTTP root while a server is built
+(`themed_client`).
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import tempfile
+import threading
+from pathlib import Path
+
+import viser
+from viser import infra
+
+from .browser import run_js
+from .worker import cache_root
+
+TITLE = "theoria"
+LOADING = "theoria — connecting…"
+# The loading line is shown over the page from its first frame until the first scene is drawn
+# (`set_loading(client, None)`). While it is there, the content of viser's panel is hidden: before
+# the app's controls arrive, viser fills it with its developer tools (the websocket address, "Save
+# Canvas", "Dev Settings", the scene tree), which a class has no use for.
+CSS = """
+#theoria-loading{position:fixed;left:50%;top:45%;transform:translate(-50%,-50%);z-index:10000;
+  font:17px/1.4 system-ui,sans-serif;color:#222;background:rgba(255,255,255,.94);padding:10px 18px;
+  border-radius:8px;box-shadow:0 1px 6px rgba(0,0,0,.15);pointer-events:none;max-width:70vw;text-align:center}
+body:has(#theoria-loading) .mantine-ScrollArea-root{visibility:hidden}
+"""
+LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div>'
+
+_lock = threading.Lock()
+_root: Path | None = None
+
+
+def _viser_index() -> Path:
+    return Path(viser.__file__).resolve().parent / "client" / "build" / "index.html"
+
+
+def themed_index(html: str) -> str:
+    html = html.replace("<title>Viser</title>", f"<title>{TITLE}</title>", 1)
+    html = html.replace('content="Viser client"', f'content="{TITLE}"', 1)
+    html = html.replace("</head>", f"<style>{CSS}</style></head>", 1)
+    html = html.replace("<body>", "<body>" + LOADING_HTML, 1)
+    return html
+
+
+def client_root() -> Path:
+    """A directory holding theoria's copy of viser's index.html."""
+    global _root
+    with _lock:
+        if _root is not None and (_root / "index.html").exists():
+            return _root
+        src = _viser_index()
+        html = themed_index(src.read_text(encoding="utf-8"))
+        digest = hashlib.blake2b(html.encode(), digest_size=8).hexdigest()
+        for base in (cache_root() / "client", Path(tempfile.gettempdir()) / "theoria-client"):
+            d = base / f"{viser.__version__}-{digest}"
+            try:
+                if not (d / "index.html").exists():
+                    d.mkdir(parents=True, exist_ok=True)
+                    tmp = d / "index.html.tmp"
+                    tmp.write_text(html, encoding="utf-8")
+                    tmp.replace(d / "index.html")
+                _root = d
+                return d
+            except OSError:
+                continue
+        return src.parent
+
+
+_build_lock = threading.Lock()
+
+
+@contextlib.contextmanager
+def themed_client():
+    """While a ViserServer is built inside this block, its HTTP root is theoria's page."""
+    root = client_root()
+    cls = infra.WebsockServer
+    with _build_lock:
+        original = cls.__init__
+
+        def init(self, *args, **kwargs):
+            if kwargs.get("http_server_root") is not None:
+                kwargs["http_server_root"] = root
+            original(self, *args, **kwargs)
+
+        cls.__init__ = init
+        try:
+            yield
+        finally:
+            cls.__init__ = original
+
+
+def set_loading(client, text: str | None) -> None:
+    """The line over the page: `text`, or gone (None)."""
+    if text is None:
+        run_js(client, "var e=document.getElementById('theoria-loading'); if(e){e.remove();}")
+    else:
+        run_js(client, "var e=document.getElementById('theoria-loading'); if(!e){e=document.createElement('div');"
+                       "e.id='theoria-loading';document.body.appendChild(e);} e.textContent=" + json.dumps(text) + ";")

@@ -1,0 +1,99 @@
+"""Playback of every browser's scene by one thread, within a share of one core.
+
+A frame of playback is a handful of pose updates (the body's attitude, the ω and L arrows, the
+visibility of a trail chunk) that viser turns into messages for one browser: ~1 ms of the
+server's CPU under its interpreter lock. One thread per browser at a fixed rate made a hundred
+browsers ask for 1,200 such frames a second, more than the server's core holds, and every slider
+and scenario switch queued behind them.
+
+`Ticker` runs each playing session's `_tick()` in turn from one thread. It measures what a tick
+costs (thread CPU time) and gives all playing sessions together PLAY_CPU_SHARE of a core: each
+session plays at min(PLAY_HZ, that budget / sessions playing), never below PLAY_HZ_MIN. One
+browser plays at 60 frames a second; thirty at ~10; a hundred at ~3 (the run's clock keeps real
+time, frames are skipped, not slowed). A paused session costs nothing.
+"""
+from __future__ import annotations
+
+import threading
+import time
+import traceback
+
+PLAY_HZ = 60.0  # at most, for one browser (viser sends messages each 1/60 s)
+PLAY_HZ_MIN = 2.0
+PLAY_CPU_SHARE = 0.35  # of one core, for the playback of all browsers together
+TICK_COST_START = 1e-3  # s of CPU per tick, until measured
+
+
+class Ticker:
+    def __init__(self, share: float = PLAY_CPU_SHARE):
+        self.share = share
+        self._sessions: list = []
+        self._next: dict[int, float] = {}
+        self._lock = threading.Lock()
+        self._wake = threading.Event()
+        self.cost = TICK_COST_START  # running mean CPU seconds per tick
+        self.ticks = 0
+        self._thread = threading.Thread(target=self._loop, daemon=True, name="theoria-playback")
+        self._thread.start()
+
+    def add(self, session) -> None:
+        with self._lock:
+            if session not in self._sessions:
+                self._sessions.append(session)
+                self._next[id(session)] = 0.0
+        self._wake.set()
+
+    def remove(self, session) -> None:
+        with self._lock:
+            if session in self._sessions:
+                self._sessions.remove(session)
+            self._next.pop(id(session), None)
+
+    def rate(self, playing: int | None = None) -> float:
+        """Frames a second each playing session gets now."""
+        if playing is None:
+            playing = sum(1 for s in list(self._sessions) if s.wants_ticks())
+        budget = self.share / max(self.cost, 1e-5)
+        return max(PLAY_HZ_MIN, min(PLAY_HZ, budget / max(1, playing)))
+
+    def _loop(self) -> None:
+        while True:
+            with self._lock:
+                sessions = list(self._sessions)
+            playing = [s for s in sessions if s.wants_ticks()]
+            if not playing:
+                self._wake.wait(0.25)
+                self._wake.clear()
+                continue
+            period = 1.0 / self.rate(len(playing))
+            now = time.perf_counter()
+            soonest = now + period
+            for s in playing:
+                due = self._next.get(id(s), 0.0)
+                if due <= now:
+                    c0 = time.thread_time()
+                    try:
+                        s._tick(now)
+                    except Exception:
+                        if not getattr(s, "_closed", False):
+                            traceback.print_exc()
+                    c = time.thread_time() - c0
+                    self.cost += 0.02 * (c - self.cost)
+                    self.ticks += 1
+                    due = max(due + period, now)  # no catching up after a stall: frames are skipped
+                    if id(s) in self._next:
+                        self._next[id(s)] = due
+                soonest = min(soonest, due)
+            time.sleep(max(0.001, soonest - time.perf_counter()))
+
+
+_TICKER: Ticker | None = None
+_TICKER_LOCK = threading.Lock()
+
+
+def ticker() -> Ticker:
+    global _TICKER
+    with _TICKER_LOCK:
+        if _TICKER is None:
+            _TICKER = Ticker()
+        return _TICKER

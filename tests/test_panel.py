@@ -1,0 +1,167 @@
+"""The panel's words and numbers (app/panel.py), the controls' parsing (app/controls.py), the view
+as a link (app/link.py) and the session's playback controls, without a browser."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from theoria.app import link as linkmod
+from theoria.app.controls import format_value, slider_range
+from theoria.app.panel import human_number, metric_label, verdict
+from theoria.physics.params import Param, pretty_unit
+from theoria.scenarios import all_scenarios, get
+from theoria.scenarios.base import Comparison
+
+
+def test_numbers_read_as_a_person_writes_them():
+    assert human_number(0.0147721) == "0.01477"
+    assert human_number(-2.79613e-11) == "−2.796 × 10⁻¹¹"
+    assert human_number(2.5e6) == "2.5 × 10⁶"
+    assert human_number(123456.7) == "123457"
+    assert human_number(None) == "–" and human_number(float("nan")) == "–"
+    assert human_number(0) == "0"
+    assert human_number((1.0, -0.5)) == "1, −0.5"
+
+
+def test_verdicts_say_how_far_euler_is_from_the_simulation():
+    assert verdict(Comparison("x", 1.0, 1.0 + 1e-12))[1] == "good"
+    assert "0.5 %" in verdict(Comparison("x", 1.0, 1.005))[0] and verdict(Comparison("x", 1.0, 1.005))[1] == "close"
+    assert verdict(Comparison("x", 1.0, 1.5))[1] == "far" and "33 %" in verdict(Comparison("x", 1.0, 1.5))[0]
+    assert verdict(Comparison("x", None, 2.0))[1] == ""
+    words, tone = verdict(Comparison("x", 0.0, -2.8e-11))
+    assert tone == "" and "exactly 0" in words  # no percentage of a zero
+
+
+def test_metric_keys_become_words_with_units():
+    assert metric_label("flip_interval_s") == "Flip interval (s)"
+    assert metric_label("precession_rate_arcsec_per_yr") == "Precession rate (″/yr)"
+    assert metric_label("energy_rel_drift") == "Energy relative drift"
+    assert metric_label("polhode_period_euler_808_s") == "Polhode period Euler's §808 (s)"
+    assert "_" not in metric_label("nutation_longitude_18_6yr_iau2000_arcsec")
+
+
+def test_units_in_words():
+    assert pretty_unit("kg m^2") == "kg·m²" and pretty_unit("m^3/s^2") == "m³/s²" and pretty_unit("1") == ""
+    assert pretty_unit("deg") == "°"
+
+
+def test_every_parameter_has_a_human_label_and_every_choice_its_words():
+    for s in all_scenarios():
+        for p in s.params:
+            assert p.label and "_" not in p.display(), (s.name, p.name)
+            assert p.display() != p.name, (s.name, p.name)
+            if p.kind == "choice" and p.choice_labels:
+                assert len(p.choice_labels) == len(p.choices), (s.name, p.name)
+                for c in p.choices:
+                    assert p.choice_of(p.choice_text(c)) == str(c)
+
+
+@pytest.mark.parametrize("text,value", [("1e9", 1e9), ("2.5e6", 2.5e6), ("1e-3", 1e-3), ("-0.5", -0.5),
+                                        ("0.001", 0.001)])
+def test_typed_numbers_are_taken_exactly(text, value):
+    p = Param("x", 1000.0, -1e12, 1e12, "m")
+    assert p.parse(text) == value
+    assert p.parse(format_value(p, value)) == value  # what a field shows reads back to the same value
+
+
+def test_a_slider_only_when_it_holds_the_default_and_every_preset_on_its_grid():
+    p = Param("perturbation", 0.01, 1e-9, 0.5, "1", step=0.001)
+    assert slider_range(p) is not None
+    assert slider_range(p, presets=[1e-6]) is None  # 10⁻⁶ is not on a 0.001 grid: a text field
+    flip = get("middle-axis-flip")
+    from theoria.app.controls import ParamControls  # noqa: F401
+
+    presets = [g["perturbation"] for g in flip.presets.values() if "perturbation" in g]
+    assert slider_range(flip.param("perturbation"), presets) is None
+
+
+def test_a_link_holds_the_view_and_reads_back():
+    spec = get("middle-axis-flip")
+    values = spec.resolve({"perturbation": 1e-3, "spin": -0.5})
+    st = linkmod.LinkState(scenario=spec.name, params={p.name: linkmod.param_text(p, values[p.name]) for p in spec.params},
+                           time=12.5, playing=False, camera=(3.0, 2.3, 1.8, 0.0, 0.0, 0.0),
+                           options={}, overlays={"axes": False}, present=True)
+    q = linkmod.to_query(st, spec)
+    back = linkmod.from_address("http://h:1/?" + q)
+    assert back.scenario == spec.name and back.time == 12.5 and not back.playing and back.present
+    assert back.camera == st.camera and back.overlays == {"axes": False}
+    got, errors = linkmod.link_values(spec, back)
+    assert errors == [] and got == values
+
+
+def test_a_bad_link_keeps_the_defaults_and_says_which_value():
+    spec = get("middle-axis-flip")
+    got, errors = linkmod.link_values(spec, linkmod.from_address("?s=middle-axis-flip&p.spin=1e9&p.nope=3"))
+    assert got == spec.defaults and {e.name for e in errors} == {"spin", "nope"}
+    assert linkmod.from_address("?cam=1,2,nan").camera is None or not all(
+        math.isfinite(x) for x in linkmod.from_address("?cam=1,2,nan").camera) is False
+
+
+def test_the_class_link_only_on_a_network_address():
+    assert linkmod.class_link("127.0.0.1", 8080) is None
+    assert linkmod.class_link("192.168.1.5", 8080) == "http://192.168.1.5:8080/"
+    assert linkmod.class_link("0.0.0.0", 8080, "http://10.0.0.7:8080/?s=moon") == "http://10.0.0.7:8080/"
+    uri = linkmod.qr_svg_uri("http://10.0.0.7:8080/?s=moon")
+    assert uri.startswith("data:image/svg+xml")
+
+
+# ---- the session's controls with a fake browser ------------------------------------------------
+
+def test_session_typed_values_reset_step_and_presenter_mode(monkeypatch):
+    from test_gallery import _session, _wait
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        n = s.updates
+        s.controls.enter("perturbation", "1e-3")
+        _wait(lambda: s.updates > n, 300)
+        assert s.good_values["perturbation"] == 1e-3
+        # a value out of range is refused with the allowed range; the field shows the last good value
+        s.controls.enter("perturbation", "7")
+        assert client.notes and "0.5" in client.notes[-1][1]
+        assert s.controls.handles["perturbation"].value == "0.001"
+        assert s.controls.values()["perturbation"] == 1e-3
+        # Reset while paused puts the clock at the start and the read-out follows
+        s._toggle_play()
+        assert not s.playing
+        s.clock = 0.5
+        s._reset()
+        assert s.clock == 0.0 and s.scrub.value == 0.0 and s.time_md.content.startswith("t = 0 ")
+        assert not s.playing
+        s._step(1)
+        assert s.clock == pytest.approx(0.01) and not s.playing and s.view.frame > 0
+        s._set_present(True)
+        assert s.view.label_scale > 1 and all(not h.visible for h in s.controls._containers)
+        s._set_present(False)
+        assert all(h.visible for h in s.controls._containers)
+
+
+def test_session_restores_a_link(monkeypatch):
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    spec = get("middle-axis-flip")
+    q = "s=middle-axis-flip&p.spin=4.5&p.perturbation=0.002&t=10&play=0&cam=4,1,2,0,0,0&v.axes=0"
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: "http://127.0.0.1:1/?" + q)
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        assert s.spec.name == spec.name and s.good_values["spin"] == 4.5 and s.good_values["perturbation"] == 0.002
+        assert not s.playing and client.camera.position == (4.0, 1.0, 2.0)
+        t = s.drawing.times[s.view.frame]
+        assert abs(t - 10.0) <= np.diff(s.drawing.times).max()
+        assert s.toggles["axes"].value is False
+        st = s.link_state()
+        assert st.params["spin"] == "4.5" and st.camera[:3] == (4.0, 1.0, 2.0) and st.overlays == {"axes": False}
+
+
+def test_export_says_where_the_file_went_and_its_size(tmp_path, capsys):
+    from theoria.app.cli import main
+
+    out = tmp_path / "flip.html"
+    assert main(["export", "middle-axis-flip", "--set", "duration=2", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert str(out) in text and out.exists()
+    size = out.stat().st_size
+    assert f"{size / 1e6:.1f} MB" in text or f"{size / 1e3:.0f} KB" in text or f"{size / 1e6:.0f} MB" in text

@@ -1,0 +1,268 @@
+"""The teacher's face in a real headless Chromium (Debian's /usr/bin/chromium driven by Playwright):
+the panel in words for every scenario (no raw identifier visible, at most two screens tall at
+1280×800), typed numbers taken exactly, a copied link restoring the view in a fresh browser, and
+presenter mode with its keys. Run: pytest -m browser tests/test_teacher_browser.py
+"""
+from __future__ import annotations
+
+import re
+import time
+from urllib.parse import urlencode
+
+import pytest
+
+from test_app_browser import ARGS, CHROMIUM, WAIT_MS, _free_port, _have_browser
+
+pytestmark = pytest.mark.browser
+
+if not _have_browser():
+    pytest.skip("needs Debian's chromium at /usr/bin/chromium and python playwright", allow_module_level=True)
+
+W, H = 1280, 800
+
+# the panel: viser's floating control panel (a Mantine Paper holding a scroll area)
+PANEL_JS = """() => Array.from(document.querySelectorAll('.mantine-Paper-root')).find(e => e.querySelector('.mantine-ScrollArea-root'))"""
+PANEL_TEXT_JS = f"""() => {{ const p = ({PANEL_JS})(); return p ? p.innerText : ''; }}"""
+# how tall the panel's content is, in screens of the window: its header plus its scrolled content
+PANEL_SCREENS_JS = f"""() => {{
+  const p = ({PANEL_JS})(); if (!p) return null;
+  const v = p.querySelector('.mantine-ScrollArea-viewport');
+  const header = v.getBoundingClientRect().top - p.getBoundingClientRect().top;
+  return (header + v.scrollHeight) / window.innerHeight; }}"""
+INPUT_JS = """(label) => {
+  const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
+  if (!l) return null;
+  let p = l;
+  for (let k = 0; k < 8 && p; k++) { p = p.parentElement; const i = p && p.querySelector('input'); if (i) return i; }
+  return null; }"""
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture(scope="module")
+def app():
+    from theoria.app.server import make_server
+
+    server, sessions = make_server(port=_free_port(), host="127.0.0.1", verbose=False)
+    yield f"http://127.0.0.1:{server.get_port()}/", sessions
+    server.stop()
+
+
+def _open(browser, url, w=W, h=H):
+    ctx = browser.new_context(viewport={"width": w, "height": h})
+    page = ctx.new_page()
+    page.goto(url)
+    return ctx, page
+
+
+def _session_for(sessions, before: set, name: str | None = None, timeout: float = WAIT_MS / 1000):
+    """The session of the page just opened (a client id not in `before`), once it shows a run."""
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        new = [s for cid, s in list(sessions.items()) if cid not in before]
+        if new and new[-1].updates >= 1 and (name is None or new[-1].drawing_spec == name):
+            return new[-1]
+        time.sleep(0.2)
+    raise AssertionError(f"no session showed {name}")
+
+
+def _query(spec, **extra) -> str:
+    """A link to the scenario with its quick preview values (the panel's words are the same)."""
+    q = [("s", spec.name), ("fixedDpr", "1")] + [(f"p.{k}", str(v)) for k, v in spec.preview.items()]
+    q += list(extra.items())
+    return urlencode(q)
+
+
+def raw_identifiers(text: str, spec, run) -> list[str]:
+    """Words in `text` that are keys scripts use, not words a class reads: snake_case names, the
+    scenario's slug, parameter / metric / option / overlay keys that are not plain words."""
+    from theoria.scenarios import all_scenarios
+    from theoria.scenarios.drawing import OVERLAYS
+
+    keys = {p.name for p in spec.params} | set(run.metrics) | set(spec.options) | set(OVERLAYS) | set(run.plot_series)
+    nonword = {k for k in keys if not re.fullmatch(r"[A-Za-z]+", k) or k in ("gm",)}
+    slugs = {s.name for s in all_scenarios() if "-" in s.name}  # "moon", "syzygy" are words too
+    found = []
+    for tok in re.findall(r"[A-Za-z0-9_\-]+", text):
+        if re.fullmatch(r"[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)+", tok) or tok in nonword or tok in slugs:
+            found.append(tok)
+    return found
+
+
+def _tab(page, name: str) -> None:
+    page.get_by_role("tab", name=name).click()
+    time.sleep(0.4)
+
+
+def test_every_panel_is_in_words_and_fits_two_screens(browser, app):
+    from theoria.scenarios import all_scenarios
+
+    base, sessions = app
+    bad, screens, titles = [], {}, {}
+    for spec in all_scenarios():
+        before = set(sessions)
+        ctx, page = _open(browser, base + "?" + _query(spec))
+        try:
+            s = _session_for(sessions, before, spec.name)
+            page.wait_for_function("document.title.startsWith('theoria')", timeout=WAIT_MS)
+            titles[spec.name] = page.title()
+            for tab in ("Explore", "Compare", "Read"):
+                _tab(page, tab)
+                text = page.evaluate(PANEL_TEXT_JS)
+                ids = raw_identifiers(text, spec, s.result)
+                if ids:
+                    bad.append((spec.name, tab, sorted(set(ids))))
+                screens[(spec.name, tab)] = page.evaluate(PANEL_SCREENS_JS)
+        finally:
+            ctx.close()
+    assert bad == [], bad
+    too_tall = {k: round(v, 2) for k, v in screens.items() if v is None or v > 2.0}
+    assert too_tall == {}, too_tall
+    assert all(t.startswith("theoria — ") for t in titles.values()), titles
+
+
+def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
+    from theoria.scenarios import get
+
+    base, sessions = app
+    flip, pull = get("middle-axis-flip"), get("gravity-start")
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(flip))
+    try:
+        s = _session_for(sessions, before, flip.name)
+        field = page.evaluate_handle(INPUT_JS, flip.param("perturbation").display()).as_element()
+        n = s.updates
+        field.click()
+        field.fill("")
+        page.keyboard.type("1e-3", delay=120)  # typed one key at a time: nothing runs per keystroke
+        time.sleep(1.0)
+        assert s.updates == n and s.controls.values()["perturbation"] == 0.01
+        page.mouse.click(300, 400)  # the field loses focus: the value is taken
+        page.wait_for_function("1", timeout=1000)
+        t0 = time.time()
+        while s.good_values["perturbation"] != 1e-3:
+            assert time.time() - t0 < WAIT_MS / 1000
+            time.sleep(0.1)
+        assert s.result.params["perturbation"] == 1e-3
+    finally:
+        ctx.close()
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(pull))
+    try:
+        s = _session_for(sessions, before, pull.name)
+        field = page.evaluate_handle(INPUT_JS, pull.param("gm").display()).as_element()
+        field.fill("2.5e6")
+        field.press("Enter")
+        t0 = time.time()
+        while s.good_values["gm"] != 2.5e6:
+            assert time.time() - t0 < WAIT_MS / 1000
+            time.sleep(0.1)
+        assert s.result.params["gm"] == 2.5e6
+        # a value out of range is refused with the allowed range, and the last good value stays
+        field = page.evaluate_handle(INPUT_JS, pull.param("distance").display()).as_element()
+        n = s.updates
+        field.fill("-0.5")
+        field.press("Enter")
+        page.wait_for_function("document.body.innerText.includes('Not allowed')", timeout=WAIT_MS)
+        text = page.evaluate("document.body.innerText")
+        assert "Distance s of F" in text and "1e+09" in text
+        time.sleep(0.5)
+        assert s.updates == n and s.good_values["distance"] == 10.0
+        assert page.evaluate("(e) => e.value", field) == "10"
+    finally:
+        ctx.close()
+
+
+def test_a_copied_link_restores_scenario_parameters_time_and_camera(browser, app):
+    from theoria.scenarios import get
+
+    base, sessions = app
+    flip = get("middle-axis-flip")
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(flip))
+    try:
+        s = _session_for(sessions, before, flip.name)
+        field = page.evaluate_handle(INPUT_JS, flip.param("perturbation").display()).as_element()
+        field.fill("0.002")
+        field.press("Enter")
+        while s.good_values["perturbation"] != 0.002:
+            time.sleep(0.1)
+        page.mouse.click(300, 400)
+        page.keyboard.press("Space")  # pause
+        for _ in range(3):
+            page.keyboard.press("ArrowRight")
+        # orbit the camera with the mouse
+        page.mouse.move(400, 400)
+        page.mouse.down()
+        page.mouse.move(480, 360, steps=8)
+        page.mouse.up()
+        page.wait_for_function("location.search.includes('play=0') && location.search.includes('p.perturbation=0.002')",
+                               timeout=WAIT_MS)
+        time.sleep(1.5)  # the address follows the camera within a second
+        url = page.url
+        want_t = float(re.search(r"[?&]t=([^&]+)", url).group(1))
+        want_cam = [float(x) for x in re.search(r"[?&]cam=([^&]+)", url).group(1).split(",")]
+        assert not s.playing and abs(want_t - s.drawing.times[s.view.frame]) < 1e-6 * max(1, want_t)
+    finally:
+        ctx.close()
+    before = set(sessions)
+    ctx, page = _open(browser, url)  # a fresh browser context: nothing shared but the address
+    try:
+        r = _session_for(sessions, before, flip.name)
+        assert r.spec.name == flip.name
+        assert r.good_values == flip.resolve({"perturbation": 0.002})
+        assert not r.playing
+        assert abs(r.drawing.times[r.view.frame] - want_t) <= max(abs(x) for x in (r.drawing.times[1] - r.drawing.times[0],
+                                                                                     1e-9))
+        time.sleep(1.0)
+        cam = page.evaluate("(() => { const c = window.__viserMutable.camera; return c.position.toArray(); })()")
+        assert max(abs(a - b) for a, b in zip(cam, want_cam[:3])) < 1e-3 * (1 + max(abs(x) for x in want_cam[:3])), (cam, want_cam)
+    finally:
+        ctx.close()
+
+
+def test_presenter_mode_large_type_no_controls_and_keys(browser, app):
+    from theoria.scenarios import get
+
+    base, sessions = app
+    flip = get("middle-axis-flip")
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(flip, present="1"), 1920, 1080)
+    try:
+        s = _session_for(sessions, before, flip.name)
+        assert s.present
+        page.wait_for_function("!!document.getElementById('theoria-present')", timeout=WAIT_MS)
+        text = page.evaluate(PANEL_TEXT_JS)
+        assert "Playback speed" not in text and flip.param("spin").display() not in text
+        assert flip.title in text
+        page.mouse.click(300, 500)
+        playing = s.playing
+        page.keyboard.press("Space")
+        t0 = time.time()
+        while s.playing == playing:
+            assert time.time() - t0 < 10
+            time.sleep(0.05)
+        clock = s.clock
+        page.keyboard.press("ArrowRight")
+        t0 = time.time()
+        while s.clock == clock:
+            assert time.time() - t0 < 10
+            time.sleep(0.05)
+        assert not s.playing
+        name = list(flip.presets)[1]
+        page.keyboard.press("2")
+        t0 = time.time()
+        while s.good_values != flip.preset(name):
+            assert time.time() - t0 < WAIT_MS / 1000
+            time.sleep(0.1)
+        assert s.presets.value == name
+    finally:
+        ctx.close()
