@@ -200,7 +200,7 @@ register(Scenario(
               exclusive_min=True, label="Out-of-roundness ω₀ = √(3(B − A)/C)"),
         Param("tide_rate", 2e-5, 0.0, 1e-3, "n", "tidal rate c in θ̈ = −c (a/r)⁶ (θ̇ − ḟ) (exaggerated; physics.tides)",
               exclusive_min=True, label="Tidal rate c (exaggerated)"),
-        Param("spin_rate", 1.8, 0.2, 4.0, "n", "initial spin θ̇/n at periapse", label="Starting spin (turns per orbit)"),
+        Param("spin_rate", 1.8, 0.2, 4.0, "n", "initial spin θ̇/n at periapse", label="Starting spin θ̇"),
         Param("initial_angle_deg", 0.0, -180.0, 180.0, "deg", "initial angle of the long axis from the periapse line",
               label="Starting angle of the long axis from periapse"),
         Param("orbits", 50000.0, 10.0, 2e5, "", "orbits to simulate", label="Orbits to follow"),
