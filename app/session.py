@@ -175,7 +175,7 @@ class ClientSession:
         self.status = gui.add_markdown("*Computing the scene…*")
         self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
         # the update counter that protocol-level tools (benchmarks/classroom.py) follow; never shown
-        self._tick = gui.add_markdown("*simulating…*", visible=False)
+        self._tick_md = gui.add_markdown("*simulating…*", visible=False)
         self.tabs = gui.add_tab_group()
         self._explore = self.tabs.add_tab("Explore")
         with self._explore:
@@ -565,7 +565,7 @@ class ClientSession:
 
     def _tick_text(self, text: str) -> None:
         try:
-            self._tick.content = text
+            self._tick_md.content = text
         except Exception:
             pass
 
