@@ -444,11 +444,13 @@ class ClientSession:
         run the scene replays. Rendering happens on the map's own thread (SweepMaps)."""
         gui, sw = self.client.gui, self.sweep
         self._sguard = False  # set while the code itself changes the map's dropdowns
-        sizes = " × ".join(f"{sw.ds.sizes[d]} {sw.param_words(d)[0].lower()}" for d in sw.dims)
+        sizes = " × ".join(str(sw.ds.sizes[d]) for d in sw.dims)
         about = sw.preset.description if sw.preset is not None else ""
         self.sweep_head = gui.add_markdown(
-            f"**Map: {_md(sw.title())}**  \n{_md(sizes)} ({sw.ds['status'].size} runs). "
-            "**Click a pixel** to replay that run in the scene." + (f"\n\n*{_md(about)}*" if about else ""))
+            f"**Map: {_md(sw.title())}** — {sizes} = {sw.ds['status'].size} runs. "
+            "**Click a pixel** to replay that run in the scene.")
+        self.sweep_map = gui.add_html("<p><i>Drawing the map…</i></p>")
+        self.sweep_shown = gui.add_markdown("")
         self._metric_labels: dict[str, str] = {}
         for m in sw.metrics:
             label = sw.metric_text(m)
@@ -456,13 +458,13 @@ class ClientSession:
         first = next(iter(self._metric_labels))
         self.sweep_metric = gui.add_dropdown("Colour shows", list(self._metric_labels), initial_value=first)
         views = [lab for lab, _ in sw.views(self._metric_labels[first])]
-        self.sweep_view = gui.add_dropdown("Summary", views, initial_value=views[0],
+        self.sweep_view = gui.add_dropdown("Summary", views, initial_value=sw.default_view(self._metric_labels[first]),
                                            hint="a dimension that is not on the map is summarised")
         self.sweep_view.visible = len(views) > 1
-        self.sweep_map = gui.add_html("<p><i>Drawing the map…</i></p>")
         # a click on the map sets this hidden field ("row,column,view,count": the page's script)
         self.sweep_pixel = gui.add_text("Run on the map", initial_value="", visible=False)
-        self.sweep_shown = gui.add_markdown("")
+        if about:
+            gui.add_markdown(f"*{_md(about)}*")
         self._sweep_pic = None
         self._sweep_mark: dict | None = None  # the values of the run shown (its pixel is marked)
         self._sweep_want: tuple[str, str] | None = None
@@ -476,7 +478,7 @@ class ClientSession:
             return
         metric = self._metric_labels[self.sweep_metric.value]
         views = [lab for lab, _ in self.sweep.views(metric)]
-        keep = self.sweep_view.value if self.sweep_view.value in views else views[0]
+        keep = self.sweep_view.value if self.sweep_view.value in views else self.sweep.default_view(metric)
         self._sguard = True
         try:
             self.sweep_view.options = views

@@ -43,7 +43,7 @@ RAMP = np.array([[68, 1, 84], [71, 44, 122], [59, 81, 139], [44, 113, 142], [33,
                  [39, 173, 129], [92, 200, 99], [170, 220, 50], [253, 231, 37]], float)
 NAN_RGB = (190, 190, 190)  # a run with no value (refused, failed, not run, undecided)
 MARK_RGB = (255, 40, 40)
-MAP_WIDTH_PX = 300  # the map's width in the panel (CSS px); the height follows the grid's shape
+MAP_WIDTH_PX = 280  # the map's width in the panel (CSS px); the height follows the grid's shape
 
 _REDUCE_WORDS = {"mean": "mean", "median": "median", "max": "largest", "min": "smallest",
                  "fraction": "fraction nonzero"}
@@ -117,6 +117,8 @@ class Picture:
     lo: float
     hi: float
     key: str
+    ref: np.ndarray | None = None  # a profile's theory beside it (Goldreich & Peale's probability)
+    ref_metric: str = ""
 
     @property
     def rows(self) -> int:
@@ -157,9 +159,15 @@ class SweepMaps:
         self.metrics = [v for v in ds.data_vars if v != "status" and np.any(np.isfinite(np.asarray(ds[v].values, float)))]
         if not self.metrics:
             raise ParameterError("--sweep", self.path, "a sweep whose runs gave metrics (every value is missing)")
+        # the named sweep this is (its description is shown), when its fixed values and swept names match
+        fixed = spec.get("fixed", {})
         self.preset = next((p for p in SWEEP_PRESETS.values()
-                            if p.scenario == self.scenario.name and p.metric in self.metrics), None)
-        first = self.preset.metric if self.preset is not None else self.metrics[0]
+                            if p.scenario == self.scenario.name and p.metric in self.metrics
+                            and all(fixed.get(k) == v for k, v in p.fixed.items())
+                            and {g.split("=", 1)[0] for g in p.grid} == set(self.grid_dims)), None)
+        usual = next((p.metric for p in SWEEP_PRESETS.values()
+                      if p.scenario == self.scenario.name and p.metric in self.metrics), None)
+        first = usual or self.metrics[0]
         self.metrics.remove(first)
         self.metrics.insert(0, first)
         self._cache: dict[tuple[str, str], Picture] = {}
@@ -234,7 +242,14 @@ class SweepMaps:
         return out
 
     def default_view(self, metric: str) -> str:
-        return self.views(metric)[0][0]
+        """Every run as its own pixel; for a capture metric the fraction captured against the first
+        swept parameter (the probability a theory predicts, e.g. against e)."""
+        views = self.views(metric)
+        if is_capture(metric):
+            for label, v in views:
+                if v.y is None and v.x == self.grid_dims[0]:
+                    return label
+        return views[0][0]
 
     # ---- pictures --------------------------------------------------------------------------
     def picture(self, metric: str, view_label: str) -> Picture:
@@ -261,10 +276,21 @@ class SweepMaps:
                 lo = 0.0  # a nonnegative quantity (an exponent, an amplitude; round-off below 0) from zero
         else:
             lo, hi = 0.0, 1.0
-        pic = Picture(m, v, metric, render_png(vals, lo, hi), lo, hi, f"{metric}|{v.key}")
+        png = render_png(vals, lo, hi) if v.y is not None else render_bars(vals[0], lo, hi)
+        pic = Picture(m, v, metric, png, lo, hi, f"{metric}|{v.key}")
+        ref = self.reference(metric)
+        if v.y is None and ref is not None:  # the theory's probability at the same points, as dots
+            pic.ref = np.asarray(open_map(self.path, ref, x=v.x, y=False, reduce="mean").values[0], float)
+            pic.ref_metric = ref
         with self._lock:
             self._cache[key] = pic
         return pic
+
+    def reference(self, metric: str) -> str | None:
+        """The metric that predicts `metric` (captured_p_q: Goldreich & Peale's probability), if in the sweep."""
+        m = re.fullmatch(r"captured_(\d+_\d+)", metric)
+        ref = f"gp_capture_probability_{m.group(1)}" if m else None
+        return ref if ref in self.ds.data_vars else None
 
     def picture_async(self, metric: str, view_label: str) -> Future:
         return self._pool.submit(self.picture, metric, view_label)
@@ -305,13 +331,60 @@ def render_png(vals: np.ndarray, lo: float, hi: float) -> bytes:
     return buf.getvalue()
 
 
+def render_bars(vals: np.ndarray, lo: float, hi: float, height: int = 120) -> bytes:
+    """A profile as bars: column j filled from the bottom up to its value, in its colour (one
+    image column per run of the profile; a missing value is a thin grey bar)."""
+    from PIL import Image
+
+    v = np.asarray(vals, float)
+    f = (v - lo) / (hi - lo if hi > lo else 1.0)
+    cols = ramp(f)
+    img = np.full((height, len(v), 3), 255, np.uint8)
+    for j, x in enumerate(f):
+        if not np.isfinite(x):
+            img[-3:, j] = NAN_RGB
+            continue
+        h = int(round(np.clip(x, 0, 1) * height))
+        if h:
+            img[height - h:, j] = cols[j]
+    img[:, :, :][np.all(img == 255, axis=-1) & (np.arange(height)[:, None] % 30 == 29)] = (225, 225, 225)  # gridlines
+    buf = io.BytesIO()
+    Image.fromarray(img).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def nice_ticks(lo: float, hi: float, n: int = 5) -> list[float]:
+    """About n round values (1, 2, 2.5 or 5 × 10^k apart) from lo to hi."""
+    if not (np.isfinite(lo) and np.isfinite(hi)) or hi <= lo:
+        return [lo]
+    raw = (hi - lo) / max(n - 1, 1)
+    mag = 10 ** np.floor(np.log10(raw))
+    step = next(m * mag for m in (1, 2, 2.5, 5, 10) if m * mag >= raw * 0.999)
+    first = np.ceil(lo / step - 1e-9) * step
+    out = [float(round(x, 12)) for x in np.arange(first, hi + step * 1e-6, step)]
+    return [0.0 if abs(x) < step * 1e-9 else x for x in out]
+
+
 def _ticks(values: np.ndarray, n: int = 5) -> list[tuple[float, str]]:
-    """(fraction along the axis, text) for about n ticks at pixel centres."""
+    """(fraction along the axis, text) for round values of a swept parameter, placed between the
+    pixel centres of its grid (the first value at the middle of the first pixel)."""
     k = len(values)
+    try:
+        v = np.asarray(values, float)
+    except (TypeError, ValueError):  # a choice parameter: every value by name
+        return [((i + 0.5) / k, str(values[i])) for i in range(k)]
     if k == 1:
-        return [(0.5, human_number(_num(values[0])))]
-    idx = sorted(set(np.linspace(0, k - 1, min(n, k)).round().astype(int)))
-    return [((i + 0.5) / k, human_number(_num(values[i]))) for i in idx]
+        return [(0.5, human_number(float(v[0])))]
+    if not np.all(np.diff(v) > 0):
+        idx = sorted(set(np.linspace(0, k - 1, min(n, k)).round().astype(int)))
+        return [((i + 0.5) / k, human_number(float(v[i]))) for i in idx]
+    return [((0.5 + float(np.interp(t, v, np.arange(k)))) / k, human_number(t)) for t in nice_ticks(v[0], v[-1], n)]
+
+
+def _range_ticks(lo: float, hi: float) -> list[tuple[float, str]]:
+    """(fraction of the colour bar or of a bar's height, text) for round values of the metric."""
+    span = (hi - lo) or 1.0
+    return [((t - lo) / span, human_number(t)) for t in nice_ticks(lo, hi)]
 
 
 def _num(v):
@@ -328,23 +401,31 @@ def map_html(maps: SweepMaps, pic: Picture, field_uuid: str | None, mark: tuple[
     m = pic.map
     rows, cols = pic.rows, pic.cols
     W = MAP_WIDTH_PX
-    H = int(round(W * 0.75)) if rows > 1 else 60
+    profile = pic.view.y is None
+    H = int(round(W * 0.75)) if not profile else int(round(W * 0.6))
     src = "data:image/png;base64," + base64.b64encode(pic.png).decode("ascii")
-    ylabel = maps.axis_text(m.y) if m.y else ""
     xlabel = maps.axis_text(m.x)
-    metric = maps.metric_text(pic.metric)
-    if pic.view.reduce:
-        metric += " — " + next(lab for lab, v in maps.views(pic.metric) if v == pic.view)
+    summary = next(lab for lab, v in maps.views(pic.metric) if v == pic.view)
+    if pic.view.reduce and is_capture(pic.metric):  # a fraction of runs, not a yes/no any more
+        quantity = "Fraction " + metric_words(pic.metric)[0][:1].lower() + metric_words(pic.metric)[0][1:]
+        metric = quantity + ", over the " + summary.split(" over the ", 1)[1].split(" (against")[0]
+    else:
+        quantity = maps.metric_text(pic.metric)
+        metric = quantity + (" — " + summary if pic.view.reduce else "")
+    ylabel = maps.axis_text(m.y) if m.y else quantity
     font = "font:11px/1.2 system-ui,sans-serif;color:#222"
-    parts = [f"<div class='theoria-map' style='{font};user-select:none'>",
+    parts = [f"<div class='theoria-map' style='{font};user-select:none;margin:0 10px'>",
              f"<div style='font-weight:600;margin-bottom:4px'>{_e(metric)}</div>",
              "<div style='display:flex;align-items:stretch'>"]
     # the y axis: its name written upward, tick values beside the map
     parts.append(f"<div style='writing-mode:vertical-rl;transform:rotate(180deg);text-align:center;"
                  f"height:{H}px;width:16px;font-weight:500'>{_e(ylabel)}</div>")
-    parts.append(f"<div style='position:relative;width:34px;height:{H}px'>")
+    parts.append(f"<div style='position:relative;width:40px;height:{H}px;margin-left:2px'>")
     if m.y:
         for f, t in _ticks(m.y_values):
+            parts.append(f"<span style='position:absolute;right:3px;bottom:{f * H - 6:.1f}px'>{_e(t)}</span>")
+    else:  # a profile: the bars' heights are the metric
+        for f, t in _range_ticks(pic.lo, pic.hi):
             parts.append(f"<span style='position:absolute;right:3px;bottom:{f * H - 6:.1f}px'>{_e(t)}</span>")
     parts.append("</div>")
     data = (f" data-theoria-map='1' data-uuid='{_e(field_uuid)}' data-rows='{rows}' data-cols='{cols}' "
@@ -358,23 +439,30 @@ def map_html(maps: SweepMaps, pic: Picture, field_uuid: str | None, mark: tuple[
         parts.append(f"<div title='the run shown in the scene' style='position:absolute;pointer-events:none;"
                      f"left:{j * pw - 2:.1f}px;bottom:{i * ph - 2:.1f}px;width:{max(pw, 4):.1f}px;height:{max(ph, 4):.1f}px;"
                      f"border:2px solid rgb{MARK_RGB};box-shadow:0 0 0 1px #fff'></div>")
+    if pic.ref is not None:
+        for j, r in enumerate(pic.ref):
+            if np.isfinite(r):
+                y = (r - pic.lo) / ((pic.hi - pic.lo) or 1.0) * H
+                parts.append(f"<div style='position:absolute;pointer-events:none;left:{(j + 0.5) * W / cols - 4:.1f}px;"
+                             f"bottom:{y - 4:.1f}px;width:8px;height:8px;border-radius:50%;background:#e8590c;"
+                             "border:1px solid #fff'></div>")
     parts.append("</div>")
     # the colour bar: the metric's range, bottom to top
     parts.append(f"<div style='width:12px;height:{H}px;margin-left:8px;background:{ramp_css()};outline:1px solid #444'></div>")
     parts.append(f"<div style='position:relative;width:40px;height:{H}px'>")
-    for k in range(5):
-        f = k / 4
-        parts.append(f"<span style='position:absolute;left:3px;bottom:{f * H - 6:.1f}px'>"
-                     f"{_e(human_number(pic.lo + f * (pic.hi - pic.lo)))}</span>")
+    for f, t in _range_ticks(pic.lo, pic.hi):
+        parts.append(f"<span style='position:absolute;left:3px;bottom:{f * H - 6:.1f}px'>{_e(t)}</span>")
     parts.append("</div></div>")
     # the x axis
-    parts.append(f"<div style='position:relative;margin-left:50px;width:{W}px;height:14px'>")
+    parts.append(f"<div style='position:relative;margin-left:58px;width:{W}px;height:14px'>")
     for f, t in _ticks(m.x_values):
         parts.append(f"<span style='position:absolute;left:{f * W:.1f}px;transform:translateX(-50%)'>{_e(t)}</span>")
     parts.append("</div>")
-    parts.append(f"<div style='margin-left:50px;width:{W}px;text-align:center;font-weight:500'>{_e(xlabel)}</div>")
+    parts.append(f"<div style='margin-left:58px;width:{W}px;text-align:center;font-weight:500'>{_e(xlabel)}</div>")
     legend = "Grey: no value (refused, failed or undecided runs). " if np.any(~np.isfinite(m.values)) else ""
-    parts.append(f"<div style='margin-top:4px;color:#555'>{legend}Colour bar: {_e(metric)}. "
+    if pic.ref is not None:
+        legend += f"<span style='color:#e8590c'>●</span> {_e(metric_words(pic.ref_metric)[0])}. "
+    parts.append(f"<div style='margin-top:4px;color:#555'>{legend}Colour bar: {_e(quantity)}. "
                  "Click a pixel to replay that run in the scene.</div></div>")
     return "".join(parts)
 
