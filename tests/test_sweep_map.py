@@ -101,6 +101,12 @@ def test_serve_sweep_click_replays_the_run(tiny_sweep):
             session = next(iter(sessions.values()))
             assert session.spec.name == "middle-axis-flip"  # the scenario asked for comes first
             want = sw.open_map(tiny_sweep, "lyapunov_probe_per_orbit").run_values(2, 2)
+            # what the page's script would never send: outside the map, another view, not a pixel at
+            # all, longer than a control value may be (the gate drops that one) — nothing is replayed
+            for bad in (f"3,0,{a['key']},1", f"0,4,{a['key']},2", "0,0,some other view,3", "x,y", "0," * 150):
+                await c.send_gui(a["uuid"], bad)
+            await asyncio.sleep(1.5)
+            assert session._sweep_mark is None and session.spec.name == "middle-axis-flip"
             await c.send_gui(a["uuid"], f"2,2,{a['key']},1")  # row 2 (e = 0.2), column 2 (θ̇/n = 1.45)
             # the worker may show a quick preview first (fewer orbits); then the run itself
             ok = await c.wait_for(lambda: session.good_values == want, 240)
