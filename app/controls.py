@@ -22,6 +22,7 @@ from typing import Any, Callable
 
 from theoria.physics.errors import ParameterError
 from theoria.physics.params import Param
+from .format import exact
 
 MAX_SLIDER_STEPS = 2000
 
@@ -78,16 +79,10 @@ def format_value(p: Param, v: Any) -> str:
     if p.kind == "choice":
         return p.choice_text(v)
     if p.kind == "vec3":
-        return ", ".join(_num(x) for x in v)
+        return ", ".join(exact(x) for x in v)
     if p.kind == "int":
         return str(int(v))
-    return _num(v)
-
-
-def _num(x) -> str:
-    x = float(x)
-    text = f"{x:.12g}"
-    return text if float(text) == x else repr(x)
+    return exact(v)
 
 
 class ParamControls:

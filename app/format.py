@@ -8,6 +8,8 @@ from numbers import Integral
 import numpy as np
 
 MISSING = "–"
+MINUS = "−"
+_SUP = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
 
 
 def number(x, digits: int = 6) -> str:
@@ -33,6 +35,40 @@ def number(x, digits: int = 6) -> str:
     if not math.isfinite(v):
         return MISSING
     return f"{v:.{digits}g}"
+
+
+def human_number(x, digits: int = 4) -> str:
+    """`digits` significant digits; plain decimals from 10⁻³ to 10⁶, else "2.80 × 10⁻¹¹"; a true
+    minus sign; "–" for a missing or non-finite value. Vectors: comma-separated."""
+    if x is None:
+        return MISSING
+    if isinstance(x, (tuple, list, np.ndarray)):
+        return ", ".join(human_number(v, digits) for v in x)
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return str(x)
+    if not math.isfinite(v):
+        return MISSING
+    if v == 0:
+        return "0"
+    a = abs(v)
+    if 1e-3 <= a < 1e6:
+        text = f"{v:.{digits}g}"
+        if "e" in text:  # .4g of 123456 gives 1.235e+05: write it out
+            text = f"{v:.0f}"
+    else:
+        mant, exp = f"{v:.{digits - 1}e}".split("e")
+        mant = mant.rstrip("0").rstrip(".") if "." in mant else mant
+        text = f"{mant} × 10{str(int(exp)).translate(_SUP)}"
+    return text.replace("-", MINUS, 1) if text.startswith("-") else text
+
+
+def exact(x) -> str:
+    """A float as the shortest of 12 significant digits or repr that reads back exactly."""
+    x = float(x)
+    text = f"{x:.12g}"
+    return text if float(text) == x else repr(x)
 
 
 def comparison_rows(comparisons, digits: int = 6) -> list[tuple[str, str, str, str, str]]:

@@ -17,6 +17,7 @@ from typing import Any
 from urllib.parse import parse_qsl, urlencode, urlsplit
 
 from theoria.physics.errors import ParameterError
+from .format import exact
 
 
 @dataclass
@@ -40,18 +41,12 @@ def _num(x: float, digits: int = 6) -> str:
 def param_text(p, v: Any) -> str:
     """A parameter's value as the link writes it (exact: read back by Param.parse)."""
     if p.kind == "vec3":
-        return ",".join(_exact(x) for x in v)
+        return ",".join(exact(x) for x in v)
     if p.kind == "choice":
         return str(v)
     if p.kind == "int":
         return str(int(v))
-    return _exact(v)
-
-
-def _exact(x) -> str:
-    x = float(x)
-    text = f"{x:.12g}"
-    return text if float(text) == x else repr(x)
+    return exact(v)
 
 
 def to_query(state: LinkState, spec=None) -> str:

@@ -14,11 +14,10 @@ import re
 import numpy as np
 
 from . import gallery
+from .format import human_number
 
 UPLOT_POINTS = 2000  # points per series in the live plot
 
-_SUP = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
-MINUS = "−"
 
 
 def y_axis_px(series_values, px_per_char: float = 7.2, min_px: int = 50) -> int:
@@ -41,33 +40,6 @@ def y_axis_px(series_values, px_per_char: float = 7.2, min_px: int = 50) -> int:
 
 
 # ---- numbers as a person reads them ----------------------------------------------------------
-
-def human_number(x, digits: int = 4) -> str:
-    """`digits` significant digits; plain decimals from 10⁻³ to 10⁶, else "2.80 × 10⁻¹¹"; a true
-    minus sign; "–" for a missing or non-finite value. Vectors: comma-separated."""
-    if x is None:
-        return "–"
-    if isinstance(x, (tuple, list, np.ndarray)):
-        return ", ".join(human_number(v, digits) for v in x)
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return str(x)
-    if not math.isfinite(v):
-        return "–"
-    if v == 0:
-        return "0"
-    a = abs(v)
-    if 1e-3 <= a < 1e6:
-        text = f"{v:.{digits}g}"
-        if "e" in text:  # .4g of 123456 gives 1.235e+05: write it out
-            text = f"{v:.0f}"
-    else:
-        mant, exp = f"{v:.{digits - 1}e}".split("e")
-        mant = mant.rstrip("0").rstrip(".") if "." in mant else mant
-        text = f"{mant} × 10{str(int(exp)).translate(_SUP)}"
-    return text.replace("-", MINUS, 1) if text.startswith("-") else text
-
 
 def percent(rel: float) -> str:
     """A relative difference as a percentage with two significant digits ("0.0012 %")."""

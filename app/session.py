@@ -42,7 +42,8 @@ from . import browser, gallery, page, playback
 from . import link as linkmod
 from .controls import ParamControls
 from .export_html import configure_scene
-from .panel import (UPLOT_POINTS, compare_html, heading_markdown, human_number, metric_label, numbers_markdown,
+from .format import human_number
+from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
                     read_markdown, y_axis_px)
 from .scene import SceneView
 from .worker import SimulationWorker, drawing_of, limits_text

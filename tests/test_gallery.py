@@ -364,3 +364,19 @@ def test_long_run_without_progress_reports_still_shows_the_bar(monkeypatch):
         _wait(lambda: s.updates >= 1)
         time.sleep(0.2)
         assert [v for k, v in s.progress.history if k == "visible"] == []
+
+
+def test_a_playing_session_advances_its_clock_and_a_paused_one_does_not():
+    """The one playback thread (app/playback.py) moves every playing session's clock by real time;
+    a paused session's clock stays where it is."""
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        assert s.playing
+        c0 = s.clock
+        _wait(lambda: s.clock != c0, timeout=10.0)
+        s._toggle_play()
+        assert not s.playing
+        time.sleep(0.3)  # a tick in flight may still land
+        c1 = s.clock
+        time.sleep(0.5)
+        assert s.clock == c1

@@ -9,7 +9,8 @@ import pytest
 
 from theoria.app import link as linkmod
 from theoria.app.controls import format_value, slider_range
-from theoria.app.panel import human_number, metric_label, verdict
+from theoria.app.format import human_number
+from theoria.app.panel import metric_label, verdict
 from theoria.physics.params import Param, pretty_unit
 from theoria.scenarios import all_scenarios, get
 from theoria.scenarios.base import Comparison

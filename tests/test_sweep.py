@@ -31,6 +31,7 @@ def cli(*args, timeout=600, **kw):
 
 # ----------------------------------------------------------------------- refused before any work
 
+@pytest.mark.slow  # a theoria process per case (the sweep's imports take seconds each)
 @pytest.mark.parametrize("spec, names", [
     ("nonsense=0:1:3", ["nonsense", "unknown parameter", "eccentricity"]),
     ("eccentricity=0:0.9:3", ["eccentricity", "0.9", "[0, 0.5]"]),
@@ -280,6 +281,7 @@ def test_python_sweep_batched_to_zarr_and_parquet_and_the_map_replays_a_pixel(tm
         sw.open_map(tmp_path / "h.zarr", "nonsense")
 
 
+@pytest.mark.slow
 def test_run_out_writes_the_samples_as_parquet_and_csv(tmp_path):
     import pandas as pd
 
