@@ -35,7 +35,8 @@ import numpy as np
 from theoria.physics.errors import ParameterError
 from theoria.physics.params import pretty_unit
 
-from .panel import human_number, metric_label
+from .format import human_number
+from .panel import metric_label
 from .sweep import SAMPLE, SWEEP_PRESETS, MapData, open_map
 
 # a dark-to-bright perceptual ramp: matplotlib's viridis sampled at 9 points (its published table)

@@ -95,7 +95,7 @@ def test_map_click_replays_and_screenshot(browser, sweeps, name, target, tmp_pat
         assert box["x"] >= 0 and box["x"] + box["width"] <= W and box["y"] + box["height"] <= H, box
         text = page.locator(".theoria-map").inner_text()
         words = {"hyperion-chaos-map": ["Orbital eccentricity", "Largest Lyapunov exponent", "per orbit"],
-                 "mercury-capture": ["Eccentricity e", "Fraction captured into the 3:2 resonance",
+                 "mercury-capture": ["Orbital eccentricity", "Fraction captured into the 3:2 resonance",
                                      "Goldreich & Peale"]}[name]
         for w in words:
             assert w in text, (w, text)
