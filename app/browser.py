@@ -1,7 +1,7 @@
 """Small pieces of JavaScript the app runs in a browser (viser's RunJavascript message), for what
 viser's GUI API does not offer: the tab's title, the address bar holding the view's state, the
 framing of the scene beside the control panel, a typed value taken when its field loses focus,
-and presenter mode's large type.
+a click on a sweep's map, and presenter mode's large type.
 
 Each helper is idempotent and cheap; they are installed once per page by `SETUP` and then called
 as `window.theoria.<name>(...)`. The JavaScript reads only its own page (no network).
@@ -57,6 +57,21 @@ SETUP = r"""
     const t = e.target;
     if (t && t.tagName === 'INPUT' && (t.type === 'text' || t.type === '') && t.form && t.form.requestSubmit)
       t.form.requestSubmit();
+  }, true);
+  // a sweep's map (app/sweep_map.py): a click sets the map's hidden field to "row,column,view,n"
+  // (row 0 at the bottom), sent as an ordinary control value; n makes a second click on the same
+  // pixel a new value
+  T.clicks = 0;
+  document.addEventListener('click', (e) => {
+    const img = e.target && e.target.closest ? e.target.closest('img[data-theoria-map]') : null;
+    const m = window.__viserMutable;
+    if (!img || !m || !m.sendMessage) return;
+    const r = img.getBoundingClientRect(), rows = +img.dataset.rows, cols = +img.dataset.cols;
+    const j = Math.min(cols - 1, Math.max(0, Math.floor((e.clientX - r.left) / r.width * cols)));
+    const i = Math.min(rows - 1, Math.max(0, Math.floor((r.bottom - e.clientY) / r.height * rows)));
+    T.clicks += 1;
+    m.sendMessage({type: 'GuiUpdateMessage', uuid: img.dataset.uuid,
+                   updates: {value: i + ',' + j + ',' + img.dataset.key + ',' + T.clicks}});
   }, true);
   T.title = (text) => { document.title = text; };
   T.url = (query) => {

@@ -311,9 +311,14 @@ def cmd_serve(args) -> int:
     for flag, v in (("--max-clients", args.max_clients), ("--max-per-address", args.max_per_address)):
         if v < 1:
             raise ParameterError(flag, v, "a whole number ≥ 1")
+    sweep = None
+    if args.sweep is not None:
+        from theoria.app.sweep_map import SweepMaps
+
+        sweep = SweepMaps(args.sweep)  # not a theoria sweep: one line, exit 2, before the server starts
     serve(port=args.port, host=args.host, scenario=args.scenario,
           limits=Limits(max_connections=args.max_clients, max_per_address=args.max_per_address),
-          precompute=not args.no_precompute)
+          precompute=not args.no_precompute, sweep=sweep)
     return 0
 
 
@@ -391,6 +396,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="browsers from one network address (default 10)")
     s.add_argument("--no-precompute", action="store_true",
                    help="do not prepare every scenario's defaults and presets in the background")
+    s.add_argument("--sweep", default=None, metavar="RESULT.zarr",
+                   help="a sweep result (theoria sweep … --out RESULT.zarr) shown as a map in a Sweep tab; "
+                        "click a pixel to replay that run")
     s.set_defaults(fn=cmd_serve)
 
     s = sub.add_parser("list", help="scenarios, one line each")

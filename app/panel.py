@@ -66,6 +66,8 @@ def verdict(c) -> tuple[str, str]:
 
 
 def _versus(who: str, a: float, b: float) -> tuple[str, str]:
+    if a == b:  # also both exactly 0 (a run's capture outcome beside a probability of 0)
+        return f"{who} agree exactly", "good"
     rel = abs(a - b) / max(abs(a), abs(b))
     if rel < 1e-9:
         return f"{who} agree to 10⁻⁹", "good"

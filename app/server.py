@@ -295,9 +295,19 @@ def _refuse_share(server: viser.ViserServer, log: RateLimitedLog) -> None:
 
 
 def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None, verbose: bool = True,
-                run=None, limits: Limits | None = None, pool: SimPool | None = None):
+                run=None, limits: Limits | None = None, pool: SimPool | None = None, sweep=None):
     """A running viser server with one ClientSession per browser; returns (server, sessions).
-    `run`: a finished Run every new browser is shown first (its scenario and parameters)."""
+    `run`: a finished Run every new browser is shown first (its scenario and parameters).
+    `sweep`: a sweep result (a Zarr path, or app.sweep_map.SweepMaps) every browser gets as a map
+    in a Sweep tab; its scenario is the first scene. A path that is not a theoria sweep raises
+    ParameterError before the server starts."""
+    if sweep is not None and not hasattr(sweep, "picture"):
+        from .sweep_map import SweepMaps
+
+        sweep = SweepMaps(sweep)
+    if sweep is not None:
+        scenario = scenario or sweep.scenario.name
+        sweep.picture_async(sweep.metrics[0], sweep.default_view(sweep.metrics[0]))  # the first map, ready early
     if run is not None:
         scenario = run.scenario
     if scenario is not None:
@@ -316,12 +326,13 @@ def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None 
     pool = pool or shared_pool()
     pool.prepare(scenario or "free-tumble")
     server._theoria_pool = pool
+    server._theoria_sweep = sweep
     sessions: dict[int, ClientSession] = {}
 
     @server.on_client_connect
     def _(client: viser.ClientHandle) -> None:
         try:
-            sessions[client.client_id] = ClientSession(server, client, scenario, run=run)
+            sessions[client.client_id] = ClientSession(server, client, scenario, run=run, sweep=sweep)
         except Exception as e:
             log.line("theoria: a browser's session could not start:\n" + traceback.format_exc())
             try:
@@ -372,7 +383,7 @@ def _raise_fd_limit() -> None:
 
 
 def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None, run=None,
-          limits: Limits | None = None, precompute: bool = True) -> None:
+          limits: Limits | None = None, precompute: bool = True, sweep=None) -> None:
     """Run the web app until interrupted (Ctrl-C, SIGTERM, or the parent process gone), printing
     the URL to open."""
     _raise_fd_limit()
@@ -385,7 +396,9 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
         signal.signal(signal.SIGTERM, on_term)
     t0 = time.perf_counter()
     pool = shared_pool()
-    server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False, run=run, limits=limits, pool=pool)
+    server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False, run=run, limits=limits, pool=pool,
+                            sweep=sweep)
+    sweep = server._theoria_sweep
     port = server.get_port()
     if host in ("0.0.0.0", "::", ""):
         import socket
@@ -395,7 +408,7 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
     else:
         print(f"theoria: open http://{host}:{port}/ in a browser (Ctrl-C to stop)", flush=True)
     if precompute:
-        first = run.scenario if run is not None else (scenario or "free-tumble")
+        first = run.scenario if run is not None else (scenario or (sweep.scenario.name if sweep else "free-tumble"))
         n = pool.precompute(all_scenarios(), first=first)
         if n:
             print(f"theoria: preparing {n} scenes in the background (defaults and presets, kept for the next "

@@ -101,9 +101,11 @@ class ClientSession:
     active = 0  # sessions open on this process (sets the playback rate)
 
     def __init__(self, server: viser.ViserServer, client: viser.ClientHandle, scenario: str | None,
-                 run=None):
-        """`run`: a finished Run to show first (`Run.show()`), with its scenario and parameters."""
+                 run=None, sweep=None):
+        """`run`: a finished Run to show first (`Run.show()`), with its scenario and parameters.
+        `sweep`: a sweep result (app/sweep_map.SweepMaps) shown as a map in a Sweep tab."""
         self.server, self.client = server, client
+        self.sweep = sweep
         ClientSession.active += 1
         self.scenarios = {s.name: s for s in all_scenarios()}
         # the address the browser opened: a shared view to restore (not for a Run.show())
@@ -178,6 +180,9 @@ class ClientSession:
         # the update counter that protocol-level tools (benchmarks/classroom.py) follow; never shown
         self._tick_md = gui.add_markdown("*simulating…*", visible=False)
         self.tabs = gui.add_tab_group()
+        if self.sweep is not None:  # the server was started for this map: its tab comes first
+            with self.tabs.add_tab("Sweep"):
+                self._build_sweep_tab()
         self._explore = self.tabs.add_tab("Explore")
         with self._explore:
             self.heading = gui.add_markdown(heading_markdown(self.spec))
@@ -405,7 +410,15 @@ class ClientSession:
         name = self._labels[self.dd.value]
         if name == self.spec.name:
             return
+        self._switch_scenario(name)
+        self.request()
+
+    def _switch_scenario(self, name: str) -> None:
+        """The panel for scenario `name` (its controls, presets, texts); the caller requests a run."""
         self.spec = self.scenarios[name]
+        label = gallery.label(self.spec)
+        if self.dd.value != label:
+            self.dd.value = label  # its callback sees the scenario already switched
         self.controls.remove()
         self.controls = self._make_controls()
         if self.present:
@@ -425,7 +438,121 @@ class ClientSession:
         self.good_values = None
         self.view_opts = View(exaggerate=self.view_opts.exaggerate)
         self._restore = None
-        self.request()
+
+    # ---- the sweep's map ------------------------------------------------------------------------
+    def _build_sweep_tab(self) -> None:
+        """The Sweep tab: the map of one metric over two swept parameters, what it shows, and which
+        run the scene replays. Rendering happens on the map's own thread (SweepMaps)."""
+        gui, sw = self.client.gui, self.sweep
+        self._sguard = False  # set while the code itself changes the map's dropdowns
+        sizes = " × ".join(str(sw.ds.sizes[d]) for d in sw.dims)
+        about = sw.preset.description if sw.preset is not None else ""
+        self.sweep_head = gui.add_markdown(
+            f"**Map: {_md(sw.title())}** — {sizes} = {sw.ds['status'].size} runs. "
+            "**Click a pixel** to replay that run in the scene.")
+        self.sweep_map = gui.add_html("<p><i>Drawing the map…</i></p>")
+        self.sweep_shown = gui.add_markdown("")
+        self._metric_labels: dict[str, str] = {}
+        for m in sw.metrics:
+            label = sw.metric_text(m)
+            self._metric_labels[label if label not in self._metric_labels else f"{label} [{m}]"] = m
+        first = next(iter(self._metric_labels))
+        self.sweep_metric = gui.add_dropdown("Colour shows", list(self._metric_labels), initial_value=first)
+        views = [lab for lab, _ in sw.views(self._metric_labels[first])]
+        self.sweep_view = gui.add_dropdown("Summary", views, initial_value=sw.default_view(self._metric_labels[first]),
+                                           hint="a dimension that is not on the map is summarised")
+        self.sweep_view.visible = len(views) > 1
+        # a click on the map sets this hidden field ("row,column,view,count": the page's script)
+        self.sweep_pixel = gui.add_text("Run on the map", initial_value="", visible=False)
+        if about:
+            gui.add_markdown(f"*{_md(about)}*")
+        self._sweep_pic = None
+        self._sweep_mark: dict | None = None  # the values of the run shown (its pixel is marked)
+        self._sweep_want: tuple[str, str] | None = None
+        self.sweep_metric.on_update(lambda e: self._safe(self._on_sweep_metric))
+        self.sweep_view.on_update(lambda e: self._safe(self._on_sweep_view))
+        self.sweep_pixel.on_update(lambda e: self._safe(self._on_sweep_click))
+        self._show_map()
+
+    def _on_sweep_metric(self) -> None:
+        if self._sguard:
+            return
+        metric = self._metric_labels[self.sweep_metric.value]
+        views = [lab for lab, _ in self.sweep.views(metric)]
+        keep = self.sweep_view.value if self.sweep_view.value in views else self.sweep.default_view(metric)
+        self._sguard = True
+        try:
+            self.sweep_view.options = views
+            self.sweep_view.value = keep
+            self.sweep_view.visible = len(views) > 1
+        finally:
+            self._sguard = False
+        self._show_map()
+
+    def _on_sweep_view(self) -> None:
+        if not self._sguard:
+            self._show_map()
+
+    def _show_map(self) -> None:
+        """Post the chosen view's rendering (cached after the first time); it is shown when ready."""
+        want = (self._metric_labels[self.sweep_metric.value], self.sweep_view.value)
+        self._sweep_want = want
+        fut = self.sweep.picture_async(*want)
+        fut.add_done_callback(lambda f: self._safe(self._map_ready, f, want))
+
+    def _map_ready(self, fut, want) -> None:
+        if want != self._sweep_want or self._closed:
+            return  # another view was chosen meanwhile
+        pic = fut.result()
+        self._sweep_pic = pic
+        self._draw_map()
+
+    def _draw_map(self) -> None:
+        from .sweep_map import map_html
+
+        pic = self._sweep_pic
+        if pic is None:
+            return
+        self.sweep_map.content = map_html(self.sweep, pic, self.sweep_pixel._impl.uuid, self._mark_in(pic))
+
+    def _mark_in(self, pic) -> tuple[int, int] | None:
+        """The pixel of `pic` that holds the run shown in the scene (if it is on this map)."""
+        v = self._sweep_mark
+        if v is None:
+            return None
+        m = pic.map
+
+        def index(values, x):
+            hits = np.flatnonzero(np.asarray(values) == x)
+            return int(hits[0]) if hits.size else None
+
+        j = index(m.x_values, v.get(m.x))
+        i = index(m.y_values, v.get(m.y)) if m.y else 0
+        return None if i is None or j is None else (i, j)
+
+    def _on_sweep_click(self) -> None:
+        from .sweep_map import parse_click
+
+        pic = self._sweep_pic
+        ij = parse_click(self.sweep_pixel.value, pic) if pic is not None else None
+        if ij is not None:
+            self.replay_pixel(*ij)
+
+    def replay_pixel(self, i: int, j: int) -> dict:
+        """Replay the run at row i, column j of the map shown: the sweep's scenario with that run's
+        full parameters, through the worker like any other change. Returns the values."""
+        pic = self._sweep_pic
+        values = self.sweep.pixel_values(pic, i, j)
+        name = pic.map.scenario
+        if name != self.spec.name:
+            self._switch_scenario(name)
+        self.controls.set_values(values)
+        self._set_preset_for(values)
+        self._sweep_mark = values
+        self.sweep_shown.content = f"**In the scene:** {_md(self.sweep.pixel_words(pic, i, j))}"
+        self._draw_map()
+        self.request(dict(values))
+        return values
 
     # ---- playback controls -----------------------------------------------------------------------
     def _on_playback(self, which: str) -> None:

@@ -33,6 +33,10 @@ def test_verdicts_say_how_far_euler_is_from_the_simulation():
     assert verdict(Comparison("x", None, 2.0))[1] == ""
     words, tone = verdict(Comparison("x", 0.0, -2.8e-11))
     assert tone == "" and "exactly 0" in words  # no percentage of a zero
+    # no Euler value: the simulated one against the modern one, also when both are exactly 0 (a
+    # tidal run's capture outcome beside a probability of 0 divided by zero)
+    assert verdict(Comparison("x", None, 0.0, 0.0)) == ("simulated and modern agree exactly", "good")
+    assert verdict(Comparison("x", None, 0.0, 0.5))[1] == "far"
 
 
 def test_metric_keys_become_words_with_units():
