@@ -164,8 +164,10 @@ class ViserProtocolClient:
                 self.values[m["uuid"]] = m["value"]
         elif typ == "GuiUpdateMessage":
             up = m.get("updates", {})
-            if m.get("uuid") in self.markdown and "_markdown" in up:
-                self.markdown[m["uuid"]] = up["_markdown"]
+            if m.get("uuid") in self.markdown:  # a markdown's or an HTML element's new text
+                for key in ("_markdown", "content"):
+                    if isinstance(up.get(key), str):
+                        self.markdown[m["uuid"]] = up[key]
             if m.get("uuid") == self.status_uuid:
                 for key in ("_markdown", "content"):
                     if key in up:

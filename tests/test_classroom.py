@@ -238,9 +238,12 @@ def test_idle_sockets_are_closed_and_one_address_cannot_take_every_seat():
             closed_idle = [c._reader.done() for c in idle]
             many = [ViserProtocolClient(url) for _ in range(5)]
             for c in many:
-                await c.connect()
+                try:
+                    await c.connect()
+                except websockets.exceptions.ConnectionClosedError:  # refused while it said hello
+                    pass
             await asyncio.sleep(3.0)
-            served = [c for c in many if not c._reader.done()]
+            served = [c for c in many if c._reader is not None and not c._reader.done()]
             for c in served:
                 assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
             for c in idle + many:
