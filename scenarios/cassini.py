@@ -205,8 +205,7 @@ def _draw(run, spec, view):
     spin = _magnified(ex["spin_axis"], k_mag)
     Lk = NORMAL_LENGTH
     d.add(Arrows(name="normals/ecliptic", origins=np.zeros((1, 3)), vectors=np.array([[0.0, 0.0, Lk]]),
-                 colors=(ECLIPTIC_COLOR,), shaft_radius=0.02, head_radius=0.05, head_length=0.1,
-                 labels=("ecliptic pole",)),
+                 colors=(ECLIPTIC_COLOR,), shaft_radius=0.02, head_radius=0.05, head_length=0.1),
           Arrows(name="normals/orbit", origins=np.zeros((1, 3)), vectors=(Lk * nrm[f])[:, None, :],
                  colors=(ORBIT_COLOR,), shaft_radius=0.02, head_radius=0.05, head_length=0.1,
                  labels=("orbit normal",)),
@@ -222,8 +221,9 @@ def _draw(run, spec, view):
           Segments(name="normals/plane", points=np.stack([Lk * nrm[f], Lk * spin[f]], 1)[:, None], colors=(120, 120, 120),
                    thickness=0.006),
           Label(name="node_line_label", text="node line", position=1.75 * nl),
-          Label(name="normals/magnified", text=(f"angles from the ecliptic pole ×{k_mag:g}" if k_mag != 1 else
-                                                "angles true to scale"), position=(0.0, 0.0, Lk + 0.35)))
+          # named above its tip, not at it: the spin axis's tip stays within a few degrees of it
+          Label(name="normals/magnified", text="ecliptic pole (yellow): " + (
+              f"angles from it ×{k_mag:g}" if k_mag != 1 else "angles true to scale"), position=(0.0, 0.0, Lk + 0.35)))
     th = np.linspace(0, 2 * np.pi, 181)
     ring = np.stack([np.cos(th), np.sin(th), 0 * th], 1)
     d.add(Segments(name="ecliptic", points=np.stack([1.5 * ring[:-1], 1.5 * ring[1:]], 1), colors=ECLIPTIC_COLOR,
