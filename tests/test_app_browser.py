@@ -48,7 +48,7 @@ INPUTS_JS = """(label) => {
   let p = l;
   for (let k = 0; k < 8 && p; k++) {
     p = p.parentElement;
-    const ins = p ? p.querySelectorAll('input[type=text]') : [];
+    const ins = p ? Array.from(p.querySelectorAll('input')).filter(i => i.type === 'text') : [];
     if (ins.length) return Array.from(ins);
   }
   return [];
