@@ -39,7 +39,7 @@ def test_moon_seen_from_the_earth_fills_the_view_with_its_face(browser):  # noqa
 
         # the whole view from the Earth: the camera on the Earth's direction, the disc fills the view
         before = set(sessions)
-        p = Page(browser, f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1&o.earth_view=1")
+        p = Page(browser, f"http://127.0.0.1:{server.get_port()}/?s=moon&fixedDpr=1&o.earth_view=1")
         p.page.wait_for_function("window.__viserMutable && window.__viserMutable.nodeRefFromName['/world/body/mesh/0']",
                                  timeout=WAIT_MS)
         t0 = time.time()
