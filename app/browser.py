@@ -20,6 +20,11 @@ from viser import _messages
 #   Re-run on resize, on panel changes and every half second (the panel can be folded).
 # - focusout on a text field inside a form submits the form: a typed value is taken on Enter or
 #   when the field loses focus, never per keystroke.
+# - a form's submit waits SUBMIT_AFTER_MS: viser 1.1 sends all of a panel's messages through one
+#   throttled sender (50 ms, the latest message wins), so a value typed and submitted within 50 ms
+#   (Enter right after the last key, or typing into a field just after leaving another, whose
+#   submit opened the window) reached the server as the submit alone and the server took the
+#   field's previous text. Held back longer than the throttle, the submit goes after the value.
 # - present(on): presenter mode's large type (the panel scaled about its top right corner).
 SETUP = r"""
 (() => {
@@ -72,6 +77,18 @@ SETUP = r"""
     T.clicks += 1;
     m.sendMessage({type: 'GuiUpdateMessage', uuid: img.dataset.uuid,
                    updates: {value: i + ',' + j + ',' + img.dataset.key + ',' + T.clicks}});
+  }, true);
+  T.SUBMIT_AFTER_MS = 120;
+  document.addEventListener('submit', (e) => {
+    const f = e.target;
+    if (!f || f.tagName !== 'FORM' || f.__theoriaNow) return;
+    e.preventDefault();
+    e.stopImmediatePropagation();  // viser's handler sees the submit when it is sent again below
+    clearTimeout(f.__theoriaTimer);  // Enter then blur: one submit
+    f.__theoriaTimer = setTimeout(() => {
+      f.__theoriaNow = true;
+      try { if (f.isConnected) f.requestSubmit(); } finally { f.__theoriaNow = false; }
+    }, T.SUBMIT_AFTER_MS);
   }, true);
   T.title = (text) => { document.title = text; };
   T.url = (query) => {

@@ -7,15 +7,18 @@ same process:
   polhode geometry changed (checked every animation frame). Median of 7. Baseline: the 100 ms
   target for a slider to redraw (ratio = 0.1 s / measured; ≥ 1 meets it).
 - app-playback-fps: frames per second in which the page shows a new body pose during playback of
-  a 20001-sample run drawn with 10⁴-point trails (polhode, herpolhode, rotation-axis trail; the
-  default overlays of a ch. 15 scene). theoria sends the paths once and moves poses and chunk
-  visibility; baseline: the naive player that re-sends the three growing trails every frame.
+  a 20001-sample run (3000 playback frames) drawn with its growing paths (polhode, herpolhode,
+  rotation-axis trail; the default overlays of a ch. 15 scene), each densified by the renderer to
+  at most 10⁴ points. theoria sends the paths once and moves poses and chunk visibility; baseline:
+  the naive player that re-sends the same three growing trails, up to the current frame, every
+  frame.
   Times are seconds per displayed frame (ratio = baseline / theoria). Software WebGL is bound by
   pixels, so the same playback is also measured in a 960×600 window, and the floor is shown: an
   empty viser page (no node, no control) asked to redraw every frame, in the 1280×800 window.
-- record-1e5-steps: a 10⁵-step recording (free tumble, one sample per step) written column-wise;
-  baseline: the same entities logged row by row (set_time + log per step) on 10⁴ steps, scaled
-  ×10 (linear in steps; reported as baseline_extrapolated).
+- record-1e5-steps: a 10⁵-step recording (free tumble, one sample per step) written column-wise
+  (`theoria record`'s path: the drawing's playback frames, the energy, |L| and plot series on every
+  step); baseline: the body, ω, L and the same series logged row by row (set_time + log per step)
+  on 10⁴ steps, scaled ×10 (linear in steps; reported as baseline_extrapolated).
 """
 from __future__ import annotations
 
@@ -152,49 +155,75 @@ def slider_latency():
             "note": "baseline = the 100 ms slider-to-redraw target"}
 
 
+NAIVE_PATHS = ("axis_trail", "body/polhode", "herpolhode")  # the growing paths of a ch. 15 scene, shown by default
+
+
+def _drawn_paths(drawing) -> dict:
+    """The points theoria draws for each growing path (densified and thinned as the renderer does),
+    with the frame at which each point appears: what a player that re-sends trails must send."""
+    from theoria.app.scene import path_chunks
+
+    out = {}
+    for name in NAIVE_PATHS:
+        it = drawing.item(name)
+        pieces, starts, _ = path_chunks(it, grow_trails=True)
+        pts = np.concatenate(pieces)
+        # each chunk's points appear at its first frame; within it, in order over its time span
+        ends = list(starts[1:]) + [drawing.n_frames]
+        at = np.concatenate([np.linspace(a, b, len(p), endpoint=False) for p, a, b in zip(pieces, starts, ends)])
+        out[name] = (pts.astype(np.float32), at)
+    return out
+
+
 def _naive_server(result, spec):
-    """The naive player: every frame re-sends the growing trails (axis trail, polhode, herpolhode)."""
+    """The naive player: the same drawing, but every frame re-sends the growing trails (rotation-axis
+    trail, polhode, herpolhode) up to the current frame instead of sending them once."""
     import viser
 
-    from theoria.app.scene import AXIS_TRAIL_RADIUS, SceneView, decimate_index
+    from theoria.app.scene import SceneView
+    from theoria.app.worker import drawing_of
 
     with contextlib.redirect_stdout(io.StringIO()):
         server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
     stop = threading.Event()
-    traj = result.trajectory
-    idx = decimate_index(len(traj.t))
-    paths = [AXIS_TRAIL_RADIUS * traj.rotation_axis[idx], 1.3 * traj.omega_body[idx] / np.abs(traj.omega_body).max(),
-             traj.omega_inertial[idx] / np.abs(traj.omega_inertial).max()]
+    drawing = drawing_of(spec, result)
+    paths = _drawn_paths(drawing)
+    colours = {name: tuple(int(c) for c in drawing.item(name).color) for name in NAIVE_PATHS}
+    sizes = {name: float(drawing.item(name).thickness) for name in NAIVE_PATHS}
+    # the renderer draws everything else; the growing paths are left to the naive loop
+    overlays = {g: on and g not in ("axis_trail", "polhode", "herpolhode") for g, on in drawing.overlays.items()}
 
     @server.on_client_connect
     def _(client):
         view = SceneView(client.scene, "/world", grow_trails=False)
-        view.show(result, spec, overlays={k: k in ("axes", "vectors") for k in view.default_overlays(spec)})
-        def cloud(name, pts, col):
-            client.scene.add_point_cloud(name, pts.astype(np.float32), col, point_size=0.02, point_shape="square",
+        view.show(drawing, overlays)
+
+        def cloud(name, pts, col, size):
+            client.scene.add_point_cloud(name, pts, col, point_size=size, point_shape="square",
                                          precision="float32", point_shading="flat")
 
-        cloud("/world/body/polhode/0", paths[1][:2], (250, 210, 40))
+        # the node the page waits for (and the latency probe reads) before playback starts
+        cloud("/world/body/polhode/0", paths["body/polhode"][0][:2], colours["body/polhode"], sizes["body/polhode"])
 
         def play():
             t0 = time.perf_counter()
             while not stop.is_set():
                 frac = ((time.perf_counter() - t0) / 20.0) % 1.0
-                i = int(frac * (len(traj.t) - 1))
-                j = max(2, int(np.searchsorted(idx, i)))
+                k = int(frac * (drawing.n_frames - 1))
                 try:
                     with client.atomic():
-                        view.set_frame(i)
-                        cloud("/world/naive/axis_trail", paths[0][:j], (240, 120, 30))
-                        cloud("/world/body/polhode/0", paths[1][:j], (250, 210, 40))
-                        cloud("/world/naive/herpolhode", paths[2][:j], (0, 190, 200))
+                        view.set_frame(k)
+                        for name, (pts, at) in paths.items():
+                            j = max(2, int(np.searchsorted(at, k, side="right")))
+                            node = "/world/body/polhode/0" if name == "body/polhode" else f"/world/naive/{name}"
+                            cloud(node, pts[:j], colours[name], sizes[name])
                 except Exception:
                     return
                 time.sleep(1 / 60)
 
         threading.Thread(target=play, daemon=True).start()
 
-    return server, stop
+    return server, stop, {name: len(p[0]) for name, p in paths.items()}
 
 
 RENDER_JS = """(seconds) => new Promise(resolve => {
@@ -218,7 +247,7 @@ def _theoria_playback(b, viewport) -> dict:
         _wait_updates(session, n + 1)
         time.sleep(1.0)
         out["theoria"] = page.evaluate(FPS_JS, 4)
-        with session._view_lock:  # the same body with only one 10⁴-point path (rotation-axis trail)
+        with session._view_lock:  # the same body with only one path (rotation-axis trail, ~10⁴ points)
             for k in list(session.view.overlays):
                 session.view.set_overlay(k, k in ("axes", "vectors", "axis_trail"))
         time.sleep(1.0)
@@ -228,7 +257,7 @@ def _theoria_playback(b, viewport) -> dict:
                 session.view.set_overlay(k, False)
         time.sleep(1.0)
         out["no_paths"] = page.evaluate(FPS_JS, 3)
-        out["trail_points"] = int(session.drawing.n_frames)  # frames drawn of the run (a trail grows over them)
+        out["frames"] = int(session.drawing.n_frames)  # playback frames of the run (a trail grows over them)
         out["samples"] = len(session.result.trajectory.t)
         ctx.close()
     finally:
@@ -264,14 +293,14 @@ def playback_fps():
     from theoria.scenarios import get
 
     spec = get("middle-axis-flip")
-    given = {"duration": "100", "step": "0.005"}  # 20001 samples → 10⁴-point trails
+    given = {"duration": "100", "step": "0.005"}  # 20001 samples → paths of up to 10⁴ points
     result = spec.simulate_fn(spec.resolve(given))
     out = {}
     with _browser() as b:
         out = _theoria_playback(b, VIEWPORT)
         small = _theoria_playback(b, SMALL_VIEWPORT)["theoria"]
         empty = _empty_page_fps(b, VIEWPORT)
-        server, stop = _naive_server(result, spec)
+        server, stop, path_points = _naive_server(result, spec)
         try:
             ctx, page = _open(b, f"http://127.0.0.1:{server.get_port()}/?fixedDpr=1")
             time.sleep(1.0)
@@ -284,7 +313,8 @@ def playback_fps():
     fps = out["theoria"]["poses"] / out["theoria"]["seconds"]
     fps_naive = out["naive"]["poses"] / out["naive"]["seconds"]
     return {"theoria_s": 1.0 / fps, "baseline_s": 1.0 / max(fps_naive, 1e-9), "theoria_error": None,
-            "baseline_error": None, "fps": fps, "fps_naive_resend": fps_naive, "trail_points": out["trail_points"],
+            "baseline_error": None, "fps": fps, "fps_naive_resend": fps_naive, "frames": out["frames"],
+            "path_points": path_points,
             "render_fps": out["theoria"]["frames"] / out["theoria"]["seconds"],
             "fps_one_10k_trail": out["one_trail"]["poses"] / out["one_trail"]["seconds"],
             "fps_body_only": out["no_paths"]["poses"] / out["no_paths"]["seconds"],
@@ -339,7 +369,7 @@ def _naive_record(res, out, steps):
 
 @register_bench("record-1e5-steps")
 def record_steps():
-    from theoria.app.record import record_result
+    from theoria.app.record import record_run
 
     steps = 100_000
     spec, res = _long_result(steps)
@@ -347,7 +377,7 @@ def record_steps():
     with tempfile.TemporaryDirectory() as d:
         path = os.path.join(d, "run.rrd")
         t0 = time.perf_counter()
-        record_result(res, spec, path)
+        info = record_run(res, path)  # the drawing's frames and every step's series, column-wise
         t_ours = time.perf_counter() - t0
         size = os.path.getsize(path)
         sub = 10_000
@@ -355,4 +385,4 @@ def record_steps():
         _naive_record(res, os.path.join(d, "naive.rrd"), sub)
         t_naive = (time.perf_counter() - t0) * (n / sub)
     return {"theoria_s": t_ours, "baseline_s": t_naive, "theoria_error": None, "baseline_error": None,
-            "steps": n, "size_MB": size / 1e6, "baseline_extrapolated": f"row-by-row on {sub} steps x {n / sub:.1f}"}
+            "steps": n, "frames": info["frames"], "size_MB": size / 1e6, "baseline_extrapolated": f"row-by-row on {sub} steps x {n / sub:.1f}"}

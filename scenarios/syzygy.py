@@ -89,7 +89,7 @@ def _syzygy(values, progress=None):
         Comparison("syzygy distance (lunar distances)", (sz.EULER_N_SQUARED / 3.0) ** (1.0 / 3.0), b_lunar, None, "c",
                    "Euler: v ≈ c·(n²/3)^{1/3} with n² = 175, 'about four'; simulated: root of §7/§9 with today's n, m"),
         Comparison("α = v/a: Euler's §7 equation vs the restricted problem's quintic", alpha_e, alpha, None, "",
-                   "Euler pulls the Moon toward the Sun with a³ = G(M_sun + M_earth) where the Sun alone gives "
+                   "Euler pulls the Moon toward the Sun with a³ = G(M☉ + M⊕) where the Sun alone gives "
                    "a³(1 − μ); simulated: the collinear point (quintic) the run sits at"),
         Comparison("α = v/a: Euler's 4-term series vs the root of his §7 equation", series_e, alpha_e, series_c, "",
                    "his m = n²c³/a³ = μ; modern column: the series with the 4th coefficient corrected (4/243, not 1/81)"),
@@ -157,7 +157,7 @@ def _syzygy_params():
         Param("duration_yr", 1.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)",
               label="Length of the run"),
         Param("mass_ratio", sz.EARTH_SUN_MASS_RATIO, 1e-9, 1.0, "1",
-              "m = M_earth/M_sun (IAU 2009: 3.0035e-6); Euler's n²c³/a³ is m/(1 + m)",
+              "m = M⊕/M☉ (IAU 2009: 3.0035e-6); Euler's n²c³/a³ is m/(1 + m)",
               label="Earth/Sun mass ratio m", advanced=True),
         Param("moon_revolutions_per_year", sz.MOON_REVOLUTIONS_PER_YEAR, 1.0, 100.0, "1/yr",
               "n: sidereal months per sidereal year (13.369; Euler: √175 = 13.23); sets the lunar unit",

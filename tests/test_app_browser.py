@@ -48,11 +48,25 @@ INPUTS_JS = """(label) => {
   let p = l;
   for (let k = 0; k < 8 && p; k++) {
     p = p.parentElement;
-    const ins = p ? p.querySelectorAll('input[type=text]') : [];
+    const ins = p ? Array.from(p.querySelectorAll('input')).filter(i => i.type === 'text') : [];
     if (ins.length) return Array.from(ins);
   }
   return [];
 }"""
+
+SLIDER_JS = """(label) => {
+  const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
+  let p = l;
+  for (let k = 0; k < 8 && p; k++) { p = p.parentElement; const t = p && p.querySelector('[role=slider]'); if (t) return t; }
+  return null;
+}"""
+
+
+def _label(scenario: str, name: str) -> str:
+    """The words the panel shows for a parameter (the field's label)."""
+    from theoria.scenarios import get
+
+    return get(scenario).param(name).display()
 
 
 def _have_browser() -> bool:
@@ -138,13 +152,20 @@ class Page:
     def signature(self, name):
         return self.page.evaluate(SIGNATURE_JS, name)
 
-    def set_input(self, label, texts):
-        ins = self.page.evaluate_handle(INPUTS_JS, label)
-        elements = [ins.get_property(str(i)).as_element() for i in range(len(texts))]
-        assert all(elements), f"no inputs for {label}"
-        for el, text in zip(elements, texts):
-            el.fill(str(text))
-            el.press("Enter")
+    def set_input(self, label, text):
+        """Type `text` into the panel's field labelled `label` (a parameter's words, `Param.display()`)
+        and press Enter: a typed number is taken then, as a person does it."""
+        self.page.wait_for_function(f"(l) => ({INPUTS_JS})(l).length > 0", arg=label, timeout=WAIT_MS)
+        el = self.page.evaluate_handle(INPUTS_JS, label).get_property("0").as_element()
+        assert el is not None, f"no input for {label}"
+        el.fill(str(text))
+        el.press("Enter")
+
+    def nudge_slider(self, label, key="ArrowRight"):
+        """Move the slider labelled `label` one step with the keyboard (focus its thumb, press a key)."""
+        self.page.wait_for_function(f"(l) => !!({SLIDER_JS})(l)", arg=label, timeout=WAIT_MS)
+        self.page.evaluate_handle(SLIDER_JS, label).as_element().focus()
+        self.page.keyboard.press(key)
 
     def wait_signature_change(self, name, before):
         self.page.wait_for_function(f"(b) => {{ const s = ({SIGNATURE_JS})('{name}'); return s && (s[0] !== b[0] || Math.abs(s[1] - b[1]) > 1e-6 * (1 + Math.abs(b[1]))); }}",
@@ -203,35 +224,50 @@ def test_page_loads_offline_and_draws_the_body(browser, tumble_app):
 
 
 def test_slider_changes_scene_and_bad_value_keeps_it(browser, flip_app):
+    """A typed value (Enter) and a slider step each redraw the scene; an impossible body and an
+    out-of-range number are refused by name with the rule, and the scene keeps the last good run."""
     url, sessions = flip_app
     p = Page(browser, url).wait_ready()
+    nudge, spin = _label("middle-axis-flip", "perturbation"), _label("middle-axis-flip", "spin")
+    inertia, duration = _label("middle-axis-flip", "inertia"), _label("middle-axis-flip", "duration")
     try:
         p.dismiss_software_webgl_note()
         time.sleep(4.0)  # let the flips play (a third of the 30 s run at speed 1 is 10 s)
         SCREENSHOTS.mkdir(parents=True, exist_ok=True)
         p.page.screenshot(path=str(SCREENSHOTS / "middle-axis-flip.png"))
         before = p.signature("/world/body/polhode/0")
-        p.set_input("perturbation", ["0.2"])
+        p.set_input(nudge, "0.2")
         p.wait_signature_change("/world/body/polhode/0", before)
+        typed = p.signature("/world/body/polhode/0")
+        assert typed != before
+        session = list(sessions.values())[-1]
+        assert session.good_values["perturbation"] == 0.2
+        # the spin's slider, one step with the keyboard: a new run, a new polhode
+        spin0 = session.controls.values()["spin"]
+        p.nudge_slider(spin)
+        p.wait_signature_change("/world/body/polhode/0", typed)
         good = p.signature("/world/body/polhode/0")
-        assert good != before
-        # an impossible body (A + B < C): a notification naming the parameter and the rule
-        p.set_input("inertia [kg m^2]", ["1", "1", "5"])
-        p.page.wait_for_function("document.body.innerText.includes('Bad value for inertia')", timeout=WAIT_MS)
+        assert session.good_values["spin"] > spin0
+        # an impossible body (A + B < C): a notification naming the control and the rule
+        p.set_input(inertia, "1, 1, 5")
+        p.page.wait_for_function("(w) => document.body.innerText.includes('Not allowed: ' + w)", arg=inertia,
+                                 timeout=WAIT_MS)
         text = p.page.evaluate("document.body.innerText")
         assert "A+B >= C" in text and "triangle" in text
         time.sleep(1.0)
         assert p.signature("/world/body/polhode/0") == good  # the scene keeps the last good state
-        # out of range for a number input: the allowed range is named
-        p.set_input("duration [s]", ["-3"])
-        p.page.wait_for_function("document.body.innerText.includes('Bad value for duration')", timeout=WAIT_MS)
+        # out of range for a number field: the allowed range is named
+        p.set_input(duration, "-3")
+        p.page.wait_for_function("(w) => document.body.innerText.includes('Not allowed: ' + w)", arg=duration,
+                                 timeout=WAIT_MS)
         assert "(0, 1e+06] s" in p.page.evaluate("document.body.innerText")
         time.sleep(0.5)
         assert p.signature("/world/body/polhode/0") == good
         # the server is still alive: good values are simulated and drawn
-        p.set_input("duration [s]", ["30"])
-        p.set_input("inertia [kg m^2]", ["1", "2", "2.5"])
+        p.set_input(duration, "30")
+        p.set_input(inertia, "1, 2, 2.5")
         p.wait_signature_change("/world/body/polhode/0", good)
+        assert session.good_values["inertia"] == (1.0, 2.0, 2.5)
         assert p.outside == []
     finally:
         p.close()
@@ -245,7 +281,7 @@ def test_two_browsers_hold_independent_states(browser, flip_app):
         sig_b = b.signature("/world/body/polhode/0")
         sig_a = a.signature("/world/body/polhode/0")
         assert sig_a == sig_b  # same defaults
-        a.set_input("perturbation", ["0.3"])
+        a.set_input(_label("middle-axis-flip", "perturbation"), "0.3")
         a.wait_signature_change("/world/body/polhode/0", sig_a)
         time.sleep(1.0)
         assert b.signature("/world/body/polhode/0") == sig_b
@@ -287,8 +323,12 @@ def test_switching_to_an_orbit_scenario_draws_its_bodies(browser, tumble_app):
         assert len(bodies) >= 2 and len(trails) == len(bodies), (bodies, trails)
         text = p.page.evaluate("document.body.innerText")
         assert orbit.title in text and orbit.section in text
-        for prm in orbit.params:
-            assert prm.name in text
+        for prm in orbit.params:  # the parameters in words; the advanced ones in a closed folder
+            if not prm.advanced:
+                assert prm.display() in text, prm.display()
+            if "_" in prm.name:
+                assert prm.name not in text, prm.name
+        assert "More settings" in text or not any(prm.advanced for prm in orbit.params)
         assert p.outside == []
     finally:
         p.close()
@@ -332,7 +372,7 @@ def test_a_failing_scenario_never_kills_the_server(browser):
         a = Page(browser, url)
         try:
             a.page.wait_for_function("document.body.innerText.includes('deliberate failure')", timeout=WAIT_MS)
-            assert "Error in test-broken" in a.page.evaluate("document.body.innerText")
+            assert f"Error in {spec.title}" in a.page.evaluate("document.body.innerText")  # named in words
         finally:
             a.close()
         b = Page(browser, url)  # a new browser is still served

@@ -10,6 +10,9 @@ import os
 
 import pytest
 
+from theoria.app.scene import MAX_DRAW_POINTS
+from theoria.scenarios.drawing import MAX_FRAMES
+
 pytestmark = [pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian's chromium"),
               pytest.mark.slow]
 
@@ -31,10 +34,15 @@ def test_app_benches_measure_what_they_say(cli):
     lat = rows["app-slider-latency"]
     assert lat["samples"] == 6001 and 0 < lat["server_ms_median"] <= lat["latency_ms_median"] * 1.5
     fps = rows["app-playback-fps"]
-    assert fps["trail_points"] == 10_000 and fps["samples"] == 20_001
+    assert fps["samples"] == 20_001 and fps["frames"] == MAX_FRAMES
+    # the naive player re-sends the very paths theoria draws: each at most MAX_DRAW_POINTS, and the
+    # rotation-axis trail of the flip (the longest) thousands of points
+    pts = fps["path_points"]
+    assert set(pts) == {"axis_trail", "body/polhode", "herpolhode"}
+    assert all(0 < n <= MAX_DRAW_POINTS for n in pts.values()) and pts["axis_trail"] > 2000, pts
     for k in ("fps", "fps_one_10k_trail", "fps_body_only", "fps_at_960x600", "empty_viser_page_fps"):
         assert 0 < fps[k] < 250, k  # a real frame rate, not a count of something else
     # the paths are sent once: playback beats the player that re-sends them every frame
     assert fps["fps"] > fps["fps_naive_resend"]
     rec = rows["record-1e5-steps"]
-    assert rec["steps"] == 100_001 and rec["size_MB"] > 1
+    assert rec["steps"] == 100_001 and rec["frames"] == MAX_FRAMES and rec["size_MB"] > 1

@@ -37,6 +37,13 @@ INPUT_JS = """(label) => {
   return null; }"""
 
 
+# the page's camera position in the scene's own coordinates (the link's): three.js holds it in its
+# y-up world, the scene's root node carries the turn from viser's world (z up) to it
+CAMERA_WORLD_JS = """(() => { const m = window.__viserMutable, root = m.nodeRefFromName[''];
+  root.updateWorldMatrix(true, false);
+  return m.camera.position.clone().applyMatrix4(root.matrixWorld.clone().invert()).toArray(); })()"""
+
+
 @pytest.fixture(scope="module")
 def browser():
     from playwright.sync_api import sync_playwright
@@ -97,6 +104,15 @@ def raw_identifiers(text: str, spec, run) -> list[str]:
     return found
 
 
+def _field(page, label: str):
+    """The input of the panel's control labelled `label`, once the panel shows it (the session
+    has drawn its run before the page has laid out the panel's controls)."""
+    page.wait_for_function(f"(l) => !!({INPUT_JS})(l)", arg=label, timeout=WAIT_MS)
+    field = page.evaluate_handle(INPUT_JS, label).as_element()
+    assert field is not None, label
+    return field
+
+
 def _tab(page, name: str) -> None:
     page.get_by_role("tab", name=name).click()
     time.sleep(0.4)
@@ -138,7 +154,7 @@ def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
     ctx, page = _open(browser, base + "?" + _query(flip))
     try:
         s = _session_for(sessions, before, flip.name)
-        field = page.evaluate_handle(INPUT_JS, flip.param("perturbation").display()).as_element()
+        field = _field(page, flip.param("perturbation").display())
         n = s.updates
         field.click()
         field.fill("")
@@ -146,7 +162,7 @@ def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
         time.sleep(1.0)
         assert s.updates == n and s.controls.values()["perturbation"] == 0.01
         page.mouse.click(300, 400)  # the field loses focus: the value is taken
-        page.wait_for_function("1", timeout=1000)
+        page.wait_for_function("1", timeout=WAIT_MS)  # a round trip to the page
         t0 = time.time()
         while s.good_values["perturbation"] != 1e-3:
             assert time.time() - t0 < WAIT_MS / 1000
@@ -158,7 +174,7 @@ def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
     ctx, page = _open(browser, base + "?" + _query(pull))
     try:
         s = _session_for(sessions, before, pull.name)
-        field = page.evaluate_handle(INPUT_JS, pull.param("gm").display()).as_element()
+        field = _field(page, pull.param("gm").display())
         field.fill("2.5e6")
         field.press("Enter")
         t0 = time.time()
@@ -167,7 +183,7 @@ def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
             time.sleep(0.1)
         assert s.result.params["gm"] == 2.5e6
         # a value out of range is refused with the allowed range, and the last good value stays
-        field = page.evaluate_handle(INPUT_JS, pull.param("distance").display()).as_element()
+        field = _field(page, pull.param("distance").display())
         n = s.updates
         field.fill("-0.5")
         field.press("Enter")
@@ -190,7 +206,7 @@ def test_a_copied_link_restores_scenario_parameters_time_and_camera(browser, app
     ctx, page = _open(browser, base + "?" + _query(flip))
     try:
         s = _session_for(sessions, before, flip.name)
-        field = page.evaluate_handle(INPUT_JS, flip.param("perturbation").display()).as_element()
+        field = _field(page, flip.param("perturbation").display())
         field.fill("0.002")
         field.press("Enter")
         while s.good_values["perturbation"] != 0.002:
@@ -223,7 +239,7 @@ def test_a_copied_link_restores_scenario_parameters_time_and_camera(browser, app
         assert abs(r.drawing.times[r.view.frame] - want_t) <= max(abs(x) for x in (r.drawing.times[1] - r.drawing.times[0],
                                                                                      1e-9))
         time.sleep(1.0)
-        cam = page.evaluate("(() => { const c = window.__viserMutable.camera; return c.position.toArray(); })()")
+        cam = page.evaluate(CAMERA_WORLD_JS)
         assert max(abs(a - b) for a, b in zip(cam, want_cam[:3])) < 1e-3 * (1 + max(abs(x) for x in want_cam[:3])), (cam, want_cam)
     finally:
         ctx.close()
