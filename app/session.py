@@ -217,7 +217,9 @@ class ClientSession:
             self.plot = None
         with self.tabs.add_tab("Compare"):
             self.compare = gui.add_html(compare_html(None))
-            self.notes_md = gui.add_markdown("")
+            # how the numbers were made: folded, so the table and its verdicts fit a screen
+            with gui.add_folder("How these numbers were made", expand_by_default=False):
+                self.notes_md = gui.add_markdown("")
             self.numbers_folder = gui.add_folder("All numbers of this run", expand_by_default=False)
             with self.numbers_folder:
                 self.numbers = gui.add_markdown("")

@@ -128,7 +128,8 @@ def test_every_panel_is_in_words_and_fits_two_screens(browser, app):
         ctx, page = _open(browser, base + "?" + _query(spec))
         try:
             s = _session_for(sessions, before, spec.name)
-            page.wait_for_function("document.title.startsWith('theoria')", timeout=WAIT_MS)
+            # the page is titled "theoria" from its first byte; the session then names the scenario
+            page.wait_for_function("document.title.startsWith('theoria — ')", timeout=WAIT_MS)
             titles[spec.name] = page.title()
             for tab in ("Explore", "Compare", "Read"):
                 _tab(page, tab)
@@ -142,7 +143,7 @@ def test_every_panel_is_in_words_and_fits_two_screens(browser, app):
     assert bad == [], bad
     too_tall = {k: round(v, 2) for k, v in screens.items() if v is None or v > 2.0}
     assert too_tall == {}, too_tall
-    assert all(t.startswith("theoria — ") for t in titles.values()), titles
+    assert all(t == f"theoria — {name}" for name, t in titles.items()), titles
 
 
 def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
