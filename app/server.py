@@ -26,7 +26,6 @@ start, `app.worker.RunStore`). A class switching among the same presets computes
 """
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import io
 import logging

@@ -23,19 +23,16 @@ Ctrl-C or SIGTERM: the finished chunks stay, the cluster is shut down, exit stat
 """
 from __future__ import annotations
 
-import dataclasses
 import datetime
 import json
-import math
 import os
 import re
 import shutil
 import signal
-import sys
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping
 
 import numpy as np
 

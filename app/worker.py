@@ -41,7 +41,6 @@ import itertools
 import logging
 import os
 import pickle
-import select
 import signal
 import subprocess
 import sys

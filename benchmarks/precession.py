@@ -129,7 +129,6 @@ def secular_error_against_full(years=MILLENNIUM, step_days=2.0, sample_years=0.1
     (the node's terms fitted with sin/cos of Ω and 2Ω; the shorter ones average out at samples of
     0.1 yr) and the drift of the averaging, c₁·t, whose size at the end is returned."""
     from theoria.physics import long_term_precession as LT
-    from theoria.physics.integrator import PointMass, integrate
     from theoria.scenarios import earth_long_view as LV
 
     orb = LV.secular_calibration()[1]

@@ -25,7 +25,7 @@ import numpy as np
 from ..physics import earth_precession as EP
 from ..physics import long_term_precession as LT
 from ..physics import quaternion as quat
-from ..physics.constants import (ARCSEC_RAD, EARTH_DYNAMICAL_ELLIPTICITY, GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY,
+from ..physics.constants import (ARCSEC_RAD, EARTH_DYNAMICAL_ELLIPTICITY,
                                  GM_SUN_AU3_DAY2, LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY, OBLIQUITY_J2000_RAD,
                                  SIDEREAL_MONTH_DAYS)
 from ..physics.params import Param, ParameterError

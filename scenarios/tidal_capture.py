@@ -16,10 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics import quaternion as quat
 from ..physics import tides
 from ..physics.orbits import KeplerOrbit
-from ..physics.params import Param, ParameterError
+from ..physics.params import Param
 from ..physics.spin_orbit_batch import planar_batch
 from ..physics.trajectory import Trajectory
 from .budget import Cost, trajectory_bytes
