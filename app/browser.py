@@ -136,8 +136,10 @@ def call(client, name: str, *args) -> bool:
     return run_js(client, f"window.theoria && window.theoria.{name}({', '.join(json.dumps(a) for a in args)});")
 
 
-def read_address(client, timeout: float = 3.0) -> str | None:
-    """The address the browser opened (with its query), or None (no answer, or a fake client)."""
+def read_address(client, timeout: float = 10.0) -> str | None:
+    """The address the browser opened (with its query), or None (no answer, or a fake client). A
+    page answers within milliseconds; the generous timeout is for a loaded machine, where a link
+    answered late would otherwise be ignored."""
     try:
         ls = client.local_storage
         ls.set_item(ADDRESS_KEY + "-probe", "1")

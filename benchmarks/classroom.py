@@ -137,6 +137,10 @@ class ViserProtocolClient:
     def _handle(self, m: dict) -> None:
         self.messages += 1
         typ = m.get("type", "")
+        if typ == "LocalStorageGetItemRequestMessage":  # the page answers at once (here: nothing stored)
+            asyncio.get_running_loop().create_task(self.send_raw({
+                "type": "LocalStorageGetItemResponseMessage", "value": None, "error": None,
+                "request_uuid": m.get("request_uuid")}))
         if "Notification" in typ and isinstance(m.get("props"), dict) and "title" in m["props"]:
             self.notifications.append((m["props"].get("title", ""), m["props"].get("body", "")))
         if typ == "RunJavascriptMessage":
