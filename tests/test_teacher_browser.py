@@ -124,10 +124,20 @@ def test_every_panel_is_in_words_and_fits_two_screens(browser, app):
     base, sessions = app
     bad, screens, titles = [], {}, {}
     for spec in all_scenarios():
-        before = set(sessions)
-        ctx, page = _open(browser, base + "?" + _query(spec))
+        # one more try when the page's first session did not show the link's scene: on a loaded
+        # machine a page can be slow to answer its address (the link); the
+        # words and the size of the panel are what this test is about
+        for attempt in range(2):
+            before = set(sessions)
+            ctx, page = _open(browser, base + "?" + _query(spec))
+            try:
+                s = _session_for(sessions, before, spec.name)
+                break
+            except AssertionError:
+                ctx.close()
+                if attempt:
+                    raise
         try:
-            s = _session_for(sessions, before, spec.name)
             # the page is titled "theoria" from its first byte; the session then names the scenario
             page.wait_for_function("document.title.startsWith('theoria — ')", timeout=WAIT_MS)
             titles[spec.name] = page.title()
