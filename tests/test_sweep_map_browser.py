@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from screenshots_teacher import DISMISS_JS
-from test_app_browser import ARGS, CHROMIUM, WAIT_MS, _free_port, _have_browser
+from test_app_browser import WAIT_MS, _free_port, _have_browser, browser  # noqa: F401  (the fixture)
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
@@ -48,16 +48,6 @@ def sweeps(tmp_path_factory):
             out[name] = d / f"{name}.zarr"
             th.scenario(SWEEP_PRESETS[name].scenario).sweep(out=out[name], cluster=c, grid=kw["grid"], **kw["fixed"])
     return out
-
-
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        yield b
-        b.close()
 
 
 def _wait(cond, timeout=WAIT_MS / 1000):

@@ -11,7 +11,7 @@ from urllib.parse import urlencode
 
 import pytest
 
-from test_app_browser import ARGS, CHROMIUM, WAIT_MS, _free_port, _have_browser
+from test_app_browser import WAIT_MS, _free_port, _have_browser, browser  # noqa: F401  (the fixture)
 
 pytestmark = pytest.mark.browser
 
@@ -42,16 +42,6 @@ INPUT_JS = """(label) => {
 CAMERA_WORLD_JS = """(() => { const m = window.__viserMutable, root = m.nodeRefFromName[''];
   root.updateWorldMatrix(true, false);
   return m.camera.position.clone().applyMatrix4(root.matrixWorld.clone().invert()).toArray(); })()"""
-
-
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        yield b
-        b.close()
 
 
 @pytest.fixture(scope="module")
