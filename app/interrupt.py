@@ -6,10 +6,16 @@ compiled (numba) function returns arrays, numba runs a little Python code of its
 them (`numba.core.serialize._numba_unpickle`); a Ctrl-C that arrived during the compiled loop is
 raised *there*, numba cannot pass it on, and the command dies with "SystemError: CPUDispatcher(...)
 returned a result with an exception set" and two tracebacks (5 of 5 Ctrl-C at step=1e-5 before
-this). The same holds for an exception raised in a `__del__`, which Python only prints. So the
-handlers here do not raise in such a frame: they ask for the signal again 20 ms later
-(`_thread.interrupt_main`), by when the interpreter is back in theoria's own code (the integrator
-checks between chunks of steps) and the interrupt is raised where it can propagate.
+this). The same holds for an exception raised in a `__del__`, which Python only prints.
+
+So a handler that finds itself in such a frame does not raise: it marks the signal pending and
+installs a trace function that raises it on the first line of Python executed in a frame from
+which it can propagate (the integrator's loop between two compiled chunks, a script's own loop).
+Asking for the signal again later instead (a timer and `_thread.interrupt_main`) is not enough: a
+compiled function that releases the GIL picks up a pending signal at its next Python frame, which
+is numba's boxing again, and on a loaded machine 29 of 40 Ctrl-C were deferred for ever. A slow
+backstop timer still re-asks, for a main thread that goes on to block in a C call (a sleep, a
+lock) where no line of Python runs.
 
 SIGTERM (`kill`, a service manager, a closed session) becomes `Terminated`, so that the same
 clean-up runs as for Ctrl-C (a recording's temporary file is removed, the target left as it was).
@@ -19,12 +25,12 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 import _thread
 
 EXIT_INTERRUPTED = 128 + signal.SIGINT  # 130
 EXIT_TERMINATED = 128 + signal.SIGTERM  # 143
-RETRY_S = 0.02
 
 
 class Terminated(BaseException):
@@ -32,14 +38,14 @@ class Terminated(BaseException):
     `except Exception` swallows it)."""
 
 
-_state = {"active": 0, "retry_pending": False}
+_state = {"active": 0, "pending": None, "previous_trace": None, "traced": []}
+BACKSTOP_S = 0.5
 
 
 def _unsafe(frame) -> bool:
     """Is `frame`, or any frame that called it, code from which an exception cannot propagate:
-    numba building a compiled function's result, or a finaliser. (The whole chain: a second
-    signal handled while the first is being deferred runs inside the first handler, itself
-    inside numba's code.)"""
+    numba building a compiled function's result, or a finaliser. (The whole chain: a signal
+    handled inside another handler, itself inside numba's code, is as unsafe.)"""
     while frame is not None:
         code = frame.f_code
         if code.co_name == "__del__" or (code.co_name == "_numba_unpickle" and "numba" in code.co_filename):
@@ -48,34 +54,61 @@ def _unsafe(frame) -> bool:
     return False
 
 
-def _fire(signum: int) -> None:
-    _state["retry_pending"] = False
-    if _state["active"]:  # not once the command has returned: the signal would land after it
+def _raise(signum: int):
+    raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+
+
+def _take_pending() -> int | None:
+    """The deferred signal, if any, with the trace function removed."""
+    signum = _state["pending"]
+    if signum is None:
+        return None
+    _state["pending"] = None
+    sys.settrace(_state["previous_trace"])
+    for f in _state["traced"]:
+        f.f_trace = None
+    _state["traced"] = []
+    return signum
+
+
+def _trace_line(frame, event, arg):
+    if _state["pending"] is not None and event == "line" and not _unsafe(frame):
+        _raise(_take_pending())
+    return _trace_line
+
+
+def _trace_call(frame, event, arg):
+    return None if _unsafe(frame) else _trace_line
+
+
+def _backstop(signum: int) -> None:
+    if _state["pending"] == signum and _state["active"]:
         _thread.interrupt_main(signum)
 
 
-def _again(signum: int) -> None:
-    """Ask for the signal again in RETRY_S (once: a retry already pending covers this one)."""
-    if _state["retry_pending"]:
-        return
-    _state["retry_pending"] = True
-    t = threading.Timer(RETRY_S, _fire, (signum,))
+def _defer(signum: int, frame) -> None:
+    """Raise `signum` at the next line of Python that runs in a frame where it can propagate."""
+    if _state["pending"] is None:
+        _state["previous_trace"] = sys.gettrace()
+    _state["pending"] = signum
+    sys.settrace(_trace_call)  # frames called from now on
+    f = frame
+    while f is not None:  # and the frames already running, once the unsafe ones return to them
+        if not _unsafe(f):
+            f.f_trace = _trace_line
+            _state["traced"].append(f)
+        f = f.f_back
+    t = threading.Timer(BACKSTOP_S, _backstop, (signum,))
     t.daemon = True
     t.start()
 
 
-def _on_sigint(signum, frame):
+def _handler(signum, frame):
     if _unsafe(frame):
-        _again(signum)
+        _defer(signum, frame)
         return
-    raise KeyboardInterrupt
-
-
-def _on_sigterm(signum, frame):
-    if _unsafe(frame):
-        _again(signum)
-        return
-    raise Terminated
+    _take_pending()
+    _raise(signum)
 
 
 @contextlib.contextmanager
@@ -87,13 +120,15 @@ def cli_signals():
         yield
         return
     old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    signal.signal(signal.SIGINT, _on_sigint)
-    signal.signal(signal.SIGTERM, _on_sigterm)
+    signal.signal(signal.SIGINT, _handler)
+    signal.signal(signal.SIGTERM, _handler)
     _state["active"] += 1
     try:
         yield
     finally:
         _state["active"] -= 1
+        if not _state["active"]:
+            _take_pending()
         for s, h in old.items():
             if h is not None:
                 signal.signal(s, h)
@@ -109,7 +144,7 @@ def sigterm_raises():
             or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
         yield
         return
-    signal.signal(signal.SIGTERM, _on_sigterm)
+    signal.signal(signal.SIGTERM, _handler)
     _state["active"] += 1
     try:
         yield
@@ -119,4 +154,6 @@ def sigterm_raises():
         raise
     finally:
         _state["active"] -= 1
+        if not _state["active"]:
+            _take_pending()
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
