@@ -11,16 +11,38 @@ costs (thread CPU time) and gives all playing sessions together PLAY_CPU_SHARE o
 session plays at min(PLAY_HZ, that budget / sessions playing), never below PLAY_HZ_MIN. One
 browser plays at 60 frames a second; thirty at ~10; a hundred at ~3 (the run's clock keeps real
 time, frames are skipped, not slowed). A paused session costs nothing.
+
+While a browser's action is being answered (a new scene drawn and sent: `showing()`), playback
+takes PLAY_CPU_SHARE_ACTING instead: the frames are the ones skipped, not the answer delayed. A
+student who moved a slider waits for its result; the bodies turning on the other screens lose a
+few frames.
 """
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 import traceback
 
+_acting = {"n": 0}
+_acting_lock = threading.Lock()
+
+
+@contextlib.contextmanager
+def showing():
+    """An answer to a browser's action is being drawn and sent: playback gives way meanwhile."""
+    with _acting_lock:
+        _acting["n"] += 1
+    try:
+        yield
+    finally:
+        with _acting_lock:
+            _acting["n"] -= 1
+
 PLAY_HZ = 60.0  # at most, for one browser (viser sends messages each 1/60 s)
 PLAY_HZ_MIN = 2.0
 PLAY_CPU_SHARE = 0.35  # of one core, for the playback of all browsers together
+PLAY_CPU_SHARE_ACTING = 0.1  # the same while some browser's action is being answered
 TICK_COST_START = 1e-3  # s of CPU per tick, until measured
 
 
@@ -53,7 +75,8 @@ class Ticker:
         """Frames a second each playing session gets now."""
         if playing is None:
             playing = sum(1 for s in list(self._sessions) if s.wants_ticks())
-        budget = self.share / max(self.cost, 1e-5)
+        share = min(self.share, PLAY_CPU_SHARE_ACTING) if _acting["n"] else self.share
+        budget = share / max(self.cost, 1e-5)
         return max(PLAY_HZ_MIN, min(PLAY_HZ, budget / max(1, playing)))
 
     def _loop(self) -> None:

@@ -46,7 +46,7 @@ from .format import human_number
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
                     read_markdown, y_axis_px)
 from .scene import SceneView
-from .worker import SimulationWorker, drawing_of, limits_text
+from .worker import SimulationWorker, drawing_of, limits_text, timing_log
 
 # Playback: one thread for every browser within a share of a core (app/playback.py); with many
 # browsers each plays back at a lower rate and slider changes stay quick.
@@ -395,9 +395,10 @@ class ClientSession:
         self.notify(f"Not allowed: {who}", f"“{show_value(e.value)}”: {allowed}{tail}")
 
     def _safe(self, fn, *args) -> None:
-        """Run a callback; no exception reaches viser's loop."""
+        """Run a callback (playback giving way meanwhile); no exception reaches viser's loop."""
         try:
-            fn(*args)
+            with playback.showing():
+                fn(*args)
         except ParameterError as e:
             self._notify_bad(e)
         except Exception as e:  # a bug in a scenario or the scene must not kill the server
@@ -702,6 +703,7 @@ class ClientSession:
     def _apply(self, req, result, t_sim: float) -> None:
         """Show a finished run (the worker's thread): its drawing, table, plot and status."""
         spec, values = req.spec, req.values
+        req.stamps["drawing"] = time.perf_counter()
         with self._view_lock, self.client.atomic():
             if not self.worker.current(req) or spec.name != self.spec.name:
                 return  # a newer request, or another scenario chosen meanwhile
@@ -744,6 +746,7 @@ class ClientSession:
             self._follow_camera()
             self._time_gui()
             req.stamps["shown"] = time.perf_counter()
+            timing_log(spec.name, req, self.worker.pool)
             if self.updates == 0:
                 page.set_loading(self.client, None)
             self.updates += 1

@@ -30,8 +30,9 @@ second or two whatever the scenario's loop does).
   given)`, `adopt(spec, values)`, `current(req)`, `close()`, and calls back `on_result(req, run,
   seconds)`, `on_error(req, exc)` and `on_progress(percent or None, text)` (throttled: runs
   shorter than PROGRESS_SHOW_AFTER never show a bar). A run expected to take longer than
-  PREVIEW_AFTER_S (its scenario's last measured time) is shown first from the scenario's
-  `preview` values, then refined (`req.preview` is True for the coarse one).
+  PREVIEW_AFTER_S (its scenario's last measured time, scaled by the integrator steps these values
+  take: `Scenario.cost_of`) is shown first from the scenario's `preview` values, then refined
+  (`req.preview` is True for the coarse one).
 """
 from __future__ import annotations
 
@@ -58,6 +59,8 @@ import numpy as np
 
 from theoria.physics.errors import Cancelled, ParameterError, show_value
 
+from .playback import showing
+
 log = logging.getLogger("theoria.server")
 
 PROGRESS_SHOW_AFTER = 0.4  # s
@@ -66,12 +69,21 @@ RUN_SECONDS_LIMIT = 60.0  # wall-clock seconds one run may take on the server
 CANCEL_GRACE_S = 1.0  # a cancelled child that has not stopped by then is killed
 KILL_GRACE_S = 5.0  # beyond the run limit, a child that never calls progress is killed
 NOJIT_SECONDS_LIMIT = 20.0
-COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes to a compiling one  # a pure-Python run longer than this goes back to a compiling child
-PREVIEW_AFTER_S = 1.0  # a run expected to take longer shows its scenario's preview first
-SLOW_JOB_S = 1.0  # a job expected to take longer (or never timed here) may not take the last free slot
+COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes to a compiling one
+# A run expected to take longer is slow: it may not take the last free child (kept for quick runs
+# and previews), and its scenario's quick preview is shown first. A third of a second: a hundred
+# browsers moving sliders ask for several runs a second, and a slow one in the quick child made
+# every other browser wait for it.
+SLOW_JOB_S = 0.3
+PREVIEW_AFTER_S = SLOW_JOB_S
 CACHE_BYTES = 400e6  # finished runs kept in memory by the server (LRU)
 MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
 CHILD_NICE = 5  # children run below the server: the event loop and the pose stream come first
+CHILD_NICE_SLOW = 12
+# threads that draw finished runs for the browsers: the drawing holds the interpreter lock, so
+# more threads only take turns (with four, a hundred browsers' answers waited ~1 s longer at the
+# 95th percentile than with one or two); two, so that one long drawing does not hold up the rest
+APPLY_THREADS = 2  # the children of slow runs and background work, below the quick ones
 
 
 class TimeLimit(Exception):
@@ -392,6 +404,15 @@ def child_main(read_fd: int, write_fd: int) -> None:
 
 # ---- jobs and the pool -----------------------------------------------------------------------
 
+def _steps(spec, values: dict) -> float:
+    """Integrator steps of a run of `values` (Scenario.cost_of), 0 when it cannot be told."""
+    try:
+        steps = float(spec.cost_of(values).steps)
+    except Exception:
+        return 0.0
+    return steps if np.isfinite(steps) and steps > 0 else 0.0
+
+
 _ids = itertools.count(1)
 
 
@@ -414,6 +435,13 @@ class Job:
     progress: float | None = None
 
     @property
+    def steps(self) -> float:
+        """Integrator steps the run takes (its scenario's cost estimate; 0: unknown)."""
+        if "_steps" not in self.__dict__:
+            self.__dict__["_steps"] = _steps(self.spec, self.values)
+        return self.__dict__["_steps"]
+
+    @property
     def cache_key(self) -> str:
         """The run's key in the caches (a warming job has a key of its own so that it is never
         merged with a browser's job, which a pure-Python child may be running)."""
@@ -432,6 +460,7 @@ class _Slot:
 
     def __init__(self, pool: "SimPool", index: int, jit: bool = True, use_process: bool = True):
         self.pool, self.index, self.jit, self.use_process = pool, index, jit, use_process
+        self.quick = jit and index < pool.quick_n  # takes quick runs and previews only
         self.proc: subprocess.Popen | None = None
         self.inbox: Connection | None = None  # child → us
         self.outbox: Connection | None = None
@@ -455,7 +484,8 @@ class _Slot:
                 "from theoria.app.worker import child_main; child_main(int(sys.argv[1]), int(sys.argv[2]))")
         try:
             self.proc = subprocess.Popen([sys.executable, "-c", code, str(r1), str(w2),
-                                          str(CHILD_NICE if self.jit else max(0, CHILD_NICE - 3))],
+                                          str(CHILD_NICE if self.quick else CHILD_NICE_SLOW if self.jit
+                                              else max(0, CHILD_NICE - 3))],
                                          pass_fds=(r1, w2), env=env, stdin=subprocess.DEVNULL,
                                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                          close_fds=True)
@@ -690,10 +720,12 @@ class SimPool:
                  cache_bytes: float = CACHE_BYTES):
         if use_processes is None:
             use_processes = os.name == "posix" and os.environ.get("THEORIA_SIM_PROCESSES", "1") != "0"
-        # one per core and one more: a child stays free for quick runs while the others do slow
-        # ones (they run below the server's priority, so the cores are shared, not oversubscribed
-        # at the expense of the event loop)
-        self.slots_n = slots or max(2, min(5, (os.cpu_count() or 1) + 1))
+        # two per core: half of them only ever take quick runs and previews (a slider on a quick
+        # scene, the first picture of a slow one), the others take slow runs and background work
+        # at a lower priority, so that on a loaded machine a quick answer is not shared out with
+        # a run of seconds (every child runs below the server: the event loop comes first)
+        self.slots_n = slots or max(2, min(6, 2 * (os.cpu_count() or 1)))
+        self.quick_n = self.slots_n // 2
         self.use_processes = use_processes
         self.cache = RunCache(cache_bytes)
         self.store = RunStore() if store else None
@@ -703,8 +735,11 @@ class SimPool:
         self._cv = threading.Condition()
         self._jobs: dict[str, Job] = {}  # key → queued or running job
         self._queue: list[Job] = []
-        self._seconds: dict[str, float] = {}  # scenario → seconds of its last full run
-        self._apply = ThreadPoolExecutor(max_workers=4, thread_name_prefix="theoria-apply")
+        # (scenario, preview) → (seconds, integrator steps) of its last compiled run: a job's time
+        # is expected in proportion to its steps (a slider at a long duration makes a slow run of
+        # a scenario whose default is quick)
+        self._seconds: dict[tuple, tuple[float, float]] = {}
+        self._apply = ThreadPoolExecutor(max_workers=APPLY_THREADS, thread_name_prefix="theoria-apply")
         self._timers: list = []
         self._timer_cv = threading.Condition()
         self._timer_thread = None
@@ -739,14 +774,23 @@ class SimPool:
             hit = self.store.get(key)
             if hit is not None:
                 self.cache.put(key, hit[0], hit[1])
-                self._seconds.setdefault((name, False), hit[1])
+                self._seconds.setdefault((name, False), (hit[1], _steps(hit[0].spec, values)))
                 self.stats["store_hits"] += 1
         elif hit is not None:
             self.stats["cache_hits"] += 1
         return hit
 
-    def expected_seconds(self, name: str, preview: bool = False) -> float | None:
-        return self._seconds.get((name, preview))
+    def expected_seconds(self, spec, values: dict, preview: bool = False, steps: float | None = None) -> float | None:
+        """Seconds a compiled run of these values should take: the scenario's last run of the
+        same kind (full or preview), scaled by the ratio of integrator steps; None: never timed."""
+        known = self._seconds.get((spec.name, preview)) or self._seconds.get((spec.name, not preview))
+        if known is None:
+            return None
+        seconds, then = known
+        new = _steps(spec, values) if steps is None else steps
+        if not (then > 0 and new > 0):
+            return seconds
+        return seconds * new / then
 
     def job_for(self, spec, values: dict, waiter, preview: bool = False) -> Job:
         """The job computing these values (an existing one is shared), with `waiter` attached."""
@@ -762,7 +806,7 @@ class SimPool:
                     job.preempted = False
                     if job.state == "queued":
                         job.created = time.perf_counter()
-                        self._preempt()
+                        self._preempt(job)
                 self._cv.notify_all()
                 return job
             job = Job(key, spec, dict(values), preview=preview, waiters=[waiter])
@@ -841,13 +885,14 @@ class SimPool:
                 self.nojit = _Slot(self, len(self.slots), jit=False)
             self._warm_soon(job.spec)
         if not job.background:
-            self._preempt()
+            self._preempt(job)
         self._cv.notify_all()
 
-    def _preempt(self) -> None:
-        """A browser's job is waiting and every compiling child is busy: a background job (not
-        one compiling a scenario for the first time) is stopped and queued again."""
-        if any(s.job is None for s in self.slots):
+    def _preempt(self, job: Job) -> None:
+        """A browser's job is waiting and every compiling child that could take it is busy: a
+        background job (not one compiling a scenario for the first time) is stopped and queued
+        again."""
+        if any(s.job is None and self._eligible(s, job) for s in self.slots):
             return
         for s in self.slots:
             j = s.job
@@ -884,33 +929,22 @@ class SimPool:
                 and job.spec.name not in self.warm)
 
     def _slow(self, job: Job) -> bool:
-        t = self._seconds.get((job.spec.name, job.preview))
+        if job.preview and not job.background:  # a quick preview is what makes a slow run bearable:
+            return False  # it goes before every full run, whatever the loaded machine made of its time
+        t = self.expected_seconds(job.spec, job.values, job.preview, steps=job.steps)
         return t is None or t > SLOW_JOB_S
 
-    def _running(self) -> tuple[int, int]:
-        """(background jobs, slow browser jobs) running in the compiling children."""
-        jobs = [s.job for s in self.slots if s.job is not None and s.job.state == "running"]
-        now = time.perf_counter()
-        # a run that has gone on for longer than a quick one is slow, whatever was expected of it
-        # (a slider can make a quick scene's run long: a duration at its maximum)
-        return (sum(1 for j in jobs if j.background),
-                sum(1 for j in jobs if not j.background and (self._slow(j) or now - (j.started or now) > SLOW_JOB_S)))
-
     def _eligible(self, slot: _Slot, job: Job) -> bool:
-        """Which job a child may take. One compiling child is always kept for browsers' quick runs
-        (a slider on a quick scene): background work and slow runs share the others, and a
-        background job gives way to a browser's (`_preempt`)."""
+        """Which job a child may take. The quick children take only browsers' quick runs and
+        previews; the others take anything, a browser's job before background work, which gives
+        way to it (`_preempt`)."""
         if not slot.jit:
             return self._cold(job)
-        keep = max(1, len(self.slots) - 1)
-        bg, slow = self._running()
-        if job.background:
-            if bg + slow >= keep:
-                return False
-            # a browser waiting goes first; compiling a scenario a browser waits for (a warm job) does not wait
-            if not job.key.endswith("#warm") and any(not j.background and not self._cold(j) for j in self._queue):
-                return False
-        elif self._slow(job) and slow >= keep:
+        if slot.quick and (job.background or self._slow(job)):
+            return False
+        # a browser waiting goes first; compiling a scenario a browser waits for (a warm job) does not wait
+        if job.background and not job.key.endswith("#warm") and any(
+                not j.background and not self._cold(j) for j in self._queue):
             return False
         # compiling children leave a cold job to the idle pure-Python child (they warm the
         # scenario with a background job meanwhile)
@@ -965,7 +999,7 @@ class SimPool:
         if slot.jit and slot.use_process and not job.local:
             self.warm.add(job.spec.name)
         if slot.jit:  # a pure-Python time says nothing about the compiled run
-            self._seconds[(job.spec.name, job.preview)] = seconds
+            self._seconds[(job.spec.name, job.preview)] = (seconds, job.steps)
         self.cache.put(job.cache_key, run, seconds)
         if job.background and self.store is not None and not job.local:
             self.store.put(job.cache_key, run, seconds)
@@ -1125,7 +1159,7 @@ class SimulationWorker:
         with self._lock:
             if not self.current(req):
                 return req
-            expected = self.pool.expected_seconds(spec.name)
+            expected = self.pool.expected_seconds(spec, req.values)
             if spec.preview and (expected is None or expected > PREVIEW_AFTER_S):
                 self._preview(spec, req)
             job = self.pool.job_for(spec, req.values, self)
@@ -1153,8 +1187,8 @@ class SimulationWorker:
             pvals = spec.resolve({**req.given, **dict(spec.preview)})
         except Exception:
             return
-        if run_key(spec.name, pvals) == run_key(spec.name, req.values):
-            return
+        if run_key(spec.name, pvals) == run_key(spec.name, req.values) or _steps(spec, pvals) >= _steps(spec, req.values) > 0:
+            return  # the preview would cost as much as the run itself
         preq = Request(req.gen, spec, req.given, pvals, {"request": req.stamps["request"]}, preview=True)
         hit = self.pool.lookup(spec.name, pvals)
         if hit is not None:
@@ -1265,12 +1299,37 @@ class SimulationWorker:
             if not self.current(args[0]):
                 continue
             try:
-                fn(*args)
+                with showing():
+                    fn(*args)
             except Exception:
                 self.pool.logger.line("theoria: error showing a result:\n" + traceback.format_exc())
 
 
 DRAWINGS_PER_RUN = 3
+_TIMING = {"file": None, "lock": threading.Lock()}
+
+
+def timing_log(name: str, req: Request, pool: "SimPool | None" = None) -> None:
+    """One line of JSON per scene shown, when THEORIA_TIMING_LOG names a file: where an action's
+    time went (waiting for a child, simulating, drawing and sending). For `theoria bench`."""
+    path = os.environ.get("THEORIA_TIMING_LOG")
+    if not path:
+        return
+    import json
+
+    st = req.stamps
+    r = st.get("request", 0.0)
+    line = json.dumps({"scenario": name, "preview": bool(req.preview), "cached": bool(st.get("cached")),
+                       "queued_s": st.get("start", r) - r, "run_s": st.get("simulated", r) - st.get("start", r),
+                       "show_s": st.get("shown", r) - st.get("simulated", r), "total_s": st.get("shown", r) - r,
+                       "draw_s": st.get("shown", r) - st.get("drawing", r),
+                       **({"pool": {**pool.stats, "kills": sum(s.kills for s in pool.slots),
+                                    "queued": len(pool._queue), "busy": sum(s.job is not None for s in pool.slots)}}
+                          if pool is not None else {})})
+    with _TIMING["lock"]:
+        if _TIMING["file"] is None:
+            _TIMING["file"] = open(path, "a", buffering=1)
+        _TIMING["file"].write(line + "\n")
 
 
 def limits_text() -> str:

@@ -352,23 +352,34 @@ def wait_line(lines: list, text: str, timeout: float) -> float | None:
     return None
 
 
-def tree_cpu_seconds(pid: int) -> float:
-    """CPU seconds used so far by a process and its children (the simulation processes)."""
+def tree_cpu_seconds(pid: int, split: bool = False):
+    """CPU seconds used so far by a process and its children (the simulation processes); with
+    `split`, (the process's own, its children's)."""
     import psutil
 
     try:
         p = psutil.Process(pid)
         procs = [p] + p.children(recursive=True)
     except psutil.Error:
-        return 0.0
-    total = 0.0
+        return (0.0, 0.0) if split else 0.0
+    own = kids = 0.0
     for q in procs:
         try:
             c = q.cpu_times()
-            total += c.user + c.system
         except psutil.Error:
-            pass
-    return total
+            continue
+        if q.pid == pid:
+            own += c.user + c.system
+            kids += c.children_user + c.children_system  # simulation processes that were stopped
+        else:
+            kids += c.user + c.system
+    return (own, kids) if split else own + kids
+
+
+def own_cpu_seconds() -> float:
+    """CPU seconds of this process (the protocol clients): they share the machine with the server."""
+    t = os.times()
+    return t.user + t.system
 
 
 def tree_rss_mb(pid: int) -> tuple[float, float]:
@@ -490,7 +501,8 @@ async def _classroom(port: int, pid: int, soak_s: float, n: int, abusive: bool) 
     mem: list[tuple[float, float, float, int]] = []  # (t, server RSS MB, with children MB, threads)
     t_start = time.perf_counter()
     rss0 = tree_rss_mb(pid)
-    cpu0 = tree_cpu_seconds(pid)
+    cpu0 = tree_cpu_seconds(pid, split=True)
+    clients0 = own_cpu_seconds()
     stop = asyncio.Event()
 
     async def sampler():
@@ -516,7 +528,8 @@ async def _classroom(port: int, pid: int, soak_s: float, n: int, abusive: bool) 
         await asyncio.sleep(ramp)
     res = await asyncio.gather(*tasks, return_exceptions=True)
     rec["errors"] += [f"{type(r).__name__}: {r}" for r in res if isinstance(r, BaseException)]
-    cpu_end = tree_cpu_seconds(pid)
+    cpu_end = tree_cpu_seconds(pid, split=True)
+    clients_end = own_cpu_seconds()
     t_busy = time.perf_counter() - t_start
     await asyncio.sleep(2.0)  # sessions closed: nothing may run on
     cpu_idle = tree_cpu_seconds(pid)
@@ -541,7 +554,10 @@ async def _classroom(port: int, pid: int, soak_s: float, n: int, abusive: bool) 
         "full_ms_p50": _pct(full, 50), "full_ms_p95": _pct(full, 95),
         "first_scene_s_p50": float(np.median(rec["first_scene"])) if rec["first_scene"] else float("nan"),
         "first_scene_s_max": float(max(rec["first_scene"])) if rec["first_scene"] else float("nan"),
-        "cpu_cores_busy": (cpu_end - cpu0) / t_busy,
+        "cpu_cores_busy": (sum(cpu_end) - sum(cpu0)) / t_busy,
+        "cpu_cores_server": (cpu_end[0] - cpu0[0]) / t_busy,
+        "cpu_cores_simulations": (cpu_end[1] - cpu0[1]) / t_busy,
+        "cpu_cores_clients": (clients_end - clients0) / t_busy,
         "cpu_s_after_disconnect": cpu_idle2 - cpu_idle, "cpu_window_s": time.perf_counter() - t_quiet,
         "rss_mb_idle": rss0[0], "rss_mb_max": float(own.max()), "rss_mb_last": float(own[-1]),
         "rss_mb_with_children_max": float(total.max()),

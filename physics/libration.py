@@ -333,16 +333,30 @@ SCHEMES = {
 }
 
 
+_ORBIT_TABLES: dict = {}  # (e, steps per orbit, drifts) → table (shared: never written to)
+_ORBIT_TABLES_MAX = 32
+
+
 def _orbit_table(e, steps_per_orbit, drifts):
     """(a/r)³, sin 2f, cos 2f at every kick time of one orbit (n = 1, periapse at t = 0). The
-    table is periodic, so it is computed once for the whole run."""
+    table is periodic, so it is computed once for the whole run, and kept: a search for a
+    resonance's fixed point (`periapse_fixed_point`) maps hundreds of sections of one orbit, and
+    solving Kepler's equation for each was 3/4 of a Hyperion run."""
+    key = (float(e), int(steps_per_orbit), tuple(float(x) for x in np.ravel(drifts)))
+    hit = _ORBIT_TABLES.get(key)
+    if hit is not None:
+        return hit
     from .orbits import KeplerOrbit
 
     h = 2.0 * np.pi / steps_per_orbit
     at = np.concatenate([[0.0], np.cumsum(drifts)[:-1]])
     tk = h * (np.arange(steps_per_orbit)[:, None] + at[None, :])
     f, r = KeplerOrbit(a=1.0, e=e, n=1.0).anomalies(tk.ravel())
-    return ((1.0 / r**3).reshape(tk.shape), np.sin(2 * f).reshape(tk.shape), np.cos(2 * f).reshape(tk.shape))
+    table = ((1.0 / r**3).reshape(tk.shape), np.sin(2 * f).reshape(tk.shape), np.cos(2 * f).reshape(tk.shape))
+    if len(_ORBIT_TABLES) >= _ORBIT_TABLES_MAX:
+        _ORBIT_TABLES.pop(next(iter(_ORBIT_TABLES)))
+    _ORBIT_TABLES[key] = table
+    return table
 
 
 @nb.njit(cache=True, inline="always", fastmath=True)

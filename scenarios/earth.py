@@ -406,7 +406,7 @@ register(Scenario(
               exclusive_min=True, label="Obliquity at J2000"),
     ),
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
-    preview={'years': 10.0, 'step_days': 1.0},
+    preview={'years': 2.0, 'step_days': 2.0},
     simulate_fn=_earth,
     draw=_draw,
     options=EARTH_OPTIONS,

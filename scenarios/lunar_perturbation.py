@@ -283,7 +283,7 @@ register(Scenario(
               label="Sun's force", choice_labels=("exact, 1/w³", "Euler's series (§XXXIII)")),
     ),
     camera=Camera((0.9, -3.1, 2.1), (0.0, 0.0, 0.35)),  # oblique: orbit plane, node line, normal
-    preview={'duration_yr': 4.0, 'step_days': 0.05},
+    preview={'duration_yr': 2.0, 'step_days': 0.1},
     simulate_fn=_lunar,
     draw=_draw,
     options=OPTIONS,
