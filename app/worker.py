@@ -126,7 +126,8 @@ def nbytes(obj, _depth: int = 0) -> int:
 
 
 class RunCache:
-    """Finished runs by key, least recently used dropped first, at most `max_bytes` of arrays."""
+    """Finished runs by key, least recently used dropped first, at most `max_bytes` of arrays:
+    the run's and those of the drawings kept with it (`drawing_of`: 2-10 times the run's)."""
 
     def __init__(self, max_bytes: float = CACHE_BYTES):
         self.max_bytes = max_bytes
@@ -146,7 +147,7 @@ class RunCache:
             return hit[0], hit[2]
 
     def put(self, key: str, run, seconds: float) -> None:
-        size = nbytes(run)
+        size = nbytes(run) + sum(nbytes(d) for d in run.__dict__.get("_theoria_drawings", {}).values())
         if size > self.max_bytes / 4:  # one huge run would push out the whole class's presets
             return
         with self._lock:
@@ -155,9 +156,23 @@ class RunCache:
                 self._bytes -= old[1]
             self._d[key] = (run, size, seconds)
             self._bytes += size
-            while self._bytes > self.max_bytes and len(self._d) > 1:
-                _, (_, s, _) = self._d.popitem(last=False)
-                self._bytes -= s
+            run.__dict__["_theoria_cache"] = (self, key)
+            self._trim()
+
+    def grew(self, key: str, run, delta: int) -> None:
+        """`run`, cached under `key`, holds `delta` bytes more (or fewer): a drawing was kept with it."""
+        with self._lock:
+            hit = self._d.get(key)
+            if hit is None or hit[0] is not run:
+                return
+            self._d[key] = (run, hit[1] + delta, hit[2])
+            self._bytes += delta
+            self._trim()
+
+    def _trim(self) -> None:
+        while self._bytes > self.max_bytes and len(self._d) > 1:
+            _, (_, s, _) = self._d.popitem(last=False)
+            self._bytes -= s
 
     @property
     def size_bytes(self) -> int:
@@ -242,12 +257,14 @@ class RunStore:
 
 
 def _portable(run):
-    """The run without its Scenario (functions do not travel; the receiver sets it again)."""
-    if getattr(run, "spec", None) is not None:
-        import copy
+    """The run without its Scenario (functions do not travel; the receiver sets it again) and
+    without what this server keeps with it (its drawings, its place in the run cache)."""
+    import copy
 
-        run = copy.copy(run)
-        run.spec = None
+    run = copy.copy(run)
+    run.spec = None
+    for k in [k for k in vars(run) if k.startswith("_theoria_")]:
+        del run.__dict__[k]
     return run
 
 
@@ -1358,6 +1375,10 @@ def drawing_of(spec, run, view=None):
     if d is None:
         d = spec.drawing(run, view)
         store[key] = d
+        delta = nbytes(d)
         while len(store) > DRAWINGS_PER_RUN:
-            store.popitem(last=False)
+            delta -= nbytes(store.popitem(last=False)[1])
+        owner = run.__dict__.get("_theoria_cache")
+        if owner is not None:  # the server's run cache counts what its runs hold
+            owner[0].grew(owner[1], run, delta)
     return d

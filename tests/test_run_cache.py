@@ -1,0 +1,54 @@
+"""The server's run cache is bounded by what its runs really hold: the arrays of the run and of
+the drawings kept with it (a drawing is 2-10 times its run), and what goes to disk is the run
+alone."""
+from __future__ import annotations
+
+from theoria.app.worker import RunCache, RunStore, drawing_of, nbytes
+from theoria.scenarios import get
+
+
+def _run(name: str, **given):
+    spec = get(name)
+    run = spec.simulate_fn(spec.resolve(given))
+    run.spec = spec
+    return spec, run
+
+
+def test_a_drawing_kept_with_a_cached_run_is_counted_and_pushes_out_the_oldest():
+    spec, a = _run("free-tumble")
+    _, b = _run("free-tumble", duration=10.0)
+    run_bytes = nbytes(a)
+    cache = RunCache(max_bytes=1e12)
+    cache.put("a", a, 0.1)
+    assert cache.size_bytes == run_bytes
+    d = drawing_of(spec, a)
+    assert nbytes(d) > run_bytes  # the drawing is the larger part
+    assert cache.size_bytes == run_bytes + nbytes(d)
+    assert drawing_of(spec, a) is d and cache.size_bytes == run_bytes + nbytes(d)  # kept, not counted twice
+
+    # room for four runs with their drawings, less one byte: drawing the fourth run's scene
+    # pushes out the least recently used run
+    runs = [_run("free-tumble")[1] for _ in range(4)]
+    cache = RunCache(max_bytes=4 * (run_bytes + nbytes(d)) - 1)
+    for k, r in enumerate(runs):
+        cache.put(str(k), r, 0.1)
+    for r in runs[:3]:
+        drawing_of(spec, r)
+    assert all(cache.get(str(k)) is not None for k in range(4))
+    cache.get("0")  # used again: the second run is now the least recently used
+    drawing_of(spec, runs[3])
+    assert cache.get("1") is None and all(cache.get(k) is not None for k in ("0", "2", "3"))
+    assert cache.size_bytes <= cache.max_bytes
+
+
+def test_a_stored_run_carries_neither_its_drawings_nor_the_cache(tmp_path):
+    spec, run = _run("free-tumble")
+    cache = RunCache()
+    cache.put("k", run, 0.1)
+    drawing_of(spec, run)
+    store = RunStore(tmp_path)
+    store.put("free-tumble:abc", run, 0.1)
+    back, seconds = store.get("free-tumble:abc")
+    assert seconds == 0.1 and not [k for k in vars(back) if k.startswith("_theoria_")]
+    assert (back.trajectory.t == run.trajectory.t).all()
+    assert "_theoria_drawings" in vars(run)  # the server's own copy keeps its drawings
