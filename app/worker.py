@@ -70,8 +70,8 @@ CANCEL_GRACE_S = 1.0  # a cancelled child that has not stopped by then is killed
 KILL_GRACE_S = 5.0  # beyond the run limit, a child that never calls progress is killed
 NOJIT_SECONDS_LIMIT = 20.0
 COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes to a compiling one
-# A run expected to take longer is slow: it may not take the last free child (kept for quick runs
-# and previews), and its scenario's quick preview is shown first. A third of a second: a hundred
+# A run expected to take longer is slow: the quick children (kept for quick runs and previews) do
+# not take it, and its scenario's quick preview is shown first. A third of a second: a hundred
 # browsers moving sliders ask for several runs a second, and a slow one in the quick child made
 # every other browser wait for it.
 SLOW_JOB_S = 0.3
@@ -79,11 +79,11 @@ PREVIEW_AFTER_S = SLOW_JOB_S
 CACHE_BYTES = 400e6  # finished runs kept in memory by the server (LRU)
 MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
 CHILD_NICE = 5  # children run below the server: the event loop and the pose stream come first
-CHILD_NICE_SLOW = 12
+CHILD_NICE_SLOW = 12  # the children of slow runs and background work, below the quick ones
 # threads that draw finished runs for the browsers: the drawing holds the interpreter lock, so
 # more threads only take turns (with four, a hundred browsers' answers waited ~1 s longer at the
 # 95th percentile than with one or two); two, so that one long drawing does not hold up the rest
-APPLY_THREADS = 2  # the children of slow runs and background work, below the quick ones
+APPLY_THREADS = 2
 
 
 class TimeLimit(Exception):

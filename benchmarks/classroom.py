@@ -26,6 +26,11 @@ switches to a random scenario, 20 % chooses a random preset, 50 % moves a random
 slider of the scenario on screen to a random value on the slider's grid. The abusive client
 sends `ABUSE_MESSAGES` slider updates as fast as its socket takes them, in a loop.
 
+Where the server's part went: the server is started with THEORIA_TIMING_LOG, one line per scene
+it shows (waiting for a simulation process, simulating, waiting to be drawn, drawing and sending);
+`server_*_ms_p50/p95` summarise it. CPU is split into the server's own process, its simulation
+processes and the clients (this process), which share the two cores.
+
 Memory: the server's RSS (with its children) sampled every 2 s; "flat" is judged from the second
 half of the soak (slope in MB/min). Duration: env THEORIA_SOAK_S (default 60 s); the 30-minute
 soak is `THEORIA_SOAK_S=1800 python -m theoria.benchmarks.classroom 100`.
@@ -581,12 +586,17 @@ def run_classroom(soak_s: float | None = None, n: int = N_CLIENTS, abusive: bool
                   scenario: str = SCENARIO, wait_ready_s: float = 900.0) -> dict:
     """Start `theoria serve`, wait until its background preparation is done (the defaults and
     presets of every scenario: at most wait_ready_s), then run the class."""
+    import tempfile
+
     soak_s = float(os.environ.get("THEORIA_SOAK_S", "60")) if soak_s is None else soak_s
     port = _free_port()
     lines: list = []
     t0 = time.perf_counter()
+    timing = tempfile.NamedTemporaryFile(prefix="theoria-timing-", suffix=".jsonl", delete=False)
+    timing.close()
+    env = dict(os.environ, THEORIA_TIMING_LOG=timing.name)
     server = start_server_process(port, scenario, ("--max-per-address", str(n + 10), "--max-clients", str(n + 50)),
-                                  lines=lines)
+                                  lines=lines, env=env)
     try:
         t_url = wait_line(lines, "open http", 60)
         t_ready = wait_line(lines, "are ready", wait_ready_s)
@@ -595,6 +605,7 @@ def run_classroom(soak_s: float | None = None, n: int = N_CLIENTS, abusive: bool
         out["server_start_s"] = (t_url - t0) if t_url else None
         out["load_avg_1min"] = os.getloadavg()[0]
         out["server_log_tail"] = [x[2] for x in lines if x[1] == "err"][-5:]
+        out.update(server_side(timing.name))
         return out
     finally:
         server.terminate()
@@ -602,6 +613,25 @@ def run_classroom(soak_s: float | None = None, n: int = N_CLIENTS, abusive: bool
             server.wait(20)
         except subprocess.TimeoutExpired:
             server.kill()
+        os.unlink(timing.name)
+
+
+def server_side(path: str) -> dict:
+    """Where the server's part of an answer went, from its timing log (one line per scene shown):
+    p50/p95 in ms of waiting for a simulation process, simulating, waiting to be drawn, drawing and
+    sending; runs from the cache have no wait and no simulation."""
+    try:
+        rows = [json.loads(line) for line in open(path)]
+    except (OSError, ValueError):
+        return {}
+    out = {"server_scenes_shown": len(rows), "server_scenes_from_cache": sum(r["cached"] for r in rows)}
+    parts = {"queued": lambda r: r["queued_s"], "simulating": lambda r: r["run_s"],
+             "waiting_to_draw": lambda r: r["show_s"] - r.get("draw_s", 0.0), "drawing": lambda r: r.get("draw_s", 0.0)}
+    computed = [r for r in rows if not r["cached"]]
+    for name, f in parts.items():
+        xs = [f(r) for r in (computed if name in ("queued", "simulating") else rows)]
+        out[f"server_{name}_ms_p50"], out[f"server_{name}_ms_p95"] = _pct(xs, 50), _pct(xs, 95)
+    return out
 
 
 def _row(r: dict, target_s: float, note: str) -> dict:
