@@ -76,7 +76,7 @@ COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes
 # every other browser wait for it.
 SLOW_JOB_S = 0.3
 PREVIEW_AFTER_S = SLOW_JOB_S
-CACHE_BYTES = 400e6  # finished runs kept in memory by the server (LRU)
+CACHE_BYTES = 1e9  # finished runs and their drawings kept in memory by the server (LRU)
 MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
 CHILD_NICE = 5  # children run below the server: the event loop and the pose stream come first
 CHILD_NICE_SLOW = 12  # the children of slow runs and background work, below the quick ones
