@@ -426,6 +426,8 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
         pool.close()
+        if sweep is not None:
+            sweep.close()
 
 
 class Shown:

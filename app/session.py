@@ -545,7 +545,7 @@ class ClientSession:
         """Replay the run at row i, column j of the map shown: the sweep's scenario with that run's
         full parameters, through the worker like any other change. Returns the values."""
         pic = self._sweep_pic
-        values = self.sweep.pixel_values(pic, i, j)
+        values = pic.map.run_values(i, j)
         name = pic.map.scenario
         if name != self.spec.name:
             self._switch_scenario(name)

@@ -28,7 +28,6 @@ import re
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -300,9 +299,6 @@ class SweepMaps:
         self._pool.shutdown(wait=False)
 
     # ---- a pixel -----------------------------------------------------------------------------
-    def pixel_values(self, pic: Picture, i: int, j: int) -> dict[str, Any]:
-        return pic.map.run_values(i, j)
-
     def pixel_words(self, pic: Picture, i: int, j: int) -> str:
         """Which run a pixel is, in words: its swept values (and the value the map shows there)."""
         values = pic.map.run_values(i, j)
@@ -386,10 +382,6 @@ def _range_ticks(lo: float, hi: float) -> list[tuple[float, str]]:
     """(fraction of the colour bar or of a bar's height, text) for round values of the metric."""
     span = (hi - lo) or 1.0
     return [((t - lo) / span, human_number(t)) for t in nice_ticks(lo, hi)]
-
-
-def _num(v):
-    return v.item() if hasattr(v, "item") else v
 
 
 def _e(text) -> str:
