@@ -394,7 +394,8 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, on_term)
     t0 = time.perf_counter()
-    pool = shared_pool()
+    # the pool starts with the child that draws the first scene (a sweep's scenario is read later)
+    pool = shared_pool(run.scenario if run is not None else scenario if scenario or sweep else "free-tumble")
     server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False, run=run, limits=limits, pool=pool,
                             sweep=sweep)
     sweep = server._theoria_sweep

@@ -472,6 +472,10 @@ class Job:
         return not mod.startswith("theoria.scenarios.")
 
 
+FIRST_CHILD_WAIT_S = 20.0  # the other children start anyway when the first has not come up by then
+FIRST_RUN_WAIT_S = 3.0  # ... and when it has been up this long without a run to do
+
+
 class _Slot:
     """One simulation child and the thread of this process that feeds it."""
 
@@ -579,8 +583,12 @@ class _Slot:
 
     # the loop ------------------------------------------------------------------------------
     def _loop(self) -> None:
+        if self.use_process and self.jit and (self.index > 0 or self.pool.nojit is not None):
+            self.pool._first_child.wait(FIRST_CHILD_WAIT_S)
+            self.pool._first_run.wait(FIRST_RUN_WAIT_S)
         if self.use_process and not self.pool.closed:
             self._start()  # ready before the first job: a child takes seconds to import numpy and scipy
+            self.pool._first_child.set()
         while True:
             job = self.pool._take(self)
             if job is None:
@@ -734,7 +742,8 @@ class SimPool:
     scenario is not compiled on this machine yet, a run cache and a disk store."""
 
     def __init__(self, slots: int | None = None, use_processes: bool | None = None, store: bool = True,
-                 cache_bytes: float = CACHE_BYTES):
+                 cache_bytes: float = CACHE_BYTES, first: str | None = None):
+        """`first`: the scenario browsers will ask for first (see `prepare`)."""
         if use_processes is None:
             use_processes = os.name == "posix" and os.environ.get("THEORIA_SIM_PROCESSES", "1") != "0"
         # two per core: half of them only ever take quick runs and previews (a slider on a quick
@@ -760,9 +769,17 @@ class SimPool:
         self._timers: list = []
         self._timer_cv = threading.Condition()
         self._timer_thread = None
-        self.slots = [_Slot(self, i, True, use_processes) for i in range(self.slots_n)]
-        self.nojit: _Slot | None = None
         self.stats = {"jobs": 0, "coalesced": 0, "cache_hits": 0, "store_hits": 0, "cancelled": 0, "failed": 0}
+        # children import numpy, scipy, numba and every scenario (~1.5 s of CPU each): started all
+        # at once on a small machine they delay the one that draws the first scene by seconds, so
+        # one starts (the pure-Python child on a fresh install), the others once it is up
+        self._first_child = threading.Event()
+        self._first_run = threading.Event()
+        self.nojit: _Slot | None = None
+        self.slots: list[_Slot] = []
+        if first is not None:
+            self.prepare(first)
+        self.slots = [_Slot(self, i, True, use_processes) for i in range(self.slots_n)]
 
     def prepare(self, first: str | None) -> None:
         """Start the pure-Python child at once when the first scenario browsers will ask for is
@@ -772,7 +789,7 @@ class SimPool:
             return
         with self._cv:
             if first not in self.warm and self.nojit is None:
-                self.nojit = _Slot(self, len(self.slots), jit=False)
+                self.nojit = _Slot(self, self.slots_n, jit=False)
             try:
                 from theoria.scenarios import get
 
@@ -885,6 +902,8 @@ class SimPool:
     def close(self) -> None:
         with self._cv:
             self.closed = True
+            self._first_child.set()
+            self._first_run.set()
             for j in self._jobs.values():
                 j.cancel = True
             self._cv.notify_all()
@@ -899,7 +918,7 @@ class SimPool:
         self.stats["jobs"] += 1
         if self._cold(job):
             if self.nojit is None:
-                self.nojit = _Slot(self, len(self.slots), jit=False)
+                self.nojit = _Slot(self, self.slots_n, jit=False)
             self._warm_soon(job.spec)
         if not job.background:
             self._preempt(job)
@@ -1012,6 +1031,7 @@ class SimPool:
             return list(job.waiters)
 
     def _done(self, job: Job, run, seconds: float, slot: _Slot) -> None:
+        self._first_run.set()
         run.spec = job.spec
         if slot.jit and slot.use_process and not job.local:
             self.warm.add(job.spec.name)
@@ -1095,14 +1115,15 @@ _SHARED: SimPool | None = None
 _SHARED_LOCK = threading.Lock()
 
 
-def shared_pool() -> SimPool:
-    """The pool of this process (created on first use, closed at exit)."""
+def shared_pool(first: str | None = None) -> SimPool:
+    """The pool of this process (created on first use, closed at exit); `first`: the scenario
+    browsers will ask for first."""
     global _SHARED
     with _SHARED_LOCK:
         if _SHARED is None or _SHARED.closed:
             import atexit
 
-            _SHARED = SimPool()
+            _SHARED = SimPool(first=first)
             atexit.register(_SHARED.close)
         return _SHARED
 

@@ -1,14 +1,14 @@
 """The first minutes of a class in a real headless Chromium (Debian's /usr/bin/chromium driven
 by Playwright; never a downloaded browser): `theoria serve` started as a teacher starts it, on a
-fresh install (an empty numba cache, no stored runs), the page opened when the URL is printed.
+fresh install (an empty numba cache, no stored runs), the page opened when the URL is printed in a
+browser that was already running (as a teacher's is).
 
 What is asserted: the page is never blank (from its first frame there is either the loading
 line, saying what is happening, or the scene); viser's developer panel (websocket address, "Save
 Canvas", "Dev Settings", scene tree) is never shown; the tab is titled "theoria — <scenario>";
 the first scene arrives; then every scenario switch first shows something (the panel names the
 new scenario) and then its full scene (the tab title follows the drawn scene). The times are
-measured and printed (and kept by `theoria bench app-first-scene`), not asserted: the machine is
-shared.
+measured and printed, not asserted: the machine is shared.
 
 Run: pytest -m browser tests/test_classroom_browser.py -s
 """
@@ -67,21 +67,18 @@ def first_scene(scenario: str = "free-tumble", env: dict | None = None, switch_a
 
     port = _free_port()
     lines: list = []
-    t0 = time.perf_counter()
-    srv = start_server_process(port, scenario, (), env=env, lines=lines)
     out: dict = {"samples": [], "switches": []}
+    srv = None
     try:
-        t_url = wait_line(lines, "open http", 120)
-        assert t_url is not None, lines
-        out["server_start_s"] = t_url - t0
         with sync_playwright() as p:
+            # the teacher's browser is open before the server starts; the clock runs from the URL
             b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
             ctx = b.new_context(viewport={"width": 1280, "height": 800})
             outside = []
 
             def route(r):
                 u = r.request.url
-                if u.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:")):
+                if u.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:", "about:")):
                     r.continue_()
                 else:
                     outside.append(u)
@@ -89,6 +86,12 @@ def first_scene(scenario: str = "free-tumble", env: dict | None = None, switch_a
 
             ctx.route("**/*", route)
             page = ctx.new_page()
+            page.goto("about:blank")
+            t0 = time.perf_counter()
+            srv = start_server_process(port, scenario, (), env=env, lines=lines)
+            t_url = wait_line(lines, "open http", 120)
+            assert t_url is not None, lines
+            out["server_start_s"] = t_url - t0
             page.goto(f"http://127.0.0.1:{port}/?fixedDpr=1", wait_until="commit")
             while True:
                 now = time.perf_counter() - t_url
@@ -127,11 +130,12 @@ def first_scene(scenario: str = "free-tumble", env: dict | None = None, switch_a
             ctx.close()
             b.close()
     finally:
-        srv.terminate()
-        try:
-            srv.wait(20)
-        except Exception:
-            srv.kill()
+        if srv is not None:
+            srv.terminate()
+            try:
+                srv.wait(20)
+            except Exception:
+                srv.kill()
     out["server_lines"] = [x[2] for x in lines]
     return out
 
