@@ -10,7 +10,7 @@ call, and a child that has not answered within CANCEL_GRACE_S is killed (the CPU
 second or two whatever the scenario's loop does).
 
 - `SimPool` (one per server process, `shared_pool()`): `slots` children sized to the machine
-  (one per core, at least one), each fed by a thread of this process. Jobs are keyed by
+  (two per core, two to six), each fed by a thread of this process. Jobs are keyed by
   (scenario, resolved values): runs are deterministic, so thirty students asking for the same
   preset make one job, and a finished run is kept in a server-wide LRU `RunCache` (bounded in
   bytes) and, for the defaults and presets computed in the background at start-up, on disk
@@ -25,7 +25,9 @@ second or two whatever the scenario's loop does).
 - First use on a machine (empty numba cache): a scenario whose compiled code is not on disk yet
   is run by an extra child with numba's JIT switched off (pure Python: a fraction of a second for
   the rotation scenes' previews) while the compiling children warm the cache in the background;
-  `warm` marks which scenarios have been compiled on this machine.
+  `warm` marks which scenarios have been compiled on this machine. That child starts first and
+  alone: the compiling ones wait until it has delivered a run (or FIRST_RUN_WAIT_S), since five
+  imports at once on two cores held the first scene back by two seconds.
 - `SimulationWorker` (one per browser) keeps the interface the session uses: `submit(spec,
   given)`, `adopt(spec, values)`, `current(req)`, `close()`, and calls back `on_result(req, run,
   seconds)`, `on_error(req, exc)` and `on_progress(percent or None, text)` (throttled: runs
