@@ -365,7 +365,7 @@ def _die_with_parent() -> None:
 
 def child_main(read_fd: int, write_fd: int) -> None:
     """A simulation child: reads ("run", job id, scenario, values, limit s) and answers
-    ("done", id, run, seconds) | ("cancelled", id) | ("failed", id, payload), with
+    ("done", id, run, seconds, CPU seconds) | ("cancelled", id) | ("failed", id, payload), with
     ("progress", id, fraction) in between. SIGUSR1 cancels the run in progress."""
     _die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in the terminal stops the server, which stops us
@@ -391,7 +391,7 @@ def child_main(read_fd: int, write_fd: int) -> None:
             return
         _, jid, name, values, limit = msg
         cancel["flag"] = False
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), time.process_time()
         last = [0.0]
 
         def progress(frac, jid=jid):
@@ -411,7 +411,7 @@ def child_main(read_fd: int, write_fd: int) -> None:
             run = get(name).simulate_fn(values, progress=progress)
             dt = time.perf_counter() - t0
             run.spec = None
-            outbox.send(("done", jid, run, dt))
+            outbox.send(("done", jid, run, dt, time.process_time() - cpu0))
         except Cancelled:
             outbox.send(("cancelled", jid))
         except BaseException as e:  # noqa: BLE001 — every failure goes back as a message
@@ -684,7 +684,7 @@ class _Slot:
                 self.pool._progress(job, msg[2])
             elif kind == "done":
                 self.runs += 1
-                self.pool._done(job, msg[2], msg[3], self)
+                self.pool._done(job, msg[2], msg[3], self, cpu=msg[4] if len(msg) > 4 else None)
                 return
             elif kind == "cancelled":
                 self.pool._cancelled(job)
@@ -972,6 +972,10 @@ class SimPool:
         t = self.expected_seconds(job.spec, job.values, job.preview, steps=job.steps)
         return t is None or t > SLOW_JOB_S
 
+    def _expected_or_zero(self, job: Job) -> float:
+        return 0.0 if job.background else (self.expected_seconds(job.spec, job.values, job.preview, steps=job.steps)
+                                           or 0.0)
+
     def _eligible(self, slot: _Slot, job: Job) -> bool:
         """Which job a child may take. The quick children take only browsers' quick runs and
         previews; the others take anything, a browser's job before background work, which gives
@@ -996,12 +1000,14 @@ class SimPool:
             while True:
                 if self.closed:
                     return None
-                # browsers' jobs first, oldest first; then background jobs (the cache, warming)
+                # browsers' jobs first, quick ones before slow ones, each in order of when it would
+                # end if started when it was asked for (a short run asked later can go before a
+                # long one asked earlier, and nothing waits forever); then background jobs
                 best, best_key = None, None
                 for job in self._queue:
                     if not self._eligible(slot, job):
                         continue
-                    key = (job.background, self._slow(job), job.created)  # quick jobs before slow ones
+                    key = (job.background, self._slow(job), job.created + self._expected_or_zero(job))
                     if best is None or key < best_key:
                         best, best_key = job, key
                 if best is not None:
@@ -1032,13 +1038,16 @@ class SimPool:
             self._cv.notify_all()
             return list(job.waiters)
 
-    def _done(self, job: Job, run, seconds: float, slot: _Slot) -> None:
+    def _done(self, job: Job, run, seconds: float, slot: _Slot, cpu: float | None = None) -> None:
+        """`cpu`: the child's CPU seconds for the run. A job's size is judged by it, not by the wall
+        time: on a loaded machine a 50 ms run at low priority took a second, was judged slow, went
+        to the slow children behind runs of seconds, and was timed slower still."""
         self._first_run.set()
         run.spec = job.spec
         if slot.jit and slot.use_process and not job.local:
             self.warm.add(job.spec.name)
         if slot.jit:  # a pure-Python time says nothing about the compiled run
-            self._seconds[(job.spec.name, job.preview)] = (seconds, job.steps)
+            self._seconds[(job.spec.name, job.preview)] = (seconds if cpu is None else cpu, job.steps)
         self.cache.put(job.cache_key, run, seconds)
         if job.background and self.store is not None and not job.local:
             self.store.put(job.cache_key, run, seconds)
