@@ -336,6 +336,7 @@ register(Scenario(
     draw=_draw,
     options=OPTIONS,
     cost_fn=_cost,
+    preview={"turns": 1.0},  # the first turn while many are computed (20 turns take ~3 s)
     euler_formula=("(A+B)α⁵ + (3A+2B)α⁴ + (3A+B)α³ − (B+3C)α² − (2B+3C)α − (B+C) = 0 (§7, Eq. 33)\n"
                    "p̈ = −(D/2) p⁻², D/2 = A + B + C/(α+1)² − C/α²\n"
                    "Case II: p ∝ cos²φ, t = n³a² (φ + sin φ cos φ)"),
