@@ -26,6 +26,12 @@ from viser import _messages
 #   submit opened the window) reached the server as the submit alone and the server took the
 #   field's previous text. Held back longer than the throttle, the submit goes after the value.
 # - present(on): presenter mode's large type (the panel scaled about its top right corner).
+# - tracks(d), clock(c), the player: the page plays the scene by itself (app/scene.py `tracks()`).
+#   Each frame it draws, after viser has applied the server's state (viser's nodes do that in a
+#   render-loop callback of priority -1000; the player's runs at -999), it sets the poses, scales
+#   and visibility of frame k, where k follows the clock the server last sent (extrapolated at
+#   its rate while playing, exactly the server's frame while paused), and asks for the next frame
+#   while playing. Chunks of a path: chunk j is shown from its start frame on.
 SETUP = r"""
 (() => {
   if (window.theoria) return;
@@ -90,6 +96,66 @@ SETUP = r"""
       try { if (f.isConnected) f.requestSubmit(); } finally { f.__theoriaNow = false; }
     }, T.SUBMIT_AFTER_MS);
   }, true);
+  T.P = {d: null, clock: 0, k: 0, rate: 0, playing: false, at: 0, hooked: false};
+  const b64 = (s, C) => {
+    const bin = atob(s), u = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; i++) u[i] = bin.charCodeAt(i);
+    return new C(u.buffer);
+  };
+  T.tracks = (d) => {
+    d.t = d.times ? b64(d.times, Float32Array) : new Float32Array([0]);
+    for (const tr of d.tracks) {
+      tr.dim = tr.attr === 'wxyz' ? 4 : tr.attr === 'position' ? 3 : 1;
+      tr.v = b64(tr.data, tr.attr === 'wxyz' ? Int16Array : tr.attr === 'visible' ? Uint8Array : Float32Array);
+      delete tr.data;
+    }
+    T.P.d = d;
+    T.hook();
+  };
+  T.clock = (c) => { Object.assign(T.P, c); T.P.at = performance.now(); T.hook(); T.redraw(); };
+  T.redraw = () => { const m = window.__viserMutable; if (m && m.requestRender) m.requestRender(); };
+  T.frameAt = (c) => {  // the first frame whose time is not before c (the server's searchsorted)
+    const t = T.P.d.t; let lo = 0, hi = t.length;
+    while (lo < hi) { const mid = (lo + hi) >> 1; if (t[mid] < c) lo = mid + 1; else hi = mid; }
+    return Math.min(lo, T.P.d.n - 1);
+  };
+  T.shown = () => {  // the frame on screen now
+    const P = T.P;
+    if (!P.playing) return Math.min(P.k, P.d.n - 1);
+    const c = P.clock + P.rate * (performance.now() - P.at) / 1000;
+    return T.frameAt(c - Math.floor(c));
+  };
+  T.apply = (state) => {
+    const P = T.P, d = P.d, m = window.__viserMutable;
+    if (!d || !m || !d.n) return;
+    const k = T.shown(), R = m.nodeRefFromName, on = (g) => g == null || d.groups[g] !== false;
+    for (const tr of d.tracks) {
+      const o = R[tr.node];
+      if (!o) continue;
+      const v = tr.v, i = k * tr.dim;
+      if (tr.attr === 'wxyz') o.quaternion.set(v[i + 1], v[i + 2], v[i + 3], v[i]).normalize();
+      else if (tr.attr === 'position') o.position.set(v[i], v[i + 1], v[i + 2]);
+      else if (tr.attr === 'scale') o.scale.setScalar(v[i]);
+      else if (tr.attr === 'visible') o.visible = on(tr.group) && v[i] > 0;
+      if (!o.matrixAutoUpdate) o.updateMatrix();
+    }
+    for (const c of d.chunks) {
+      if (!on(c.group)) continue;
+      let n = 0;
+      while (n < c.starts.length && c.starts[n] <= k) n++;
+      for (let j = 0; j < c.nodes.length; j++) { const o = R[c.nodes[j]]; if (o) o.visible = j < n; }
+    }
+    P.frame = k;
+    if (P.playing && state && state.invalidate) state.invalidate();
+  };
+  T.hook = () => {
+    if (T.P.hooked) return;
+    const m = window.__viserMutable, root = m && m.scene && m.scene.__r3f && m.scene.__r3f.root;
+    if (!root || !root.getState().internal) { setTimeout(T.hook, 100); return; }
+    T.P.hooked = true;
+    root.getState().internal.subscribe({current: (s) => T.apply(s)}, -999, root);
+    T.redraw();
+  };
   T.title = (text) => { document.title = text; };
   T.url = (query) => {
     const q = query ? '?' + query : '';

@@ -12,6 +12,10 @@ session plays at min(PLAY_HZ, that budget / sessions playing), never below PLAY_
 browser plays at 60 frames a second; thirty at ~10; a hundred at ~3 (the run's clock keeps real
 time, frames are skipped, not slowed). A paused session costs nothing.
 
+A page that plays by itself (app/scene.py `tracks()`) moves the poses on its own at its own frame
+rate; its session asks for ticks only for the time read-out (`tick_hz()`, 2 a second), unless the
+scene has something only the server can move (label text, per-frame segments).
+
 While a browser's action is being answered (a new scene drawn and sent: `showing()`), playback
 takes PLAY_CPU_SHARE_ACTING instead: the frames are the ones skipped, not the answer delayed. A
 student who moved a slider waits for its result; the bodies turning on the other screens lose a
@@ -88,7 +92,8 @@ class Ticker:
                 self._wake.wait(0.25)
                 self._wake.clear()
                 continue
-            period = 1.0 / self.rate(len(playing))
+            # the share of a core goes to the sessions that want every frame from the server
+            period = 1.0 / self.rate(sum(1 for s in playing if _max_hz(s) >= PLAY_HZ))
             now = time.perf_counter()
             soonest = now + period
             for s in playing:
@@ -103,11 +108,18 @@ class Ticker:
                     c = time.thread_time() - c0
                     self.cost += 0.02 * (c - self.cost)
                     self.ticks += 1
-                    due = max(due + period, now)  # no catching up after a stall: frames are skipped
+                    # no catching up after a stall: frames are skipped
+                    due = max(due + max(period, 1.0 / _max_hz(s)), now)
                     if id(s) in self._next:
                         self._next[id(s)] = due
                 soonest = min(soonest, due)
             time.sleep(max(0.001, soonest - time.perf_counter()))
+
+
+def _max_hz(session) -> float:
+    """Ticks a second a session wants at most: PLAY_HZ, or fewer for a page that plays by itself."""
+    f = getattr(session, "tick_hz", None)
+    return f() if f is not None else PLAY_HZ
 
 
 _TICKER: Ticker | None = None

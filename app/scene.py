@@ -19,9 +19,19 @@ time span whose visibility follows playback, so a trail grows without being re-s
 A single arrow that turns with time (ω, L) is drawn along +z of a frame of its own: playback
 turns the frame (a pose update) and re-sends the arrow only when its length changes by more than
 VECTOR_LENGTH_TOL.
+
+**A page that plays by itself.** `tracks()` hands the page (app/browser.py's player) everything
+that only moves: frame and marker poses, label positions, visibility, the growing paths' chunks,
+and the length of each turning arrow (as a scale of the arrow drawn once). With `page_plays` set,
+`set_frame(k, moving=True)` then sends only what the page cannot move itself (label text,
+per-frame segments, arrays of arrows): during playback a browser draws every frame it can
+without a message from the server, and a hundred browsers playing cost the server almost nothing.
+Paused, stepped or scrubbed, `set_frame(k)` sets everything as before, so the server's state and
+the page's agree whenever the clock stands still.
 """
 from __future__ import annotations
 
+import base64
 import hashlib
 from dataclasses import dataclass
 
@@ -72,6 +82,11 @@ VECTOR_LENGTH_TOL = 0.02
 # below a point's size: half the bytes per update.
 PATH_PRECISION = "float16"
 FLOAT16_MAX = 6.5e4
+PAGE_ATTRS = {"wxyz", "position", "visible"}  # what a page moves by itself during playback
+
+
+def _b64(a: np.ndarray) -> str:
+    return base64.b64encode(np.ascontiguousarray(a).tobytes()).decode("ascii")
 
 
 def densify(path: np.ndarray, idx: np.ndarray, spacing: float, max_points: int):
@@ -205,6 +220,7 @@ class SceneView:
         self._static: dict[str, list] = {}  # group → handles shown/hidden with it
         self._vectors: dict[str, list] = {}  # arrow name → [frame, arrow, label, drawn length, (wxyz, lengths)]
         self._state: dict[str, object] = {}  # node name → the value last sent per animated attribute
+        self.page_plays = False  # the page moves poses itself during playback (tracks())
 
     @property
     def n(self) -> int:
@@ -447,22 +463,86 @@ class SceneView:
         self._apply_visibility(group, bool(on))
         self.set_frame(self.frame)
 
-    def set_frame(self, k: int, force: bool = False) -> None:
-        """Move what changes with time to frame k."""
+    def set_frame(self, k: int, force: bool = False, moving: bool = False) -> None:
+        """Move what changes with time to frame k. `moving`: the page is playing by itself (see
+        `tracks()`); only what it cannot move is sent."""
         if self.n == 0:
             return
         k = int(np.clip(k, 0, self.n - 1))
         self.frame = k
+        moving = moving and self.page_plays
         for it, hs in self._animated:
             if not (isinstance(it, Frame) or self._on(it.group)):
                 continue
             if it.name in self._vectors:
-                self._set_vector(it.name, k, force)
-            else:
+                if not moving or self._vectors[it.name][3] <= 0:  # (a zero arrow has no scale to give)
+                    self._set_vector(it.name, k, force)
+            elif not (moving and self._page_moves(it)):
                 self._set_item(it, hs, k, force)
+        if not moving:
+            for group, paths in self._chunks.items():
+                for p in paths:
+                    p.set_frame(k)
+
+    # ---- what the page moves by itself -----------------------------------------------------------
+    @staticmethod
+    def _page_moves(it: Item) -> bool:
+        """Only poses and visibility: label text, per-frame segments and arrays of arrows are sent."""
+        return isinstance(it, (Frame, Mesh, Sphere, Label, Light)) and set(it.animated()) <= PAGE_ATTRS
+
+    def server_moves(self) -> bool:
+        """Something shown changes with time that the page cannot move by itself."""
+        def page(it):
+            return self._vectors[it.name][3] > 0 if it.name in self._vectors else self._page_moves(it)
+        return any(not page(it) and (isinstance(it, Frame) or self._on(it.group)) for it, _ in self._animated)
+
+    def tracks(self) -> dict:
+        """What the page needs to play by itself: the frames' times (0..1 of the run), and per node
+        its poses, visibility or scale at every frame, base64 little-endian (quaternions as int16
+        × 32767, positions float32, visibility uint8, a turning arrow's scale float32), with the
+        group whose checkbox hides it. The growing paths: their chunk nodes and the frame at which
+        each appears."""
+        d = self.drawing
+        out = {"n": self.n, "groups": dict(self.overlays), "tracks": [], "chunks": []}
+        if d is None or self.n == 0:
+            return out
+        t = np.asarray(d.times, float)
+        span = (t[-1] - t[0]) or 1.0
+        out["times"] = _b64(((t - t[0]) / span).astype("<f4"))
+
+        def add(node, attr, values, group):
+            v = np.asarray(values, float)
+            if attr == "wxyz":
+                data = np.round(np.clip(v, -1, 1) * 32767).astype("<i2")
+            elif attr == "visible":
+                data = v.astype("u1")
+            else:
+                data = v.astype("<f4")
+            out["tracks"].append({"node": node, "attr": attr, "data": _b64(data), "group": group})
+
+        for it, hs in self._animated:
+            if it.name in self._vectors:
+                frame, arrow, label, drawn, (wxyz, lengths) = self._vectors[it.name]
+                if drawn > 0:  # the arrow as drawn, turned and scaled to each frame's length
+                    add(frame.name, "wxyz", wxyz, it.group)
+                    add(arrow.name, "scale", lengths / drawn, it.group)
+                    if label is not None:
+                        pos = np.zeros((len(lengths), 3))
+                        pos[:, 2] = 1.1 * lengths
+                        add(label.name, "position", pos, it.group)
+            elif self._page_moves(it):
+                group = None if isinstance(it, Frame) else it.group
+                for attr in it.animated():
+                    if attr == "visible":
+                        for h in hs:
+                            add(h.name, attr, np.asarray(it.visible, bool), group)
+                    else:
+                        add(hs[0].name, attr, getattr(it, attr), group)
         for group, paths in self._chunks.items():
             for p in paths:
-                p.set_frame(k)
+                out["chunks"].append({"nodes": [h.name for h in p.handles], "starts": [int(x) for x in p.starts],
+                                      "group": group})
+        return out
 
     def _changed(self, key: str, value, force: bool) -> bool:
         old = self._state.get(key)
@@ -499,6 +579,8 @@ class SceneView:
         frame, arrow, label, drawn, (wxyz, lengths) = self._vectors[name]
         length = float(lengths[k])
         frame.wxyz = wxyz[k]
+        if self.page_plays and drawn > 0:
+            return  # drawn once: the page scales it to each frame's length (tracks())
         if force or drawn < 0 or abs(length - drawn) > VECTOR_LENGTH_TOL * max(drawn, 1e-9):
             arrow.points = np.array([[[0, 0, 0], [0, 0, length]]], np.float32)
             if label is not None:

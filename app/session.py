@@ -52,6 +52,8 @@ from .worker import SimulationWorker, drawing_of, limits_text, timing_log
 # browsers each plays back at a lower rate and slider changes stay quick.
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
 CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubber while playing
+# a page that plays by itself needs the server's ticks only for the time read-out
+PAGE_TICK_HZ = 1.0 / CLOCK_TEXT_EVERY
 SLIDER_DEBOUNCE_S = 0.15  # slider moves closer than this are a drag: only its last value is simulated
 STEP_FRACTION = 0.01  # ← / → move the clock by this fraction of the run
 LINK_EVERY_S = 0.5  # the address bar follows the view at most this often (1 s while playing)
@@ -108,8 +110,11 @@ class ClientSession:
         self.sweep = sweep
         ClientSession.active += 1
         self.scenarios = {s.name: s for s in all_scenarios()}
-        # the address the browser opened: a shared view to restore (not for a Run.show())
-        self.address = browser.read_address(client) if run is None else None
+        # the address the browser opened: a shared view to restore (not for a Run.show()); a page
+        # that answers runs theoria's JavaScript, and plays the scene by itself (app/scene.py)
+        address = browser.read_address(client)
+        self.address = address if run is None else None
+        self.page_plays = address is not None
         self.link = linkmod.from_address(self.address)
         if self.link.scenario not in self.scenarios:
             self.link.scenario = None
@@ -117,6 +122,8 @@ class ClientSession:
         self.spec = get(name) if name else self.scenarios.get("free-tumble") or next(iter(self.scenarios.values()))
         self.present = bool(self.link.present)
         self.view = SceneView(client.scene, "/world")
+        self.view.page_plays = self.page_plays
+        self._server_moves = True  # the scene shown has something only the server can move
         self.view_opts = View(options=dict(self.link.options) if self.link.scenario else {})
         self._restore = self.link if (self.link.scenario or self.link.params) else None
         self.drawing = None
@@ -198,6 +205,7 @@ class ClientSession:
             self.time_md = gui.add_markdown("t = 0")
             self.speed = gui.add_slider("Playback speed", min=0.1, max=10.0, step=0.1, initial_value=1.0,
                                         hint=f"1 = the whole run in {RUN_SECONDS:g} s")
+            self.speed.on_update(lambda e: self._safe(self._send_clock))
             self._controls_order = getattr(self.speed, "order", None)
             self.controls = self._make_controls_here()
             self.draw_folder = gui.add_folder("What is drawn", expand_by_default=False)
@@ -571,6 +579,8 @@ class ClientSession:
             self._step(1)
 
     def _set_playing(self, on: bool) -> None:
+        was = self.playing
+        self._advance()
         self.playing = bool(on)
         self._guard = True
         try:
@@ -579,6 +589,10 @@ class ClientSession:
             pass
         finally:
             self._guard = False
+        if was and not self.playing:  # the frame the page stopped at, set by the server too
+            self._show_clock(force=True)
+            self._time_gui()
+        self._send_clock()
 
     def _toggle_play(self) -> None:
         self._set_playing(not self.playing)
@@ -586,8 +600,10 @@ class ClientSession:
     def _reset(self) -> None:
         """The clock back to the start of the run, playing or paused."""
         self.clock = 0.0
+        self._last_tick = None
         self._show_clock(force=True)
         self._time_gui()
+        self._send_clock()
 
     def _step(self, sign: int) -> None:
         """Pause and move the clock by STEP_FRACTION of the run (at least one frame)."""
@@ -597,13 +613,16 @@ class ClientSession:
         self.clock = float(np.clip(self.clock + sign * step, 0.0, 1.0))
         self._show_clock(force=True)
         self._time_gui()
+        self._send_clock()
 
     def _on_scrub(self) -> None:
         if self._guard:
             return
         self.clock = float(self.scrub.value) / 100.0
+        self._last_tick = None
         self._show_clock()
         self._time_gui(scrub=False)
+        self._send_clock()
 
     def _on_exaggerate(self) -> None:
         if self.result is None:
@@ -616,6 +635,7 @@ class ClientSession:
             return
         with self._view_lock, self.client.atomic():
             self.view.set_overlay(key, self.toggles[key].value)
+            self._send_tracks()  # a group switched on for the first time brings new nodes
 
     # ---- presenter mode ------------------------------------------------------------------------
     def _on_present_cb(self) -> None:
@@ -745,6 +765,7 @@ class ClientSession:
             self.view.set_frame(self._frame_index())
             self._follow_camera()
             self._time_gui()
+            self._send_tracks()
             req.stamps["shown"] = time.perf_counter()
             timing_log(spec.name, req, self.worker.pool)
             if self.updates == 0:
@@ -781,6 +802,7 @@ class ClientSession:
             self._update_plot()
             self.view.set_frame(self._frame_index())
             self._follow_camera()
+            self._send_tracks()
 
     def _sync_scene_options(self) -> None:
         """Checkboxes for the scenario's own options (Scenario.options)."""
@@ -842,7 +864,7 @@ class ClientSession:
         i = self._frame_index()
         if force or i != self.view.frame:
             with self._view_lock, self.client.atomic():
-                self.view.set_frame(i)
+                self.view.set_frame(i, force=force, moving=self.playing)
                 self._follow_camera()
 
     def wants_ticks(self) -> bool:
@@ -863,9 +885,7 @@ class ClientSession:
         if self._closed:
             return
         if self.playing and self.result is not None:
-            last, self._last_tick = self._last_tick, now
-            if last is not None:
-                self.clock = (self.clock + (now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
+            if self._advance(now):
                 self._show_clock()
                 if now - self._last_gui > CLOCK_TEXT_EVERY:
                     self._last_gui = now
@@ -873,6 +893,42 @@ class ClientSession:
         if now - self._link_time > (1.0 if self.playing else LINK_EVERY_S):
             self._link_time = now
             self._sync_link()
+
+    def _advance(self, now: float | None = None) -> bool:
+        """Bring the clock to `now`: while playing it runs at real time × speed. False when the
+        clock only starts now."""
+        now = time.perf_counter() if now is None else now
+        if not (self.playing and self.result is not None):
+            self._last_tick = None
+            return False
+        last, self._last_tick = self._last_tick, now
+        if last is None:
+            return False
+        self.clock = (self.clock + (now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
+        return True
+
+    def tick_hz(self) -> float:
+        """At most this many playback ticks a second: a page that plays by itself needs the server
+        only for the time read-out, unless the scene has something only the server can move."""
+        follows = self.drawing is not None and self.drawing.follow is not None  # a camera the server moves
+        return playback.PLAY_HZ if (self._server_moves or follows or not self.page_plays) else PAGE_TICK_HZ
+
+    def _send_tracks(self) -> None:
+        """The scene's moving parts, for a page that plays by itself, then its clock."""
+        self._server_moves = self.view.server_moves()
+        if self.page_plays:
+            browser.call(self.client, "tracks", self.view.tracks())
+            self._send_clock()
+
+    def _send_clock(self) -> None:
+        """The playback clock, for the page: where it stands (0..1 of the run, and the frame shown),
+        how fast it runs and whether it runs; the page extrapolates from the moment it arrives."""
+        if not self.page_plays:
+            return
+        self._advance()
+        browser.call(self.client, "clock", {
+            "clock": float(self.clock), "k": int(self.view.frame), "rate": float(self.speed.value) / RUN_SECONDS,
+            "playing": bool(self.playing and self.result is not None)})
 
     def _time_gui(self, scrub: bool = True) -> None:
         """The scrubber and the time read-out follow the clock (playing or not)."""

@@ -49,6 +49,7 @@ import time
 
 import numpy as np
 
+from ..app.browser import ADDRESS_KEY
 from . import register_bench
 
 N_CLIENTS = 30
@@ -80,8 +81,10 @@ PANEL_SLIDERS = ("Time (", "Playback speed", "Exaggerate the shape")
 class ViserProtocolClient:
     """A browser tab as the server sees it: websocket + viser's wire format, no rendering."""
 
-    def __init__(self, url: str):
+    def __init__(self, url: str, runs_js: bool = True):
         self.url = url
+        self.runs_js = runs_js  # answers the address probe, as a page running theoria's JavaScript does
+        self.poses: dict[str, int] = {}  # node → orientations received (playback sent by the server)
         self.ws = None
         self.labels: dict[str, str] = {}  # gui label → uuid
         self.values: dict[str, object] = {}  # gui uuid → last value sent by the server
@@ -142,12 +145,17 @@ class ViserProtocolClient:
     def _handle(self, m: dict) -> None:
         self.messages += 1
         typ = m.get("type", "")
-        if typ == "LocalStorageGetItemRequestMessage":  # the page answers at once (here: nothing stored)
+        if typ == "LocalStorageGetItemRequestMessage":
+            # the page answers at once: asked for its address (app/browser.py), a page gives it, which
+            # tells the server it runs theoria's JavaScript and plays the scene by itself; else nothing
+            value = "http" + self.url[2:] + "/" if (self.runs_js and str(m.get("key", "")).endswith(ADDRESS_KEY)) else None
             asyncio.get_running_loop().create_task(self.send_raw({
-                "type": "LocalStorageGetItemResponseMessage", "value": None, "error": None,
+                "type": "LocalStorageGetItemResponseMessage", "value": value, "error": None,
                 "request_uuid": m.get("request_uuid")}))
         if "Notification" in typ and isinstance(m.get("props"), dict) and "title" in m["props"]:
             self.notifications.append((m["props"].get("title", ""), m["props"].get("body", "")))
+        if typ == "SetOrientationMessage":
+            self.poses[m.get("name", "")] = self.poses.get(m.get("name", ""), 0) + 1
         if typ == "RunJavascriptMessage":
             src = m.get("source", "")
             self.scripts.append(src)
