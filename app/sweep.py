@@ -23,6 +23,7 @@ Ctrl-C or SIGTERM: the finished chunks stay, the cluster is shut down, exit stat
 """
 from __future__ import annotations
 
+import contextlib
 import datetime
 import json
 import os
@@ -731,21 +732,22 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
         client, local, where, owned = _client(cluster, workers)
         summary.cluster = where
         threads = 1 if local is not None else None
-        try:
-            with _Stop() as stop, _progress(progress, plan.size, sum(_nruns(regions[i]) for i in done), sc.name) as bar:
-                interrupted = _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, threads, on_chunk)
-                if interrupted:
-                    summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
-        finally:
+        with _quiet_distributed(local is not None):  # to the cluster's last line
             try:
-                if interrupted and local is not None:
-                    _stop_workers(local)  # a worker deep in a long chunk would hold the exit for minutes
-                if owned:
-                    client.close()
-                if local is not None:
-                    local.close(timeout=20)
-            except Exception:  # noqa: BLE001 — shutting down after Ctrl-C
-                pass
+                with _Stop() as stop, _progress(progress, plan.size, sum(_nruns(regions[i]) for i in done), sc.name) as bar:
+                    interrupted = _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, threads, on_chunk)
+                    if interrupted:
+                        summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
+            finally:
+                try:
+                    if interrupted and local is not None:
+                        _stop_workers(local)  # a worker deep in a long chunk would hold the exit for minutes
+                    if owned:
+                        client.close()
+                    if local is not None:
+                        local.close(timeout=20)
+                except Exception:  # noqa: BLE001 — shutting down after Ctrl-C
+                    pass
     summary.seconds = time.perf_counter() - t0
     summary.statuses = counts
     summary.interrupted = interrupted
@@ -758,6 +760,23 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if kind == "parquet":
         writer.finish()
     return summary, writer.open()
+
+
+@contextlib.contextmanager
+def _quiet_distributed(local: bool):
+    """A local cluster's own log lines (a comm closed while its workers are stopped, a heartbeat
+    missed) are silenced from its start to the end of its shutdown: the sweep reports every run's
+    status itself, and Ctrl-C must end in the sweep's one summary line, not a dask traceback."""
+    import logging
+
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    if local:
+        logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 def _stop_workers(local):
