@@ -422,14 +422,31 @@ def test_oblateness_node_share_vs_averaged_torque():
 
 
 @pytest.mark.slow
-def test_collinear_run_that_dop853_cannot_finish_is_reported_not_crashed():
-    """Found by tests/test_fuzz.py: masses (125846, 1e-6, 1e-6) expanding, DOP853's step underflows after
-    13 of 600 samples. The run keeps that part and says so (status "diverged", a warning), and the
-    Euler curve is cut to the same samples (it used to raise a broadcasting ValueError)."""
+def test_collinear_run_that_dop853_cannot_finish_is_reported_not_crashed(monkeypatch):
+    """Found by tests/test_fuzz.py: masses (125846, 1e-6, 1e-6) expanding, DOP853's step underflowed
+    after 13 of 600 samples with the scipy of 2026-11-24 (scipy 1.17.1 finishes it). A run the
+    integrator stops early keeps that part and says so (status "diverged", a warning), and the Euler
+    curve is cut to the same samples (it used to raise a broadcasting ValueError). The early stop is
+    made here by cutting the integrator's answer as DOP853 did, so that the check does not hang on
+    one scipy's rounding."""
+    import sys
+
     sc = get("collinear")
-    r = sc.simulate_fn(sc.resolve({"masses": "125845.61731470954,1e-06,1e-06", "motion": "expansion",
-                                   "energy": "0.001000099999"}))
+    collinear_mod = sys.modules[sc.simulate_fn.__module__]
+    given = {"masses": "125845.61731470954,1e-06,1e-06", "motion": "expansion", "energy": "0.001000099999"}
+    whole = sc.simulate_fn(sc.resolve(given))  # whichever scipy: whole, or reported
+    n = len(whole.trajectory.t)
+    assert (whole.status, n) == ("ok", 600) or (whole.status == "diverged" and 2 <= n < 600), (whole.status, n)
+    assert all(len(v) == n for v in whole.plot_series.values())
+    real = collinear_mod.integrate_dop853
+
+    def stops_after_13(*a, **k):
+        t, P, V = real(*a, **k)
+        return t[:13], P[:13], V[:13]
+
+    monkeypatch.setattr(collinear_mod, "integrate_dop853", stops_after_13)
+    r = sc.simulate_fn(sc.resolve(given))
     n = len(r.trajectory.t)
-    assert r.status == "diverged" and 2 <= n < 600 and "stopped" in r.warnings[0]
+    assert r.status == "diverged" and n == 13 and "stopped" in r.warnings[0]
     assert all(len(v) == n for v in r.plot_series.values())
     assert np.all(np.isfinite(r.trajectory.bodies["A"]))
