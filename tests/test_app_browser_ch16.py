@@ -52,12 +52,17 @@ def test_moon_seen_from_the_earth_fills_the_view_with_its_face(browser):  # noqa
         time.sleep(1.5)
         e, cam = _earth_dir_and_camera(s)
         assert np.dot(cam, e) > 0.999, (cam, e)
-        pix = _canvas_pixels(p.page)  # a 540×600 crop left of the control panel
-        drawn = np.abs(pix - 255.0) > 8  # not the white background
+        t0 = time.time()
+        while True:  # on a loaded machine the face's texture can come seconds after the disc
+            pix = _canvas_pixels(p.page)  # a 540×600 crop left of the control panel
+            drawn = np.abs(pix - 255.0) > 8  # not the white background
+            inside = pix[drawn]
+            spread = np.percentile(inside, 90) - np.percentile(inside, 10) if inside.size else 0.0
+            if (drawn.mean() > 0.6 and spread > 40) or time.time() - t0 > WAIT_MS / 1000:
+                break
+            time.sleep(0.5)
         assert drawn.mean() > 0.6, drawn.mean()  # the disc fills most of the view
-        # maria and highlands: two populations of grey on the disc
-        inside = pix[drawn]
-        assert np.percentile(inside, 90) - np.percentile(inside, 10) > 40
+        assert spread > 40, spread  # maria and highlands: two populations of grey on the disc
         p.page.screenshot(path=str(SCREENSHOTS / "moon-browser-test.png"))
         # the camera follows: later in the run it is still on the Earth's direction
         frame = s.view.frame
