@@ -886,10 +886,17 @@ class ClientSession:
             return
         if self.playing and self.result is not None:
             if self._advance(now):
-                self._show_clock()
+                alone = self.tick_hz() < playback.PLAY_HZ  # the page moves everything shown
+                if not alone:
+                    self._show_clock()
                 if now - self._last_gui > CLOCK_TEXT_EVERY:
                     self._last_gui = now
-                    self._time_gui()
+                    if alone:  # the read-out at the page's frame, one batch (one wake-up of the sender)
+                        self.view.frame = self._frame_index()
+                        with self._view_lock, self.client.atomic():
+                            self._time_gui()
+                    else:
+                        self._time_gui()
         if now - self._link_time > (1.0 if self.playing else LINK_EVERY_S):
             self._link_time = now
             self._sync_link()

@@ -10,7 +10,8 @@ call, and a child that has not answered within CANCEL_GRACE_S is killed (the CPU
 second or two whatever the scenario's loop does).
 
 - `SimPool` (one per server process, `shared_pool()`): `slots` children sized to the machine
-  (two per core, two to six), each fed by a thread of this process. Jobs are keyed by
+  (quick ones: one more than the cores, at most four; slow ones: one per core, at most three),
+  each fed by a thread of this process. Jobs are keyed by
   (scenario, resolved values): runs are deterministic, so thirty students asking for the same
   preset make one job, and a finished run is kept in a server-wide LRU `RunCache` (bounded in
   bytes) and, for the defaults and presets computed in the background at start-up, on disk
@@ -81,7 +82,16 @@ PREVIEW_AFTER_S = SLOW_JOB_S
 CACHE_BYTES = 1e9  # finished runs and their drawings kept in memory by the server (LRU)
 MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
 CHILD_NICE = 5  # children run below the server: the event loop and the pose stream come first
-CHILD_NICE_SLOW = 12  # the children of slow runs and background work, below the quick ones
+# the children of slow runs and background work, far below the quick ones: at 12 two slow runs
+# still took a third of the CPU a quick child wanted (at 15, a tenth)
+CHILD_NICE_SLOW = 15
+# A run judged quick that has taken this much CPU in a quick child, while another quick run waits
+# for one, is stopped and queued again as slow (a slider that made a quick scene slow): at most
+# this much of its work is lost, instead of the waiting run's seconds. CPU time, not wall time: on
+# a loaded machine a quick run of 50 ms can take half a second of wall time. (Showing the
+# scenario's preview when a run overran added the previews' work to the busy quick children:
+# 100 clients' p95 1.6 s against 1.2 s without, two runs each.)
+QUICK_OVERRUN_S = 0.5
 # threads that draw finished runs for the browsers: the drawing holds the interpreter lock, so
 # more threads only take turns (with four, a hundred browsers' answers waited ~1 s longer at the
 # 95th percentile than with one or two); two, so that one long drawing does not hold up the rest
@@ -450,6 +460,7 @@ class Job:
     started: float | None = None
     cancel: bool = False
     preempted: bool = False  # a background job stopped to free its child for a browser (queued again)
+    overran: bool = False  # judged quick, it ran past QUICK_OVERRUN_S in a quick child: slow from now on
     nojit_tried: bool = False
     progress: float | None = None
 
@@ -476,6 +487,16 @@ class Job:
 
 FIRST_CHILD_WAIT_S = 20.0  # the other children start anyway when the first has not come up by then
 FIRST_RUN_WAIT_S = 3.0  # ... and when it has been up this long without a run to do
+
+
+def _cpu_seconds(pid: int) -> float:
+    """CPU seconds (user + system) process `pid` has used, from /proc; 0 where there is none."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            fields = f.read().rsplit(b")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return 0.0
 
 
 class _Slot:
@@ -640,9 +661,14 @@ class _Slot:
         limit = RUN_SECONDS_LIMIT if self.jit else NOJIT_SECONDS_LIMIT
         self.outbox.send(("run", job.id, job.spec.name, job.values, limit))
         t0 = time.perf_counter()
+        cpu0 = _cpu_seconds(self.proc.pid) if self.quick else None
         signalled = None
         while True:
             now = time.perf_counter()
+            if (cpu0 is not None and not job.overran and not job.preview and now - t0 > QUICK_OVERRUN_S
+                    and _cpu_seconds(self.proc.pid) - cpu0 > QUICK_OVERRUN_S and self.pool.quick_waiting()):
+                job.overran = job.preempted = True  # queued again, for a slow child
+                self.pool.stats["overran"] += 1
             if (job.cancel or job.preempted or self.pool.closed) and signalled is None:
                 signalled = now
                 try:
@@ -748,12 +774,14 @@ class SimPool:
         """`first`: the scenario browsers will ask for first (see `prepare`)."""
         if use_processes is None:
             use_processes = os.name == "posix" and os.environ.get("THEORIA_SIM_PROCESSES", "1") != "0"
-        # two per core: half of them only ever take quick runs and previews (a slider on a quick
-        # scene, the first picture of a slow one), the others take slow runs and background work
-        # at a lower priority, so that on a loaded machine a quick answer is not shared out with
-        # a run of seconds (every child runs below the server: the event loop comes first)
-        self.slots_n = slots or max(2, min(6, 2 * (os.cpu_count() or 1)))
-        self.quick_n = self.slots_n // 2
+        # the quick children (one more than the cores, at most 4) only ever take quick runs and
+        # previews (a slider on a quick scene, the first picture of a slow one); the others (one
+        # per core, at most 3) take slow runs and background work at a far lower priority, so that
+        # on a loaded machine a quick answer is not shared out with a run of seconds (every child
+        # runs below the server: the event loop comes first)
+        cores = os.cpu_count() or 1
+        self.quick_n = slots // 2 if slots else min(4, cores + 1)
+        self.slots_n = slots or self.quick_n + min(3, cores)
         self.use_processes = use_processes
         self.cache = RunCache(cache_bytes)
         self.store = RunStore() if store else None
@@ -771,7 +799,8 @@ class SimPool:
         self._timers: list = []
         self._timer_cv = threading.Condition()
         self._timer_thread = None
-        self.stats = {"jobs": 0, "coalesced": 0, "cache_hits": 0, "store_hits": 0, "cancelled": 0, "failed": 0}
+        self.stats = {"jobs": 0, "coalesced": 0, "cache_hits": 0, "store_hits": 0, "cancelled": 0, "failed": 0,
+                      "overran": 0}
         # children import numpy, scipy, numba and every scenario (~1.5 s of CPU each): started all
         # at once on a small machine they delay the one that draws the first scene by seconds, so
         # one starts (the pure-Python child on a fresh install), the others once it is up
@@ -969,8 +998,15 @@ class SimPool:
     def _slow(self, job: Job) -> bool:
         if job.preview and not job.background:  # a quick preview is what makes a slow run bearable:
             return False  # it goes before every full run, whatever the loaded machine made of its time
+        if job.overran:
+            return True
         t = self.expected_seconds(job.spec, job.values, job.preview, steps=job.steps)
         return t is None or t > SLOW_JOB_S
+
+    def quick_waiting(self) -> bool:
+        """A browser's quick run waits in the queue (for a quick child)."""
+        with self._cv:
+            return any(not j.background and not self._slow(j) and not self._cold(j) for j in self._queue)
 
     def _expected_or_zero(self, job: Job) -> float:
         return 0.0 if job.background else (self.expected_seconds(job.spec, job.values, job.preview, steps=job.steps)

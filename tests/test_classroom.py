@@ -548,3 +548,55 @@ def test_a_run_is_sized_by_its_cpu_time_not_by_a_loaded_machine():
         for b in burners:
             b.kill()
         pool.close()
+
+
+@pytest.mark.parametrize("name,long,quick", [
+    ("middle-axis-flip", {"spin": 5.5, "duration": 15000.0}, {"spin": 5.2}),
+    ("libration-eccentric", {"orbits": 500.0, "steps_per_orbit": 5000}, {"asymmetry": 0.06, "orbits": 5.0}),
+])
+def test_a_run_misjudged_as_quick_gives_way_to_a_quick_one(name, long, quick):
+    """A run expected to be quick that turns out long (a slider that made a quick scene slow) must
+    not hold the quick child while another browser's quick run waits: past half a second of CPU
+    it is stopped, queued again as slow, and finished whole by a slow child after the quick run
+    was answered. Two children: one quick, one slow (busy with a slow run of its own)."""
+    from theoria.scenarios import get
+
+    spec = get(name)
+    pool = worker_mod.SimPool(slots=2, store=False)
+    shown, got = [], {}  # (browser, preview?) in the order the results came; browser → full run
+    full = {k: threading.Event() for k in ("warm", "slow", "misjudged", "quick")}
+
+    def result(tag, req, run):
+        shown.append((tag, bool(req.preview)))
+        if not req.preview:
+            got[tag] = run
+            full[tag].set()
+
+    def submit(tag, given):
+        w = worker_mod.SimulationWorker(tag, lambda req, r, s: result(tag, req, r),
+                                        lambda req, e: (got.update({tag: e}), full[tag].set()),
+                                        lambda *a: None, pool=pool)
+        w.submit(spec, given)
+        return w
+
+    try:
+        submit("warm", {})  # compiled (or loaded from numba's cache); its CPU time is learnt
+        assert full["warm"].wait(300)
+        submit("slow", long)  # judged slow from the warm run's time: the slow child takes it
+        key = worker_mod.run_key(spec.name, spec.resolve(long))
+        assert _wait(lambda: any(s.job is not None and s.job.key == key and not s.quick for s in pool.slots), 60)
+        assert _wait(lambda: all(s.job is None for s in pool.slots if s.quick), 60)  # (its preview shown)
+        pool._seconds[(spec.name, False)] = (1e-4, 1e8)  # from now on every run looks quick
+        shown.clear()
+        submit("misjudged", {**long, **({"spin": 5.6} if "spin" in spec.parameters else {"asymmetry": 0.051})})
+        assert _wait(lambda: any(s.job is not None and s.quick for s in pool.slots), 60)
+        submit("quick", quick)
+        for k in ("slow", "misjudged", "quick"):
+            assert full[k].wait(300), (k, shown)
+        assert shown.index(("quick", False)) < shown.index(("misjudged", False)), shown
+        assert pool.stats["overran"] == 1, pool.stats
+        run = got["misjudged"]
+        assert not isinstance(run, Exception), run
+        assert run.trajectory.t[-1] == pytest.approx(got["slow"].trajectory.t[-1])  # whole, not the stopped attempt
+    finally:
+        pool.close()
