@@ -51,8 +51,8 @@ import sys
 import threading
 import time
 import traceback
+import weakref
 from collections import OrderedDict
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, fields, is_dataclass
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -795,7 +795,7 @@ class SimPool:
         # is expected in proportion to its steps (a slider at a long duration makes a slow run of
         # a scenario whose default is quick)
         self._seconds: dict[tuple, tuple[float, float]] = {}
-        self._apply = ThreadPoolExecutor(max_workers=APPLY_THREADS, thread_name_prefix="theoria-apply")
+        self._apply = FairDrawing(APPLY_THREADS)
         self._timers: list = []
         self._timer_cv = threading.Condition()
         self._timer_thread = None
@@ -940,7 +940,7 @@ class SimPool:
             self._cv.notify_all()
         for s in self.slots + ([self.nojit] if self.nojit else []):
             s.close()
-        self._apply.shutdown(wait=False, cancel_futures=True)
+        self._apply.close()
 
     # ---- scheduling -------------------------------------------------------------------------
     def _add(self, job: Job) -> None:
@@ -1151,11 +1151,57 @@ class SimPool:
             except Exception:
                 self.logger.line("theoria: timer error:\n" + traceback.format_exc())
 
-    def submit_apply(self, fn: Callable, *args) -> None:
-        try:
-            self._apply.submit(fn, *args)
-        except RuntimeError:  # shut down
-            pass
+    def submit_apply(self, fn: Callable, *args, owner=None) -> None:
+        """`fn(*args)` on a drawing thread, the browser (`owner`) drawn least recently first."""
+        self._apply.submit(owner, fn, *args)
+
+
+class FairDrawing:
+    """The threads that draw finished runs for the browsers, the browser served least recently
+    first (not first come, first served): one browser whose quick runs finish ten times a second
+    (a student flooding a slider) takes its turn behind every other browser waiting, instead of a
+    drawing thread of its own while ninety-nine others queue for the other."""
+
+    def __init__(self, threads: int):
+        import heapq
+
+        self._heapq = heapq
+        self._heap: list = []
+        self._cv = threading.Condition()
+        self._served: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # owner → when last drawn
+        self._seq = itertools.count()
+        self._closed = False
+        for i in range(threads):
+            threading.Thread(target=self._loop, daemon=True, name=f"theoria-apply-{i}").start()
+
+    def submit(self, owner, fn: Callable, *args) -> None:
+        with self._cv:
+            if self._closed:
+                return
+            last = self._served.get(owner, 0.0) if owner is not None else 0.0
+            self._heapq.heappush(self._heap, (last, next(self._seq), owner, fn, args))
+            self._cv.notify()
+
+    def close(self) -> None:
+        with self._cv:
+            self._closed = True
+            self._heap.clear()
+            self._cv.notify_all()
+
+    def _loop(self) -> None:
+        while True:
+            with self._cv:
+                while not self._heap and not self._closed:
+                    self._cv.wait()
+                if self._closed:
+                    return
+                _, _, owner, fn, args = self._heapq.heappop(self._heap)
+                if owner is not None:
+                    self._served[owner] = time.perf_counter()
+            try:
+                fn(*args)
+            except Exception:
+                log.exception("theoria: error drawing a result")
 
 
 _SHARED: SimPool | None = None
@@ -1371,23 +1417,29 @@ class SimulationWorker:
             if self._applying:
                 return
             self._applying = True
-        self.pool.submit_apply(self._drain)
+        self.pool.submit_apply(self._drain, owner=self)
 
     def _drain(self) -> None:
-        while True:
-            with self._lock:
-                item, self._pending = self._pending, None
-                if item is None or self._closed:
-                    self._applying = False
-                    return
-            fn, args = item
-            if not self.current(args[0]):
-                continue
+        """Show the newest delivery; one more that came meanwhile is queued again behind the
+        browsers drawn less recently (`FairDrawing`)."""
+        with self._lock:
+            item, self._pending = self._pending, None
+            if item is None or self._closed:
+                self._applying = False
+                return
+        fn, args = item
+        if self.current(args[0]):
             try:
                 with showing():
                     fn(*args)
             except Exception:
                 self.pool.logger.line("theoria: error showing a result:\n" + traceback.format_exc())
+        with self._lock:
+            again = self._pending is not None and not self._closed
+            if not again:
+                self._applying = False
+        if again:
+            self.pool.submit_apply(self._drain, owner=self)
 
 
 DRAWINGS_PER_RUN = 3

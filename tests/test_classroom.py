@@ -600,3 +600,27 @@ def test_a_run_misjudged_as_quick_gives_way_to_a_quick_one(name, long, quick):
         assert run.trajectory.t[-1] == pytest.approx(got["slow"].trajectory.t[-1])  # whole, not the stopped attempt
     finally:
         pool.close()
+
+
+def test_the_browser_drawn_least_recently_is_drawn_first():
+    """Finished runs are drawn for the browser served least recently first: a browser whose runs
+    finish ten times a second (a flooded slider) queues its next drawing behind a browser that has
+    not been drawn for a while, even one that asked later (first come, first served put the
+    flooding browser's drawing first every time)."""
+    class Browser:  # a session's worker, as the drawing threads see it (an owner)
+        pass
+
+    drawing = worker_mod.FairDrawing(1)
+    order, gate = [], threading.Event()
+    flooding, other = Browser(), Browser()
+    try:
+        drawing.submit(flooding, order.append, "flooding 1")
+        assert _wait(lambda: order == ["flooding 1"], 10)
+        drawing.submit(None, gate.wait, 10)  # the thread busy with someone's drawing meanwhile
+        drawing.submit(flooding, order.append, "flooding 2")
+        drawing.submit(other, order.append, "other 1")
+        gate.set()
+        assert _wait(lambda: len(order) == 3, 10)
+        assert order == ["flooding 1", "other 1", "flooding 2"]
+    finally:
+        drawing.close()
