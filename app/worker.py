@@ -88,9 +88,7 @@ CHILD_NICE_SLOW = 15
 # A run judged quick that has taken this much CPU in a quick child, while another quick run waits
 # for one, is stopped and queued again as slow (a slider that made a quick scene slow): at most
 # this much of its work is lost, instead of the waiting run's seconds. CPU time, not wall time: on
-# a loaded machine a quick run of 50 ms can take half a second of wall time. (Showing the
-# scenario's preview when a run overran added the previews' work to the busy quick children:
-# 100 clients' p95 1.6 s against 1.2 s without, two runs each.)
+# a loaded machine a quick run of 50 ms can take half a second of wall time.
 QUICK_OVERRUN_S = 0.5
 # threads that draw finished runs for the browsers: the drawing holds the interpreter lock, so
 # more threads only take turns (with four, a hundred browsers' answers waited ~1 s longer at the
