@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import heapq
 import itertools
 import logging
 import os
@@ -522,7 +523,11 @@ class _Slot:
         env = dict(os.environ)
         if not self.jit:
             env["NUMBA_DISABLE_JIT"] = "1"
-        code = ("import os,sys; os.nice(int(sys.argv[3])) if hasattr(os,'nice') else None; "
+        # `python -c` puts the working folder first on sys.path: started from a checkout of theoria
+        # (README's first command), the child imported the checkout's theoria/ folder, which holds
+        # only the front door, instead of the installed package; the child imports what the server did
+        code = ("import os,sys; sys.path[:] = [p for p in sys.path if p]; "
+                "os.nice(int(sys.argv[3])) if hasattr(os,'nice') else None; "
                 "from theoria.app.worker import child_main; child_main(int(sys.argv[1]), int(sys.argv[2]))")
         try:
             self.proc = subprocess.Popen([sys.executable, "-c", code, str(r1), str(w2),
@@ -1120,8 +1125,6 @@ class SimPool:
 
     def call_later(self, delay: float, fn: Callable) -> None:
         """`fn()` after `delay` seconds on the pool's timer thread (kept short: it only posts)."""
-        import heapq
-
         with self._timer_cv:
             heapq.heappush(self._timers, (time.perf_counter() + delay, next(_ids), fn))
             if self._timer_thread is None:
@@ -1130,8 +1133,6 @@ class SimPool:
             self._timer_cv.notify()
 
     def _timer_loop(self) -> None:
-        import heapq
-
         while not self.closed:
             with self._timer_cv:
                 while not self._timers and not self.closed:
@@ -1161,9 +1162,6 @@ class FairDrawing:
     drawing thread of its own while ninety-nine others queue for the other."""
 
     def __init__(self, threads: int):
-        import heapq
-
-        self._heapq = heapq
         self._heap: list = []
         self._cv = threading.Condition()
         self._served: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # owner → when last drawn
@@ -1177,7 +1175,7 @@ class FairDrawing:
             if self._closed:
                 return
             last = self._served.get(owner, 0.0) if owner is not None else 0.0
-            self._heapq.heappush(self._heap, (last, next(self._seq), owner, fn, args))
+            heapq.heappush(self._heap, (last, next(self._seq), owner, fn, args))
             self._cv.notify()
 
     def close(self) -> None:
@@ -1193,7 +1191,7 @@ class FairDrawing:
                     self._cv.wait()
                 if self._closed:
                     return
-                _, _, owner, fn, args = self._heapq.heappop(self._heap)
+                _, _, owner, fn, args = heapq.heappop(self._heap)
                 if owner is not None:
                     self._served[owner] = time.perf_counter()
             try:

@@ -91,3 +91,38 @@ def test_bench_rows_needing_an_extra_say_so_in_a_plain_install(venv):
     assert p.returncode == 0, p.stderr[-2000:]
     rows = {r["name"]: r for r in json.loads(p.stdout)["benchmarks"]}
     assert "playwright" in rows["app-slider-latency"]["skipped"] and "[bench]" in rows["app-slider-latency"]["skipped"]
+
+
+def test_serve_from_the_checkout_folder_draws_the_first_scene(venv):
+    """README's first command installs theoria and starts `theoria serve` from the checkout: there
+    the folder theoria/ (the front door only) sits in the working folder. The server's simulation
+    processes must still import the installed package (they imported the checkout's and died)."""
+    import asyncio
+    import time
+
+    from theoria.benchmarks.classroom import ViserProtocolClient, _free_port
+
+    d, py = venv
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    port = _free_port()
+    server = subprocess.Popen([str(d / "venv" / "bin" / "theoria"), "serve", "--port", str(port)], cwd=ROOT,
+                              env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        t0 = time.time()
+        while "open http" not in server.stdout.readline():
+            assert server.poll() is None and time.time() - t0 < 120, server.stderr.read()[-2000:]
+
+        async def first_scene():
+            c = ViserProtocolClient(f"ws://127.0.0.1:{port}")
+            await c.connect()
+            try:
+                return await c.wait_for(lambda: c.update_no >= 1, 300), c.status
+            finally:
+                await c.close()
+
+        drawn, status = asyncio.run(first_scene())
+        assert drawn, status
+    finally:
+        server.terminate()
+        _, err = server.communicate(timeout=30)
+    assert "Traceback" not in err and "ModuleNotFoundError" not in err, err[-2000:]
