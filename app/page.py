@@ -39,6 +39,39 @@ CSS = """
 body:has(#theoria-loading) .mantine-ScrollArea-root{visibility:hidden}
 """
 LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div>'
+# Run before viser's client starts. In software WebGL (no GPU: SwiftShader, llvmpipe; the names
+# viser's own check looks for) multisampled antialiasing is the dearest part of each frame, so
+# the page asks for a canvas without it (playback 18 -> 27 frames a second at 1280x800, with
+# the other savings of app/browser.py `lighten`). viser then shows a notice that rendering is in
+# software ("Software WebGL rendering detected"), which would sit over a projected scene all
+# lesson: it is taken down as it appears.
+SOFTWARE_GL_JS = r"""
+(() => {
+  let name = '';
+  try {
+    const g = document.createElement('canvas').getContext('webgl2');
+    const x = g && g.getExtension('WEBGL_debug_renderer_info');
+    name = x ? String(g.getParameter(x.UNMASKED_RENDERER_WEBGL)) : '';
+    const lose = g && g.getExtension('WEBGL_lose_context');
+    if (lose) lose.loseContext();
+  } catch (e) {}
+  const soft = window.__theoriaSoftwareGL = /swiftshader|llvmpipe|softpipe|software/i.test(name);
+  if (!soft) return;
+  const get = HTMLCanvasElement.prototype.getContext;
+  HTMLCanvasElement.prototype.getContext = function (type, attrs) {
+    if (type === 'webgl2' || type === 'webgl') attrs = Object.assign({}, attrs || {}, {antialias: false});
+    return get.call(this, type, attrs);
+  };
+  const seen = new MutationObserver(() => {
+    for (const n of document.querySelectorAll('.mantine-Notification-root')) {
+      if (n.textContent.includes('Software WebGL rendering')) { n.style.display = 'none'; seen.disconnect(); }
+    }
+  });
+  const watch = () => seen.observe(document.body, {childList: true, subtree: true});
+  if (document.body) watch(); else document.addEventListener('DOMContentLoaded', watch);
+  setTimeout(() => seen.disconnect(), 60000);
+})();
+"""
 
 _lock = threading.Lock()
 _root: Path | None = None
@@ -51,6 +84,7 @@ def _viser_index() -> Path:
 def themed_index(html: str) -> str:
     html = html.replace("<title>Viser</title>", f"<title>{TITLE}</title>", 1)
     html = html.replace('content="Viser client"', f'content="{TITLE}"', 1)
+    html = html.replace("<head>", f"<head><script>{SOFTWARE_GL_JS}</script>", 1)
     html = html.replace("</head>", f"<style>{CSS}</style></head>", 1)
     html = html.replace("<body>", "<body>" + LOADING_HTML, 1)
     return html

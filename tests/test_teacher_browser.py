@@ -363,7 +363,11 @@ def test_playback_frame_rate_against_an_empty_page(browser, app):
     """Frames a second in which the page shows a new pose of the body while it plays, as a ratio to
     a page with only an animation loop in the same browser and run. The goal is 0.8; in software
     WebGL (SwiftShader, no GPU) on two cores viser's canvas alone renders at ~0.5-0.6 of an empty
-    page (docs/app.md), so there the measurement is reported and the goal marked as not reached."""
+    page (docs/app.md), so there the measurement is reported and the goal marked as not reached.
+
+    Playback is measured once the scene has played for a few seconds: in the first three seconds
+    after a scene arrives the page draws at about half the later rate (17-19 against 36-38 poses a
+    second here), once per scene rather than while a class watches; that rate is reported too."""
     from theoria.scenarios import get
 
     base, sessions = app
@@ -373,7 +377,8 @@ def test_playback_frame_rate_against_an_empty_page(browser, app):
     try:
         _session_for(sessions, before, spec.name)
         _page_plays(page)
-        time.sleep(1.0)
+        first = page.evaluate(POSES_JS, 3)
+        time.sleep(3.0)
         played = page.evaluate(POSES_JS, 3)
         empty_page = ctx.new_page()
         empty_page.goto("about:blank")
@@ -383,7 +388,8 @@ def test_playback_frame_rate_against_an_empty_page(browser, app):
         ctx.close()
     rate = played["poses"] / played["seconds"]
     ratio = rate / empty
-    print(f"\nplayback {rate:.1f} poses/s, empty page {empty:.1f} frames/s: ratio {ratio:.2f} (goal 0.8)")
+    print(f"\nplayback {rate:.1f} poses/s (its first 3 s: {first['poses'] / first['seconds']:.1f}), "
+          f"empty page {empty:.1f} frames/s: ratio {ratio:.2f} (goal 0.8)")
     assert played["poses"] >= 3 and empty > 10, (played, empty)
     assert played["poses"] <= played["frames"]  # a pose at most per frame drawn: a frame rate, not a count
     if ratio < 0.8:
