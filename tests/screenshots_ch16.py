@@ -47,7 +47,7 @@ with sync_playwright() as p:
         s.clock = clock
         s._show_clock(force=True)
         time.sleep(8.0)
-        pg.dismiss_software_webgl_note()
+        pg.assert_no_software_webgl_note()
         for k in range(3):  # a few moves: the canvas renders on change, and labels are placed on render
             s.clock = clock + 0.0005 * (k + 1)
             with s._view_lock:

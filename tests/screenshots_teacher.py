@@ -20,9 +20,6 @@ from test_app_browser import ARGS, CHROMIUM, _free_port  # noqa: E402
 
 OUT = HERE.parent / "docs" / "screenshots"
 LABEL_WAIT_S = float(os.environ.get("LABEL_WAIT_S", "20"))
-DISMISS_JS = """(() => { for (const b of document.querySelectorAll('button')) { let p = b;
-  for (let k = 0; k < 5 && p; k++) { p = p.parentElement;
-    if (p && (p.innerText || '').startsWith('Software WebGL')) { b.click(); return true; } } } return false; })()"""
 
 
 def main(names: list[str]) -> None:
@@ -57,7 +54,6 @@ def main(names: list[str]) -> None:
                     continue
                 shown = time.time() - t0
                 time.sleep(LABEL_WAIT_S)
-                page.evaluate(DISMISS_JS)
                 # paused a moment into the run: in software WebGL the labels of a fast-turning body
                 # trail it while it plays
                 page.mouse.click(200, 700)
@@ -67,7 +63,6 @@ def main(names: list[str]) -> None:
                 page.keyboard.press("p")
                 page.set_viewport_size({"width": 1920, "height": 1080})
                 time.sleep(LABEL_WAIT_S)
-                page.evaluate(DISMISS_JS)
                 time.sleep(0.5)
                 page.screenshot(path=str(OUT / f"{spec.name}-present.png"))
                 print(f"{spec.name}: scene after {shown:.0f} s, present={s.present}", flush=True)

@@ -68,7 +68,7 @@ def test_three_body_scene_reaches_the_browser(browser, name, values, options, no
             s.playing = False
             s.clock = when
             s._show_clock(force=True)
-            p.dismiss_software_webgl_note()
+            p.assert_no_software_webgl_note()
             # labels are WebGL text whose glyphs are built in the page: on a loaded machine (software
             # WebGL, other jobs) that took up to ~20 s
             time.sleep(float(os.environ.get("THEORIA_LABEL_WAIT", "4")))
