@@ -190,7 +190,7 @@ def integrate(
             tk = t0 + h * (done + np.arange(n)[:, None] + sch["at"][None, :])
             pos = np.stack([np.asarray(m.position(tk.ravel()), float).reshape(n, len(sch["at"]), 3) for m in masses], axis=2)
         else:
-            pos = np.zeros((1, 1, 1, 3))
+            pos = np.zeros((n, len(sch["at"]), 0, 3))  # no mass: an empty axis, indexable at every step
         rows = n // stride
         oL = np.empty((rows + 1, 3))
         oq = np.empty((rows + 1, 4))

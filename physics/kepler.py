@@ -38,7 +38,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, vectorize
+from numba import config, njit, vectorize
 
 from .errors import ParameterError
 
@@ -90,19 +90,30 @@ def radius_scalar(E, e):
     return (1.0 - e) + 2.0 * e * s * s
 
 
-@vectorize(["float64(float64, float64)"], cache=True)
-def _eccentric_anomaly_v(M, e):
-    return eccentric_anomaly_scalar(M, e)
+if config.DISABLE_JIT:
+    # numba compiles a ufunc given its signatures even with the JIT off, and the scalar functions it
+    # calls are then plain Python, which it cannot type: the simulation process that runs without
+    # the JIT (it serves the first scenes while the compiled code warms) failed to import this
+    # module on a fresh install. There numpy's element loop calls the same scalar functions.
+    def _elementwise(scalar):
+        loop = np.vectorize(scalar, otypes=[np.float64])
+        return lambda a, b: loop(a, b)[()]  # a number for numbers, as a ufunc gives
 
+    _eccentric_anomaly_v = _elementwise(eccentric_anomaly_scalar)
+    _true_anomaly_v = _elementwise(true_anomaly_scalar)
+    _radius_v = _elementwise(radius_scalar)
+else:
+    @vectorize(["float64(float64, float64)"], cache=True)
+    def _eccentric_anomaly_v(M, e):
+        return eccentric_anomaly_scalar(M, e)
 
-@vectorize(["float64(float64, float64)"], cache=True)
-def _true_anomaly_v(E, e):
-    return true_anomaly_scalar(E, e)
+    @vectorize(["float64(float64, float64)"], cache=True)
+    def _true_anomaly_v(E, e):
+        return true_anomaly_scalar(E, e)
 
-
-@vectorize(["float64(float64, float64)"], cache=True)
-def _radius_v(E, e):
-    return radius_scalar(E, e)
+    @vectorize(["float64(float64, float64)"], cache=True)
+    def _radius_v(E, e):
+        return radius_scalar(E, e)
 
 
 def check_eccentricity(e, name: str = "eccentricity"):

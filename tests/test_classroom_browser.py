@@ -154,6 +154,9 @@ def _check_never_blank(out: dict, scenario: str) -> None:
         assert st["title"].startswith("theoria"), st["title"]
     last = out["samples"][-1]
     assert last["title"] == f"theoria — {scenario}"
+    # nothing failed on the way: on a fresh install the pure-Python simulation process (which serves
+    # the first scenes while numba compiles) once died at import, printing tracebacks to the terminal
+    assert not [x for x in out["server_lines"] if "Traceback" in x], out["server_lines"]
     assert out["outside"] == []
 
 

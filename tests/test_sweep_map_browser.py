@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from screenshots_teacher import DISMISS_JS
 from test_app_browser import WAIT_MS, _free_port, _have_browser, browser  # noqa: F401  (the fixture)
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
@@ -111,8 +110,6 @@ def test_map_click_replays_and_screenshot(browser, sweeps, name, target, tmp_pat
         shown = page.get_by_text("In the scene:").locator("xpath=..").inner_text()
         assert "Eccentricity" in shown or "eccentricity" in shown, shown
         page.wait_for_timeout(2500)  # a few frames of the replay
-        page.evaluate(DISMISS_JS)  # viser's note on software WebGL
-        page.wait_for_timeout(500)
         OUT.mkdir(parents=True, exist_ok=True)
         page.screenshot(path=str(OUT / f"sweep-{name}.png"))
         print(f"{name}: click → replay shown in {took:.2f} s")
