@@ -822,11 +822,11 @@ class SimPool:
         if first is None or not self.use_processes:
             return
         with self._cv:
-            if first not in self.warm and self.nojit is None:
-                self.nojit = _Slot(self, self.slots_n, jit=False)
             try:
                 from theoria.scenarios import get
 
+                if first not in self.warm and self.nojit is None and not get(first).chaotic:
+                    self.nojit = _Slot(self, self.slots_n, jit=False)
                 if first not in self.warm:
                     self._warm_soon(get(first))
             except Exception:
@@ -994,9 +994,10 @@ class SimPool:
         job.state = "done"
 
     def _cold(self, job: Job) -> bool:
-        """A browser's job the pure-Python child should take: its scenario is not compiled here yet."""
+        """A browser's job the pure-Python child should take: its scenario is not compiled here yet
+        (and not chaotic: a chaotic scene's numbers are the compiled code's only)."""
         return (self.use_processes and not job.background and not job.local and not job.nojit_tried
-                and job.spec.name not in self.warm)
+                and not job.spec.chaotic and job.spec.name not in self.warm)
 
     def _slow(self, job: Job) -> bool:
         if job.preview and not job.background:  # a quick preview is what makes a slow run bearable:

@@ -326,6 +326,11 @@ class Scenario:
     # what a run costs before it runs: validated values -> Cost(steps, samples, bytes) (scenarios.budget);
     # None: a `duration` integrated at `step`, every step kept
     cost_fn: Callable[[dict[str, Any]], Cost] | None = None
+    # chaotic: its numbers hang on the last bit of every step, and pure Python (numba's JIT off)
+    # rounds differently from the compiled code (Hyperion's preview: Lyapunov probe 0.47 against
+    # 0.96 per orbit). Such a scenario is computed only by the compiled code, so that the app, the
+    # command line and a sweep show the same numbers for the same values.
+    chaotic: bool = False
 
     def __post_init__(self):
         for p in self.params:

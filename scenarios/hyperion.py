@@ -294,6 +294,7 @@ register(Scenario(
     draw=_draw,
     options={**ZETA_OPTION, **ORBIT_OPTION, "section": Option("surface of section + resonance zones")},
     cost_fn=_cost,
+    chaotic=True,
     euler_formula=("θ̈ = −(ω₀²/2) (a/r)³ sin 2(θ − f)\n"
                    "θ: the body's long axis, f: the moon's direction seen from the planet, r: its distance"),
     presets=(

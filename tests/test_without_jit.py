@@ -55,3 +55,34 @@ def test_every_scenario_imports_and_runs_its_preview_without_the_jit_on_an_empty
     spec = get("free-tumble")
     compiled = spec.simulate_fn(spec.resolve(dict(spec.preview)))
     assert plain["free-tumble"]["last"] == pytest.approx(list(compiled.trajectory.omega_body[-1]), rel=1e-9, abs=1e-12)
+
+
+def test_a_chaotic_scene_is_computed_by_the_compiled_code_on_a_fresh_install(tmp_path, monkeypatch):
+    """Hyperion's numbers hang on the last bit of every step: the pure-Python child (which would
+    answer first on a fresh install) gave a Lyapunov probe of 0.47 per orbit where the compiled
+    code, the command line and a sweep give 0.96. A browser's first Hyperion scene waits for the
+    compiled code and shows its numbers."""
+    import threading
+
+    from theoria.app import worker as worker_mod
+    from theoria.scenarios import get
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))  # a fresh install: nothing compiled
+    spec = get("hyperion")
+    values = dict(spec.preview)
+    want = spec.simulate_fn(spec.resolve(values)).metrics  # compiled, in this process
+    pool = worker_mod.SimPool(slots=2, store=False)
+    got, done = {}, threading.Event()
+    try:
+        assert "hyperion" not in pool.warm
+        w = worker_mod.SimulationWorker("browser", lambda req, run, s: (got.update(run=run), done.set()),
+                                        lambda req, e: (got.update(run=e), done.set()), lambda *a: None, pool=pool)
+        w.submit(spec, values)
+        assert done.wait(600)
+        run = got["run"]
+        assert not isinstance(run, Exception), run
+        for k in ("lyapunov_probe_per_orbit", "lyapunov_max_per_orbit"):
+            assert run.metrics[k] == pytest.approx(want[k], rel=1e-9), (k, run.metrics[k], want[k])
+        assert pool.nojit is None or pool.nojit.runs == 0
+    finally:
+        pool.close()
