@@ -45,9 +45,9 @@ def count_steps():
         counts["rigid"] += int(n)
         return run(L, q, I, h, n, *a)
 
-    def rk4_(which, y0, t0, h, nsteps, *a):
+    def rk4_(which, y0, i0, h, nsteps, *a):
         counts["rk4"] += int(nsteps)
-        return rk4(which, y0, t0, h, nsteps, *a)
+        return rk4(which, y0, i0, h, nsteps, *a)
 
     def section_(theta, thetadot, k, s2f, c2f, h, n_orbits, *a):
         counts["ensemble"] += int(theta.shape[0]) * int(n_orbits) * int(s2f.shape[0])

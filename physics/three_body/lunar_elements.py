@@ -144,12 +144,14 @@ def rhs_elements(t, y, mu, mus, sun, sign4=1.0, series=0.0):
 
 
 @njit(cache=True)
-def _rk4(which, y0, t0, h, nsteps, stride, mu, mus, sun, sign4, series):
+def _rk4(which, y0, i0, h, nsteps, stride, mu, mus, sun, sign4, series):
+    """nsteps RK4 steps from step i0 (the time of step i is i·h, formed so in every piece: a
+    piece that started at i0·h and added i·h rounded its times differently from the uncut run)."""
     nout = nsteps // stride + 1
     out = np.empty((nout, y0.size))
     y = y0.copy()
     out[0] = y
-    t = t0
+    t = i0 * h
     k = 1
     for i in range(1, nsteps + 1):
         if which == 0:
@@ -163,7 +165,7 @@ def _rk4(which, y0, t0, h, nsteps, stride, mu, mus, sun, sign4, series):
             k3 = rhs_elements(t + 0.5 * h, y + 0.5 * h * k2, mu, mus, sun, sign4, series)
             k4 = rhs_elements(t + h, y + h * k3, mu, mus, sun, sign4, series)
         y = y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        t = t0 + i * h
+        t = (i0 + i) * h
         if i % stride == 0:
             out[k] = y
             k += 1
@@ -179,20 +181,21 @@ def integrate_rk4(kind: str, y0, duration_days: float, step_days: float, sample_
     Returns (t, states) sampled every `sample_days` (rounded to whole steps). printed_sign /
     euler_series: see `rhs_elements`. `progress(frac)`, if given, is called between pieces of
     about 1/RK4_CHUNKS of the run (it may raise to stop the run); the pieces restart from the
-    state and time reached, which changes the result only at the level of rounding."""
+    state and step reached and round exactly as the uncut run, so the result does not depend on
+    `progress` (the app's numbers are the command line's)."""
     stride = max(1, int(round(sample_days / step_days)))
     nsteps = int(math.ceil(duration_days / step_days / stride)) * stride
     which, sign4, ser = (0 if kind == "cartesian" else 1), (-1.0 if printed_sign else 1.0), (1.0 if euler_series else 0.0)
     sun = np.asarray(sun, float)
     y = np.asarray(y0, float)
     if progress is None:
-        out = _rk4(which, y, 0.0, step_days, nsteps, stride, mu, mus, sun, sign4, ser)
+        out = _rk4(which, y, 0, step_days, nsteps, stride, mu, mus, sun, sign4, ser)
     else:
         per = max(1, nsteps // stride // RK4_CHUNKS) * stride  # steps per piece, whole samples
         pieces, done = [y[None, :]], 0
         while done < nsteps:
             n = min(per, nsteps - done)
-            part = _rk4(which, y, done * step_days, step_days, n, stride, mu, mus, sun, sign4, ser)
+            part = _rk4(which, y, done, step_days, n, stride, mu, mus, sun, sign4, ser)
             pieces.append(part[1:])
             y = part[-1].copy()
             done += n
