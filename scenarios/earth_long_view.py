@@ -386,7 +386,8 @@ def _cost(values):
     else:
         samples = float(round(values["years"] / values["sample_years"]) + 1)  # as _earth_long samples it
         cached = secular_calibration.cache_info().currsize > 0
-        steps += SECULAR_STEPS_PER_YEAR * values["years"] + 10 + (0 if cached else SECULAR_CALIBRATION_YEARS * YR / 0.5)
+        steps += SECULAR_STEPS_PER_YEAR * values["years"] + 10 + (
+            0 if cached else SECULAR_CALIBRATION_YEARS * YR * REBOUND_STEPS_PER_DAY)  # REBOUND's steps, not its samples
     return Cost(steps, samples, trajectory_bytes(samples, bodies=3, series=10))
 
 
