@@ -316,10 +316,11 @@ def cmd_serve(args) -> int:
         from theoria.app.sweep_map import SweepMaps
 
         sweep = SweepMaps(args.sweep)  # not a theoria sweep: one line, exit 2, before the server starts
-    serve(port=args.port, host=args.host, scenario=args.scenario,
-          limits=Limits(max_connections=args.max_clients, max_per_address=args.max_per_address),
-          precompute=not args.no_precompute, sweep=sweep)
-    return 0
+    ended = serve(port=args.port, host=args.host, scenario=args.scenario,
+                  limits=Limits(max_connections=args.max_clients, max_per_address=args.max_per_address),
+                  precompute=not args.no_precompute, sweep=sweep)
+    # stopped as every command is (the server and its simulation processes are gone by now)
+    return _fail("terminated", EXIT_TERMINATED) if ended == "SIGTERM" else _fail("interrupted", EXIT_INTERRUPTED)
 
 
 def _write_command(args, suffixes, write, what: str, how: str) -> int:

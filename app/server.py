@@ -382,13 +382,16 @@ def _raise_fd_limit() -> None:
 
 
 def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None, run=None,
-          limits: Limits | None = None, precompute: bool = True, sweep=None) -> None:
+          limits: Limits | None = None, precompute: bool = True, sweep=None) -> str:
     """Run the web app until interrupted (Ctrl-C, SIGTERM, or the parent process gone), printing
-    the URL to open."""
+    the URL to open. Returns what ended it, "SIGINT" or "SIGTERM", once everything it started
+    has stopped."""
     _raise_fd_limit()
     _watch_parent()
+    ended = {"by": "SIGINT"}
 
     def on_term(signum, frame):
+        ended["by"] = "SIGTERM"
         raise KeyboardInterrupt
 
     if threading.current_thread() is threading.main_thread():
@@ -429,6 +432,7 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
         pool.close()
         if sweep is not None:
             sweep.close()
+    return ended["by"]
 
 
 class Shown:

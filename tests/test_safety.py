@@ -170,6 +170,34 @@ def test_signal_mid_write_leaves_the_old_target(tmp_path, sig, code, word, phase
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("sig,code,word", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
+def test_serve_stopped_by_a_signal_exits_as_every_command_and_leaves_nothing_running(tmp_path, sig, code, word):
+    """`theoria serve` stopped half a second after its URL (its simulation processes starting on a
+    fresh install, the scenes of the class being prepared): the command's one line and exit code,
+    no traceback from the server or its simulation processes, and none of them left running."""
+    import socket
+
+    psutil = pytest.importorskip("psutil")
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    env = dict(ENV, NUMBA_CACHE_DIR=str(tmp_path / "numba"), THEORIA_CACHE_DIR=str(tmp_path / "runs"))
+    p = subprocess.Popen([sys.executable, "-m", "theoria.app.cli", "serve", "--port", str(port)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=tmp_path,
+                         preexec_fn=_terminal_like)
+    assert b"open http" in p.stdout.readline()
+    time.sleep(0.5)
+    children = psutil.Process(p.pid).children(recursive=True)
+    assert children  # the simulation processes were started
+    p.send_signal(sig)
+    out, err = p.communicate(timeout=WAIT_S)
+    assert p.returncode == code and err.decode() == f"theoria: {word}\n", err.decode()[-3000:]
+    gone, alive = psutil.wait_procs(children, timeout=10)
+    assert alive == [], alive
+
+
+@pytest.mark.slow
 def test_sigterm_outside_the_command_line(tmp_path):
     """A script calling `record` (SIGTERM keeps its default there: the process dies): the older
     file is byte for byte as it was and no temporary file is left, whether the signal comes while
