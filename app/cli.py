@@ -300,8 +300,9 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_serve(args) -> int:
-    from theoria.app.server import serve
+    from theoria.app.server import check_address, serve
 
+    check_address(args.host, args.port, flag="--")
     if args.scenario is not None:
         from theoria.scenarios import get
 

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import viser
 from viser import _messages as vm
 
+from theoria.physics.errors import ParameterError
 from theoria.scenarios import all_scenarios, get
 
 from . import page
@@ -293,13 +294,37 @@ def _refuse_share(server: viser.ViserServer, log: RateLimitedLog) -> None:
     server.disconnect_share_url = refused
 
 
+def check_address(host, port, flag: str = "") -> None:
+    """A port and a host this machine can listen on, or ParameterError naming `flag`port or
+    `flag`host (viser started its listening thread anyway: it printed a traceback there, and the
+    server waited for ever)."""
+    import socket
+
+    if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+        raise ParameterError(f"{flag}port", port, "a whole number from 0 to 65535")
+    allowed = "an address of this machine: 127.0.0.1 (this machine only), 0.0.0.0 (every network) or its name"
+    try:
+        infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    except (OSError, UnicodeError, TypeError):
+        raise ParameterError(f"{flag}host", host, allowed) from None
+    for family, kind, proto, _, addr in infos:
+        try:
+            with socket.socket(family, kind, proto) as s:
+                s.bind((addr[0], 0))  # an address of this machine (the port is viser's to take)
+            return
+        except OSError:
+            continue
+    raise ParameterError(f"{flag}host", host, allowed)
+
+
 def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None, verbose: bool = True,
                 run=None, limits: Limits | None = None, pool: SimPool | None = None, sweep=None):
     """A running viser server with one ClientSession per browser; returns (server, sessions).
     `run`: a finished Run every new browser is shown first (its scenario and parameters).
     `sweep`: a sweep result (a Zarr path, or app.sweep_map.SweepMaps) every browser gets as a map
     in a Sweep tab; its scenario is the first scene. A path that is not a theoria sweep raises
-    ParameterError before the server starts."""
+    ParameterError before the server starts, as do a port or host it cannot listen on."""
+    check_address(host, port)
     if sweep is not None and not hasattr(sweep, "picture"):
         from .sweep_map import SweepMaps
 
@@ -386,6 +411,7 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
     """Run the web app until interrupted (Ctrl-C, SIGTERM, or the parent process gone), printing
     the URL to open. Returns what ended it, "SIGINT" or "SIGTERM", once everything it started
     has stopped."""
+    check_address(host, port)  # before the simulation processes start
     _raise_fd_limit()
     _watch_parent()
     ended = {"by": "SIGINT"}

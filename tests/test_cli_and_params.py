@@ -47,6 +47,11 @@ def test_param_parse_errors():
     (["run", "initial-axis", "--set", "torque=0,0,0"], "torque=0,0,0"),
     (["run", "middle-axis-flip", "--preset", "no such preset"], '--preset=no such preset: one of "Brick: the flip"'),
     (["run", "middle-axis-flip", "--preset", "brick"], "more than one matches"),
+    # a server that cannot listen: refused before it starts (it printed viser's traceback and hung)
+    (["serve", "--port", "99999"], "--port=99999: a whole number from 0 to 65535"),
+    (["serve", "--port", "-1"], "--port=-1"),
+    (["serve", "--host", "999.1.1.1"], "--host=999.1.1.1: an address of this machine"),
+    (["serve", "--host", "192.0.2.1"], "--host=192.0.2.1: an address of this machine"),  # TEST-NET: not ours
 ])
 def test_bad_set_exits_2_with_one_line(args, needle, cli):
     code, _, err = cli(*args)
@@ -120,3 +125,15 @@ def test_every_check_row_passes_and_covers_design_table(cli_process):
     for r in rows:  # no NaN or infinity reaches the JSON: a missing value is null
         assert r["rel_error"] is not None and r["rel_error"] <= r["tolerance"], r
     assert code == 0
+
+
+def test_show_on_an_address_it_cannot_listen_on_names_it():
+    """`run.show(port=...)` in a notebook: refused by name at once (it printed viser's traceback
+    and never returned)."""
+    import theoria as th
+
+    run = th.scenario("free-tumble").simulate(duration=1)
+    with pytest.raises(ParameterError, match=r"^port=99999: a whole number from 0 to 65535$"):
+        run.show(port=99999, block=False)
+    with pytest.raises(ParameterError, match=r"^host=999\.1\.1\.1: an address of this machine"):
+        run.show(host="999.1.1.1", block=False)
