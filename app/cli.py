@@ -148,45 +148,39 @@ def cmd_list(args) -> int:
     return 0
 
 
-def _check_table_out(path: str | None) -> str | None:
-    """`theoria run --out FILE`: .parquet or .csv, in a folder that exists (checked before the run)."""
+def _check_table_out(path: str | None, force: bool) -> str | None:
+    """`theoria run --out FILE`: .parquet or .csv, a new file (or --force) in a writable folder,
+    checked before the run."""
     if path is None:
         return None
-    import os
+    from theoria.app.files import check_out
 
-    low = path.lower()
-    if not (low.endswith(".parquet") or low.endswith(".csv")):
-        raise ParameterError("--out", path, "a file name ending in .parquet or .csv")
-    parent = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
-        raise ParameterError("--out", path, f"its folder {parent} must exist and be writable")
-    if os.path.isdir(path):
-        raise ParameterError("--out", path, "is a folder; give a file name")
+    check_out(path, (".parquet", ".csv"), force=force, reader="")
     return path
 
 
 def write_table(run, path: str) -> int:
     """The run's samples (Run.to_dataframe: one row per sample, units in the column names) as
-    Parquet or CSV, written beside the target and renamed (whole or absent). Returns rows written."""
-    import os
+    Parquet or CSV, whole or absent (app/files.py `write_whole`: a full disk or a file-size
+    limit is one line naming the file, which stays as it was). Returns rows written."""
+    import io
+
+    from theoria.app.files import write_whole
 
     df = run.to_dataframe()
-    tmp = f"{path}.tmp{os.getpid()}"
-    try:
-        if path.lower().endswith(".parquet"):
-            df.attrs = {}
-            df.to_parquet(tmp, index=False)
-        else:
-            df.to_csv(tmp, index=False)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    if path.lower().endswith(".parquet"):
+        df.attrs = {}
+        buf = io.BytesIO()
+        df.to_parquet(buf, index=False)
+        data = buf.getvalue()
+    else:
+        data = df.to_csv(index=False).encode()
+    write_whole(path, data)
     return len(df)
 
 
 def cmd_run(args) -> int:
-    table_out = _check_table_out(getattr(args, "out", None))
+    table_out = _check_table_out(getattr(args, "out", None), getattr(args, "force", False))
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     sc.check_budget(values, **_limits(args))  # before the run: a run of hours is refused at once
     prog = Progress(f"run {sc.name}", quiet=False)
@@ -426,7 +420,7 @@ def build_parser() -> argparse.ArgumentParser:
                            help="also write the run's samples as a table (one row per sample)")
         else:
             s.add_argument("--out", required=True)
-            s.add_argument("--force", action="store_true", help="replace the --out file if it exists")
+        s.add_argument("--force", action="store_true", help="replace the --out file if it exists")
         s.set_defaults(fn=fn)
 
     s = sub.add_parser("replay", help="open a theoria .rrd (rerun viewer) or .html export; refuses other files")
@@ -478,11 +472,36 @@ def _fail(message: str, code: int) -> int:
     return code
 
 
+def _drop_stdout() -> None:
+    """Standard output can take nothing more (its reader went away, its disk is full): what is
+    left in its buffer goes nowhere, so that Python's own flush at exit prints no traceback."""
+    import os
+
+    try:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(fd, sys.stdout.fileno())
+        os.close(fd)
+    except (OSError, ValueError):
+        pass
+
+
 def main(argv: list[str] | None = None) -> int:
+    import errno
+
     with cli_signals():
         try:
             args = build_parser().parse_args(argv)
-            return args.fn(args)
+            code = args.fn(args)
+            sys.stdout.flush()  # a closed pipe or a full disk under stdout shows here, not at exit
+            return code
+        except BrokenPipeError:  # `theoria … | head`: the reader has what it wanted
+            _drop_stdout()
+            return 1
+        except OSError as e:
+            if e.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO):
+                raise
+            _drop_stdout()  # files are written whole or not at all (WriteError): this is stdout
+            return _fail(f"error: cannot write the output ({e.strerror})", 1)
         except ParameterError as e:
             return _fail(f"error: {e}", 2)
         except WriteError as e:

@@ -26,7 +26,8 @@ class WriteError(Exception):
     """The file could not be written; the target is as it was. Message: one line."""
 
 
-def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = False, what: str = "--out") -> Path:
+def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = False, what: str = "--out",
+              reader: str = "theoria replay") -> Path:
     """The target path, validated before a run: ParameterError naming `what` when its directory
     is missing or does not take a new file, when it is a directory, has another suffix than
     `suffixes`, or exists and `force` is not given."""
@@ -38,7 +39,7 @@ def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = 
         raise ParameterError(what, str(path), "a file, not a directory")
     if p.suffix.lower() not in suffixes:
         raise ParameterError(what, str(path), "a file name ending in " + " or ".join(suffixes) +
-                             " (what theoria replay reads)")
+                             (f" (what {reader} reads)" if reader else ""))
     parent = p.resolve().parent
     if not parent.is_dir():
         raise ParameterError(what, str(path), f"a file in an existing directory ({parent} does not exist)")

@@ -219,6 +219,45 @@ def test_sigterm_outside_the_command_line(tmp_path):
     assert sorted(f.name for f in tmp_path.iterdir()) == ["old0.rrd", "old1.rrd"]
 
 
+@pytest.mark.parametrize("suffix", ["csv", "parquet"])
+def test_a_table_that_does_not_fit_leaves_the_old_one(tmp_path, suffix):
+    """`theoria run --out` under a file-size limit of 96 kB (a full disk, as a process sees it): one
+    line naming the file, exit 1, the older table byte for byte as it was, nothing else left (it
+    ended in pandas' or pyarrow's traceback). An existing table needs --force."""
+    target = tmp_path / f"old.{suffix}"
+    target.write_bytes(b"an older table " * 100)
+    args = [sys.executable, "-m", "theoria.app.cli", "run", "free-tumble", "--duration", "200", "--out", str(target)]
+    p = subprocess.run(args, capture_output=True, env=ENV, cwd=ROOT, timeout=WAIT_S)
+    assert p.returncode == 2 and "add --force" in p.stderr.decode(), p.stderr.decode()
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (96_000, 96_000))
+
+    p = subprocess.run(args + ["--force"], capture_output=True, env=ENV, cwd=ROOT, timeout=WAIT_S, preexec_fn=limit)
+    err = p.stderr.decode().split("\r")[-1]  # after the progress line
+    assert p.returncode == 1 and err == f"theoria: error: {target}: cannot write (File too large); nothing was changed\n", err
+    assert target.read_bytes() == b"an older table " * 100
+    assert [f.name for f in tmp_path.iterdir()] == [target.name]
+
+
+def test_a_closed_or_full_standard_output_ends_in_one_line_not_a_traceback():
+    """`theoria list > /dev/full` (a full disk under stdout) and `theoria … | head` (the reader gone
+    before the output is written): exit 1, at most one line, never Python's traceback."""
+    with open("/dev/full", "wb") as full:
+        p = subprocess.run([sys.executable, "-m", "theoria.app.cli", "list"], stdout=full, stderr=subprocess.PIPE,
+                           env=ENV, cwd=ROOT, timeout=WAIT_S)
+    assert p.returncode == 1, p.stderr.decode()
+    assert p.stderr.decode() == "theoria: error: cannot write the output (No space left on device)\n"
+    r, w = os.pipe()
+    os.close(r)  # the reader is gone before a byte is written
+    try:
+        p = subprocess.run([sys.executable, "-m", "theoria.app.cli", "run", "free-tumble", "--duration", "2", "--json"],
+                           stdout=w, stderr=subprocess.PIPE, env=ENV, cwd=ROOT, timeout=WAIT_S)
+    finally:
+        os.close(w)
+    assert p.returncode == 1 and p.stderr.decode().strip() == "", p.stderr.decode()
+
+
 # ---- a full disk -------------------------------------------------------------------------------
 
 @contextlib.contextmanager
