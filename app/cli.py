@@ -379,7 +379,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    import theoria
+
     p = _Parser(prog="theoria", description="A browser laboratory of Euler's rotational celestial mechanics.")
+    p.add_argument("--version", action="version", version=f"theoria {theoria.__version__}")
     sub = p.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
 
     s = sub.add_parser("serve", help="the web app")

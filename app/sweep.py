@@ -230,6 +230,8 @@ def make_plan(sc, grid=None, random=None, samples=None, fixed=None, preset=None,
             raise ParameterError("--samples", samples, "only with --random name=lo:hi")
     if not grid and not random:
         raise ParameterError("--grid", None, "at least one --grid name=start:stop:count (or --random name=lo:hi)")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ParameterError("--seed", seed, "a whole number ≥ 0")
     axes = [parse_grid(sc, g) for g in grid]
     rng = np.random.default_rng(seed)
     raxes = [parse_random(sc, r, samples, rng) for r in random]

@@ -44,6 +44,11 @@ def missing(name: str) -> list[str]:
 
 def run_benches(names: list[str] | None = None, progress: Callable[[str], None] | None = None) -> list[dict]:
     _load_all()
+    unknown = [n for n in names or () if n not in BENCHES]
+    if unknown:
+        from theoria.physics.errors import ParameterError
+
+        raise ParameterError("name", unknown[0], "one of " + ", ".join(BENCHES))
     out = []
     for name, fn in BENCHES.items():
         if names and name not in names:

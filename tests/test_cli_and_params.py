@@ -52,6 +52,7 @@ def test_param_parse_errors():
     (["serve", "--port", "-1"], "--port=-1"),
     (["serve", "--host", "999.1.1.1"], "--host=999.1.1.1: an address of this machine"),
     (["serve", "--host", "192.0.2.1"], "--host=192.0.2.1: an address of this machine"),  # TEST-NET: not ours
+    (["bench", "nosuch"], "name=nosuch: one of app-slider-latency,"),  # printed an empty table, exit 0
 ])
 def test_bad_set_exits_2_with_one_line(args, needle, cli):
     code, _, err = cli(*args)
@@ -137,3 +138,22 @@ def test_show_on_an_address_it_cannot_listen_on_names_it():
         run.show(port=99999, block=False)
     with pytest.raises(ParameterError, match=r"^host=999\.1\.1\.1: an address of this machine"):
         run.show(host="999.1.1.1", block=False)
+
+
+def test_a_negative_seed_is_refused_before_the_sweep(cli, tmp_path):
+    out = tmp_path / "s.zarr"
+    code, _, err = cli("sweep", "free-tumble", "--grid", "duration=1:2:3", "--seed", "-1", "--out", str(out))
+    assert code == 2 and err.strip() == "theoria: error: --seed=-1: a whole number ≥ 0", err  # was numpy's traceback
+    assert not out.exists()
+
+
+def test_version_and_python_dash_m(cli_process):
+    import theoria
+
+    code, out, _ = cli_process("--version")
+    assert code == 0 and out.strip() == f"theoria {theoria.__version__}"
+    import subprocess
+    import sys
+
+    p = subprocess.run([sys.executable, "-m", "theoria", "--version"], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0 and p.stdout.strip() == f"theoria {theoria.__version__}", p.stderr
