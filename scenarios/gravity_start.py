@@ -29,9 +29,15 @@ def _gravity_start(values, progress=None):
     s, gm = values["distance"], values["gm"]
     tau0 = torque_first_order(I, u * s, gm)
     axis_e, rate_e = starting_axis(I, tau0)
-    if rate_e == 0:
-        raise ParameterError("direction", values["direction"],
-                             "not along a principal axis (no torque there, §815: the body stays at rest)")
+    if rate_e == 0:  # no torque, §815: the body stays at rest; say which value makes it so
+        if np.ptp(I) == 0:
+            raise ParameterError("inertia", values["inertia"], "moments not all equal (a body with A = B = C "
+                                 "feels no torque from one attracting point, §815)")
+        if np.linalg.norm(np.cross(u, I * u)) <= 1e-12 * np.max(I):
+            raise ParameterError("direction", values["direction"], "a direction off this body's principal axes "
+                                 "(along one there is no torque, §815: the body stays at rest)")
+        raise ParameterError("gm", gm, f"an attraction large enough that its torque does not underflow to "
+                             f"zero (here G·M/s³ = {gm / s**3:.3g})")
     # a time in which the body turns by `turn_deg` if the acceleration stayed constant
     T = np.sqrt(2.0 * np.radians(values["turn_deg"]) / rate_e)
     pos = lambda t: np.broadcast_to(u * s, (len(np.atleast_1d(t)), 3)).copy()  # noqa: E731
