@@ -337,7 +337,7 @@ class Scenario:
             if p.name in RESERVED:
                 raise ValueError(f"scenario {self.name}: a parameter may not be called {p.name!r}")
         presets = self.presets.items() if isinstance(self.presets, Mapping) else self.presets
-        object.__setattr__(self, "presets", types.MappingProxyType({n: dict(v) for n, v in presets}))
+        object.__setattr__(self, "presets", types.MappingProxyType({n: types.MappingProxyType(dict(v)) for n, v in presets}))
         object.__setattr__(self, "overlays", types.MappingProxyType(dict(self.overlays)))
         object.__setattr__(self, "options", types.MappingProxyType(dict(self.options)))
         object.__setattr__(self, "preview", types.MappingProxyType(dict(self.preview)))

@@ -124,3 +124,14 @@ def test_show_serves_the_run_in_the_app():
             assert r.status == 200 and b"<html" in r.read(2000).lower()
     finally:
         shown.stop()
+
+
+def test_a_preset_cannot_be_changed_for_the_whole_process():
+    """sc.presets is read-only, and so is each preset: a notebook that assigned into one changed
+    what every later run with that preset (and the app in the same process) started from."""
+    sc = th.scenario("free-tumble")
+    name = next(iter(sc.presets))
+    before = sc.preset(name)
+    with pytest.raises(TypeError):
+        sc.presets[name]["omega0"] = (9.0, 9.0, 9.0)
+    assert th.scenario("free-tumble").preset(name) == before
