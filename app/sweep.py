@@ -344,12 +344,14 @@ def run_chunk(task: dict) -> dict:
     status = np.full(n, STATUS["ok"], np.int8)
     messages: dict[int, str] = {}
     out: dict[str, np.ndarray] = {}
+    reported: set[str] = set()  # every metric the runs reported (to name them if --metrics asks for another)
     if task["batched"]:
         res = sc.batch.fn(dict(fixed), {k: np.asarray(v) for k, v in points.items()})
         st = res.pop("_status", None)
         if st is not None:
             status[:] = st
         messages.update(res.pop("_messages", {}))
+        reported.update(res)
         for k, v in res.items():
             if metrics is None or k in metrics:
                 out[k] = np.asarray(v, float)
@@ -369,6 +371,7 @@ def run_chunk(task: dict) -> dict:
             if run.status != "ok":
                 status[i] = STATUS["diverged"] if run.status == "diverged" else STATUS["flagged"]
                 messages[i] = f"{run.status}: " + "; ".join(run.warnings)
+            reported.update(run.metrics)
             for k, v in run.metrics.items():
                 if metrics is not None and k not in metrics:
                     continue
@@ -380,7 +383,7 @@ def run_chunk(task: dict) -> dict:
                     out[k] = np.full(n, np.nan)
                 out[k][i] = x
     return {"metrics": out, "status": status, "messages": messages, "seconds": time.perf_counter() - t0,
-            "worker_pid": os.getpid()}
+            "worker_pid": os.getpid(), "reported": sorted(reported)}
 
 
 # ------------------------------------------------------------------------------------- writers
@@ -498,6 +501,10 @@ class ZarrWriter:
     def finish(self):
         return None
 
+    def discard(self):
+        """A new sweep refused after it began (a --metrics name no run reports): nothing of it stays."""
+        shutil.rmtree(self.path, ignore_errors=True)
+
     def open(self):
         return self._xr.open_zarr(self.path, consolidated=False)
 
@@ -564,6 +571,10 @@ class ParquetWriter:
         with open(self.sessions_file, "w") as f:
             json.dump(sessions, f)
         self.sessions = sessions
+
+    def discard(self):
+        """A new sweep refused after it began (a --metrics name no run reports): nothing of it stays."""
+        shutil.rmtree(self.parts, ignore_errors=True)
 
     def finish(self):
         import pyarrow as pa
@@ -740,6 +751,10 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
                     interrupted = _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, threads, on_chunk)
                     if interrupted:
                         summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
+            except ParameterError:
+                if not resume:
+                    writer.discard()
+                raise
             finally:
                 try:
                     if interrupted and local is not None:
@@ -826,12 +841,12 @@ def _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, thre
                 raise SweepError(f"chunk {i} failed on a worker ({type(e).__name__}: {e}); the finished chunks "
                                  f"are kept in {writer.path}, --resume continues") from None
             if not checked_metrics:
-                seen = set(res["metrics"])
+                seen = set(res["metrics"]) | set(res.get("reported", ()))
                 known = set(getattr(getattr(sc, "batch", None), "metrics", ()) or ())
                 missing = [m for m in plan.metrics if m not in seen and m not in known]
                 if missing and np.any(res["status"] == STATUS["ok"]):
                     raise ParameterError("--metrics", missing[0], "not a metric of " + sc.name + "; its metrics: "
-                                         + ", ".join(sorted(seen)))
+                                         + ", ".join(sorted(seen | known)))
                 checked_metrics = True
             writer.write(i, regions[i], res)
             summary.chunks_computed += 1

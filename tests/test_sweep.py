@@ -53,6 +53,22 @@ def test_bad_grid_exits_2_with_one_line_before_any_work(tmp_path, spec, names):
     assert not out.exists()  # nothing was written: no work began
 
 
+@pytest.mark.slow  # a local cluster starts before the first runs say which metrics there are
+@pytest.mark.parametrize("suffix", ["zarr", "parquet"])
+def test_a_metric_no_run_reports_names_the_metrics_and_leaves_nothing(tmp_path, suffix):
+    """`--metrics` with a name the scenario's runs do not report: known only once the first runs
+    are back; one line naming the metrics they do report (the list was empty: it held only the
+    asked-for ones), exit 2, and nothing of the sweep on disk (a partial result was left)."""
+    out = tmp_path / f"m.{suffix}"
+    r = cli("sweep", "free-tumble", "--grid", "duration=1:2:3", "--workers", "1", "--metrics", "nosuch",
+            "--out", str(out), "--quiet", timeout=300)
+    assert r.returncode == 2, r.stderr
+    line = r.stderr.strip().splitlines()[-1]
+    assert line.startswith("theoria: error: --metrics=nosuch: not a metric of free-tumble; its metrics: "), line
+    assert "energy_rel_drift" in line and "polhode_period_s" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
 def test_bad_specs_from_python_and_the_names_the_scenario_uses():
     sc = th.scenario("libration-eccentric")
     # the issue's `e=` is accepted as the unique beginning of the scenario's `eccentricity`
