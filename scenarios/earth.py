@@ -396,7 +396,7 @@ register(Scenario(
             "obliquity with the Moon's node, 1.3″ twice a year, 0.2″ twice a month. The table puts "
             "each term beside the IAU value and Euler's."),
     params=(
-        Param("years", 100.0, 0.0, 400.0, "yr", "length of the run from J2000", exclusive_min=True, step=1.0,
+        Param("years", 100.0, MIN_YEARS, 400.0, "yr", "length of the run from J2000", step=1.0,
               label="Length of the run"),
         Param("step_days", 0.5, 0.0, 3.0, "day", "integrator step (the spin is solved exactly; resolve the month)",
               exclusive_min=True, step=0.1, label="Integrator step", advanced=True),

@@ -403,7 +403,7 @@ register(Scenario(
             "and the obliquity swings by a degree (time plot). The averaged torque runs the whole cycle in a "
             "second; the full day-by-day integration is one choice away."),
     params=(
-        Param("years", 25800.0, 0.0, 30000.0, "yr", "length of the run", exclusive_min=True, step=100.0,
+        Param("years", 25800.0, 100.0, 30000.0, "yr", "length of the run", step=100.0,
               label="Length of the run"),
         Param("start_year", J2000_YEAR, -28000.0, J2000_YEAR, "yr", "first year (astronomical: 0 = 1 BC, −2999 = 3000 BC)",
               step=100.0, label="First year"),

@@ -162,3 +162,17 @@ def test_version_and_python_dash_m(cli_process):
 
     p = subprocess.run([sys.executable, "-m", "theoria", "--version"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0 and p.stdout.strip() == f"theoria {theoria.__version__}", p.stderr
+
+
+def test_the_advertised_range_is_the_one_enforced():
+    """`theoria list --json` and sc.parameters say what a value may be: the shortest run the
+    Earth scenes accept is their parameter's minimum (they advertised (0, …] and refused below
+    0.05 and 100 years)."""
+    import theoria as th
+
+    for name, lo in (("earth", 0.05), ("earth-long-view", 100.0)):
+        p = th.scenario(name).param("years")
+        assert p.minimum == lo and not p.exclusive_min
+        with pytest.raises(ParameterError):
+            th.scenario(name).resolve({"years": lo * 0.99})
+        th.scenario(name).resolve({"years": lo})
