@@ -21,8 +21,17 @@ from theoria.physics.params import ParameterError
 from .format import number
 
 
+def _terminal() -> bool:
+    """stderr is a terminal: a progress line rewritten in place (\r) is for a person watching;
+    in a file or a pipe (a log, `2>&1`) the rewrites would be kept as fragments."""
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
 class Progress:
-    """Progress on stderr for runs that take longer than a second (throttled)."""
+    """Progress on stderr for runs that take longer than a second (throttled), on a terminal only."""
 
     showing: "Progress | None" = None  # the progress line on the terminal now, if any
 
@@ -30,7 +39,7 @@ class Progress:
         self.label = label
         self.t0 = time.perf_counter()
         self.last = 0.0
-        self.quiet = quiet
+        self.quiet = quiet or not _terminal()
         self.shown = False
 
     def __call__(self, fraction: float) -> None:
@@ -241,8 +250,9 @@ def cmd_check(args) -> int:
         sys.stderr.write(f"\rcheck {cid:<24} ({time.perf_counter() - t0:.0f} s)")
         sys.stderr.flush()
 
-    rows = run_checks(args.ids or None, progress=None if args.json else progress)
-    if not args.json:
+    shown = not args.json and _terminal()
+    rows = run_checks(args.ids or None, progress=progress if shown else None)
+    if shown:
         sys.stderr.write("\r" + " " * 50 + "\r")
     if args.json:
         print(json.dumps({"results": [r.to_json() for r in rows]}, indent=2))

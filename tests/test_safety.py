@@ -314,19 +314,43 @@ def test_full_disk_leaves_the_old_target(tmp_path, cmd, suffix):
 # ---- Ctrl-C during a run -------------------------------------------------------------------------
 
 def _run_and_interrupt(args: list[str], wait_for: str, sig=signal.SIGINT, delay: float = 0.0):
-    """Start `theoria ARGS`, wait until its stderr shows `wait_for`, then send `sig`."""
+    """Start `theoria ARGS` with its stderr on a terminal (a pseudo-terminal: the progress line is
+    for terminals only), wait until it shows `wait_for`, then send `sig`. Returns the exit code
+    and everything written to the terminal (its line ends as the program wrote them)."""
+    import pty
+    import select
+
+    master, slave = pty.openpty()
     p = subprocess.Popen([sys.executable, "-m", "theoria.app.cli", *args], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, env=ENV, cwd=ROOT, preexec_fn=_terminal_like)
-    seen = b""
-    while wait_for.encode() not in seen:
-        chunk = p.stderr.read1(4096)
-        if not chunk:
-            break
-        seen += chunk
-    time.sleep(delay)
-    p.send_signal(sig)
-    out, err = p.communicate(timeout=WAIT_S)
-    return p.returncode, (seen + err).decode()
+                         stderr=slave, env=ENV, cwd=ROOT, preexec_fn=_terminal_like)
+    os.close(slave)
+
+    def read(until: float, want: bytes | None) -> bytes:
+        got = b""
+        while time.time() < until and (want is None or want not in got):
+            if not select.select([master], [], [], 0.5)[0]:
+                if p.poll() is not None and want is None:
+                    break
+                continue
+            try:
+                chunk = os.read(master, 4096)
+            except OSError:  # the program has exited and closed the terminal
+                break
+            if not chunk:
+                break
+            got += chunk
+        return got
+
+    try:
+        seen = read(time.time() + WAIT_S, wait_for.encode())
+        time.sleep(delay)
+        p.send_signal(sig)
+        p.stdout.read()
+        p.wait(timeout=WAIT_S)
+        seen += read(time.time() + 10, None)
+    finally:
+        os.close(master)
+    return p.returncode, seen.replace(b"\r\n", b"\n").decode()
 
 
 @pytest.mark.slow
@@ -482,3 +506,12 @@ def test_web_viewer_is_local_quiet_and_stops_with_its_parent(recording, tmp_path
     assert alive == [], [k.cmdline() for k in alive]  # no orphan left at 95 % CPU
     assert not (tmp_path / "config" / "rerun" / "analytics.json").exists()  # no analytics identity written
     p.stdout.close(), p.stderr.close()
+
+
+def test_progress_is_written_for_a_terminal_only(tmp_path):
+    """A run's progress line is rewritten in place (\\r): in a log file or a pipe (`2>&1`) its
+    rewrites were kept as fragments and glued to the output."""
+    p = subprocess.run([sys.executable, "-m", "theoria.app.cli", "run", "free-tumble", "--duration", "3000"],
+                       capture_output=True, env=ENV, cwd=ROOT, timeout=WAIT_S)
+    assert p.returncode == 0, p.stderr.decode()
+    assert b"\r" not in p.stderr and b"%" not in p.stderr, p.stderr.decode()
