@@ -9,6 +9,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
+import numpy as np
+
 from .errors import ParameterError
 
 
@@ -83,6 +85,8 @@ class Param:
         if self.kind == "vec3":
             if isinstance(text, str):
                 parts = [p for p in text.replace(" ", "").split(",")]
+            elif isinstance(text, (set, frozenset, dict)):  # no order: which number is x?
+                raise ParameterError(self.name, text, "three numbers in order (x, y, z), " + self.allowed())
             else:
                 try:
                     parts = list(text)
@@ -103,6 +107,8 @@ class Param:
         return v
 
     def _number(self, part: Any, whole: Any) -> float:
+        if isinstance(part, (bool, np.bool_)):  # True is 1 to Python, not a number a user meant
+            raise ParameterError(self.name, whole, "a number, " + self.allowed())
         try:
             v = float(part)
         except OverflowError:  # an int beyond float range (10**400): as infinite as "inf"

@@ -176,3 +176,15 @@ def test_the_advertised_range_is_the_one_enforced():
         with pytest.raises(ParameterError):
             th.scenario(name).resolve({"years": lo * 0.99})
         th.scenario(name).resolve({"years": lo})
+
+
+def test_values_a_user_did_not_mean_as_numbers_are_refused():
+    """From Python: a set has no order (omega0={3, 2, 1} ran as (1, 2, 3)) and True is not a step
+    (it ran as 1.0): refused by name."""
+    import theoria as th
+
+    sc = th.scenario("free-tumble")
+    for kw, needle in (({"omega0": {3.0, 2.0, 1.0}}, "in order"), ({"step": True}, "a number"),
+                       ({"duration": False}, "a number"), ({"omega0": (1.0, True, 2.0)}, "a number")):
+        with pytest.raises(ParameterError, match=needle):
+            sc.resolve(kw)
