@@ -239,6 +239,13 @@ def check_budget(spec: "Scenario", values: Mapping[str, Any], max_steps: float |
     """The run's Cost, or BudgetExceeded (a ParameterError) when it needs more integrator steps
     than `max_steps` or keeps more bytes than `max_memory` (None: no limit). The error names the
     parameter that drives the cost, the need, the limit and the value of that parameter that fits."""
+    for name, limit, what in (("max_steps", max_steps, "a number of integrator steps > 0"),
+                              ("max_memory", max_memory, "a number of bytes > 0")):
+        if limit is None:
+            continue
+        if isinstance(limit, bool) or not isinstance(limit, (int, float, np.integer, np.floating)) \
+                or not limit > 0:  # a string ('4GB' is the command line's), -1, 0 or NaN
+            raise ParameterError(name, limit, f"{what}, or None for no limit")
     values = dict(values)
     cost = spec.cost_of(values)
     over_steps, over_mem = _over(cost.steps, max_steps), _over(cost.bytes, max_memory)

@@ -205,3 +205,13 @@ def test_cli_subprocess_refusal_is_one_line():
     p = run_theoria("run", "earth-long-view", "--set", "model=full", "--set", "step_days=0.01")
     assert p.returncode == 2 and p.stdout == "" and p.stderr.count("\n") == 1
     assert "step_days=0.01" in p.stderr and "9.42e+08 integrator steps" in p.stderr, p.stderr
+
+
+@pytest.mark.parametrize("kw", [{"max_steps": "none"}, {"max_steps": -1}, {"max_steps": 0}, {"max_steps": float("nan")},
+                                {"max_memory": "4GB"}, {"max_memory": -1}, {"max_steps": True}])
+def test_a_limit_that_is_not_a_positive_number_is_refused_by_name(kw):
+    """From Python a limit is a number or None ('4GB' and 'none' are the command line's words): a
+    string ended in a TypeError, and -1, 0 or NaN were taken as limits ('over the limit of -1')."""
+    name, v = next(iter(kw.items()))
+    with pytest.raises(ParameterError, match=f"^{name}=.*: a number of .* > 0, or None for no limit$"):
+        get("free-tumble").simulate(duration=1, **kw)
