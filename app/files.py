@@ -46,7 +46,8 @@ def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = 
     if p.exists() and not p.is_file():
         raise ParameterError(what, str(path), "a regular file (this is a device, a pipe or a socket)")
     if p.exists() and not force:
-        raise ParameterError(what, str(path), "a new file: it exists; add --force to replace it")
+        raise ParameterError(what, str(path), "a new file: it exists; " +
+                             ("add --force to replace it" if what.startswith("--") else "force=True replaces it"))
     try:  # the only sure test that the directory takes a new file (read-only mounts, permissions, ACLs)
         with tempfile.NamedTemporaryFile(dir=parent, prefix=f".{p.name}.", suffix=".probe"):
             pass

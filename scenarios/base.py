@@ -170,17 +170,25 @@ class Run:
         return cols
 
     # ---- the app's writers: the Run hands itself over (physics stays free of viser and rerun) ----
-    def record(self, path, **kw) -> dict:
-        """Write a rerun recording (.rrd) of this run: the app's drawing, camera and text."""
+    def record(self, path, view: View | None = None, force: bool = True) -> dict:
+        """Write a rerun recording (.rrd) of this run: the app's drawing, camera and text, whole or
+        not at all. `force=False` refuses to replace an existing file."""
         from ..app.record import record_run
 
-        return record_run(self, path, **kw)
+        return record_run(self, _out_path(path, ".rrd", force), view=_view(view))
 
-    def export_html(self, path, **kw) -> dict:
-        """Write a standalone HTML replay of this run (plays from file://, no network)."""
+    def export_html(self, path, frames: int = 240, fps: float = 30.0, view: View | None = None,
+                    force: bool = True) -> dict:
+        """Write a standalone HTML replay of this run (plays from file://, no network), whole or
+        not at all: `frames` pictures (at most the run's) played at `fps`. `force=False` refuses
+        to replace an existing file."""
         from ..app.export_html import export_run
 
-        return export_run(self, path, **kw)
+        if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or not 2 <= frames <= 100_000:
+            raise ParameterError("frames", frames, "a whole number from 2 to 100000")
+        if isinstance(fps, bool) or not isinstance(fps, (int, float, np.integer, np.floating)) or not 0 < fps <= 240:
+            raise ParameterError("fps", fps, "frames a second, above 0 and at most 240")
+        return export_run(self, _out_path(path, ".html", force), frames=int(frames), fps=float(fps), view=_view(view))
 
     def show(self, port: int = 8080, host: str = "127.0.0.1", block: bool | None = None):
         """Serve this run in the app (http://127.0.0.1:8080 by default) with its parameters. Blocks
@@ -189,6 +197,21 @@ class Run:
         from ..app.server import show_run
 
         return show_run(self, port=port, host=host, block=block)
+
+
+def _out_path(path, suffix: str, force: bool):
+    """A file `Run.record` / `Run.export_html` may write (app/files.py `check_out`), named `path`."""
+    from ..app.files import check_out
+
+    if not isinstance(path, (str, bytes)) and not hasattr(path, "__fspath__"):
+        raise ParameterError("path", path, f"a file name ending in {suffix}")
+    return check_out(path, (suffix,), force=bool(force), what="path")
+
+
+def _view(view):
+    if view is not None and not isinstance(view, View):
+        raise ParameterError("view", view, "None or a theoria View (the drawing's options)")
+    return view
 
 
 DIVERGENCE_LIMIT = 1e100  # |x| beyond this in a trajectory is an overflow in the making, not physics

@@ -135,3 +135,24 @@ def test_a_preset_cannot_be_changed_for_the_whole_process():
     with pytest.raises(TypeError):
         sc.presets[name]["omega0"] = (9.0, 9.0, 9.0)
     assert th.scenario("free-tumble").preset(name) == before
+
+
+def test_record_and_export_from_python_check_what_they_write(tmp_path):
+    """From a notebook: the file's kind is the method's (record() wrote .rrd bytes into an .html
+    file, which `theoria replay` then refused), force=False keeps an existing file, and a bad
+    number of frames, frame rate or view is refused by name (ZeroDivisionError, TypeError...)."""
+    run = th.scenario("free-tumble").simulate(duration=2)
+    page = tmp_path / "a.html"
+    assert run.export_html(page)["bytes"] > 10_000
+    kept = page.read_bytes()
+    for call, needle in ((lambda: run.record(page), "^path=.*: a file name ending in .rrd"),
+                         (lambda: run.export_html(tmp_path / "a.txt"), "a file name ending in .html"),
+                         (lambda: run.export_html(page, force=False), "it exists; force=True replaces it"),
+                         (lambda: run.export_html(tmp_path / "b.html", frames=-5), "^frames=-5: a whole number"),
+                         (lambda: run.export_html(tmp_path / "b.html", fps=0), "^fps=0: frames a second"),
+                         (lambda: run.export_html(tmp_path / "b.html", view="x"), "^view=x: None or a theoria View")):
+        with pytest.raises(th.ParameterError, match=needle):
+            call()
+    assert page.read_bytes() == kept
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.html"]
+    assert run.record(tmp_path / "a.rrd")["bytes"] > 0
