@@ -418,9 +418,10 @@ def build_parser() -> argparse.ArgumentParser:
                           ("record", cmd_record, "a rerun recording of the run"),
                           ("export", cmd_export, "a standalone HTML replay")):
         s = sub.add_parser(name, help=hlp)
-        s.add_argument("name")
-        s.add_argument("--set", action="append", metavar="KEY=VALUE")
-        s.add_argument("--duration", type=float, default=None)
+        s.add_argument("name", help="the scenario (`theoria list` shows them)")
+        s.add_argument("--set", action="append", metavar="KEY=VALUE",
+                       help="a parameter's value, e.g. --set spin=2 --set inertia=1,2,3 (repeat for more)")
+        s.add_argument("--duration", type=float, default=None, help="the run's length (its `duration`, where it has one)")
         s.add_argument("--preset", default=None, metavar="NAME",
                        help="start from a preset (its name or a unique part of it; `theoria list` shows them)")
         s.add_argument("--max-steps", default=None, metavar="N",
@@ -428,11 +429,12 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--max-memory", default=None, metavar="SIZE",
                        help="refuse a run that keeps more memory (default 1GB; e.g. 4GB; none: no limit)")
         if name == "run":
-            s.add_argument("--json", action="store_true")
+            s.add_argument("--json", action="store_true", help="parameters, metrics and comparisons as JSON on stdout")
             s.add_argument("--out", default=None, metavar="FILE.parquet|FILE.csv",
                            help="also write the run's samples as a table (one row per sample)")
         else:
-            s.add_argument("--out", required=True)
+            s.add_argument("--out", required=True, metavar="FILE" + (".rrd" if name == "record" else ".html"),
+                           help="the file to write (whole or not at all)")
         s.add_argument("--force", action="store_true", help="replace the --out file if it exists")
         s.set_defaults(fn=fn)
 
@@ -467,13 +469,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=cmd_sweep)
 
     s = sub.add_parser("check", help="every result of Euler's: Euler / simulated / modern")
-    s.add_argument("ids", nargs="*")
-    s.add_argument("--json", action="store_true")
+    s.add_argument("ids", nargs="*", help="rows to check, e.g. E1 E7 (default: every row; `theoria check` lists them)")
+    s.add_argument("--json", action="store_true", help="the rows as JSON on stdout")
     s.set_defaults(fn=cmd_check)
 
     s = sub.add_parser("bench", help="benchmarks as ratios against a baseline in the same run")
-    s.add_argument("names", nargs="*")
-    s.add_argument("--json", action="store_true")
+    s.add_argument("names", nargs="*", help="benchmarks to run (default: all; a wrong name lists them)")
+    s.add_argument("--json", action="store_true", help="the rows as JSON on stdout")
     s.set_defaults(fn=cmd_bench)
     return p
 

@@ -144,8 +144,9 @@ def _match_param(sc, name: str, flag: str, spec: str):
     if len(hits) == 1:
         return sc.param(hits[0])
     known = ", ".join(names)
-    what = f"more than one parameter begins so ({', '.join(hits)})" if len(hits) > 1 else "unknown parameter"
-    raise ParameterError(name or flag, spec, f"{what}; parameters of {sc.name}: {known}")
+    what = (f"more than one parameter begins with {name!r} ({', '.join(hits)})" if len(hits) > 1
+            else f"unknown parameter {name!r}")
+    raise ParameterError(flag, spec, f"{what}; parameters of {sc.name}: {known}")  # the flag, the whole spec
 
 
 def parse_grid(sc, spec: str) -> Axis:

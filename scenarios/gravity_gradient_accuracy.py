@@ -78,7 +78,7 @@ def _draw(run, spec, view):
 
 def _check_ratios(v):
     if not v["min_ratio"] < v["max_ratio"]:
-        raise ParameterError("min_ratio", v["min_ratio"], f"below max_ratio = {v['max_ratio']:g}")
+        raise ParameterError("min_ratio", v["min_ratio"], f"less than max_ratio (here {v['max_ratio']:g})")
 
 
 def _cost(values):

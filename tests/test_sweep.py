@@ -76,7 +76,7 @@ def test_bad_specs_from_python_and_the_names_the_scenario_uses():
     assert plan.dims == ("eccentricity", "asymmetry") and plan.shape == (64, 64)
     assert np.allclose(plan.grid[0].values, np.linspace(0, 0.5, 64))
     assert plan.batched  # both may vary across one batch of libration-eccentric
-    with pytest.raises(th.ParameterError, match="more than one parameter begins so"):
+    with pytest.raises(th.ParameterError, match="more than one parameter begins with .o."):
         sw.make_plan(sc, grid=["o=1:2:2"])  # orbital_rate or orbits
     with pytest.raises(th.ParameterError, match="swept twice"):
         sw.make_plan(sc, grid=["e=0:0.1:2", "eccentricity=0:0.2:2"])
