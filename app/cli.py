@@ -287,7 +287,8 @@ def cmd_sweep(args) -> int:
         name = SWEEP_PRESETS[name].scenario
     sc = get(name)
     try:
-        summary, _ = run_sweep(sc, out=args.out, cluster=args.cluster, resume=args.resume, metrics=args.metrics,
+        summary, _ = run_sweep(sc, out=args.out, cluster=args.cluster, resume=args.resume, force=args.force,
+                               metrics=args.metrics,
                                preset=args.preset, seed=args.seed, chunk=args.chunk, workers=args.workers,
                                progress=not args.quiet, **kw)
     except SweepError as e:
@@ -462,6 +463,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="an existing Dask scheduler (tcp://host:8786); default: a local cluster on this machine's cores")
     s.add_argument("--workers", default=None, type=int, help="workers of the local cluster (default: one per core)")
     s.add_argument("--resume", action="store_true", help="keep the finished chunks of --out and compute the rest")
+    s.add_argument("--force", action="store_true", help="replace what --out holds (an earlier sweep)")
     s.add_argument("--metrics", default=None, metavar="A,B", help="the metrics to keep (default: all)")
     s.add_argument("--chunk", default=None, metavar="N", help="runs per chunk (default: chosen from the grid)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")

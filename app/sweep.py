@@ -716,7 +716,7 @@ def _client(cluster, workers):
 
 def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, resume=False, metrics=None,
               fixed=None, preset=None, seed=0, chunk=None, workers=None, progress=True,
-              on_chunk=None) -> tuple[Summary, Any]:
+              on_chunk=None, force=False) -> tuple[Summary, Any]:
     """Plan, check, run and write a sweep. Returns (Summary, the opened result)."""
     if out is None:
         raise ParameterError("--out", None, "a file name ending in .zarr or .parquet")
@@ -731,6 +731,10 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if workers is not None and (int(workers) < 1 or int(workers) > 256):
         raise ParameterError("--workers", workers, "from 1 to 256")
     plan = make_plan(sc, grid, random, samples, fixed, preset, metrics, seed, chunk, nworkers)
+    earlier = os.path.exists(out) or (kind == "parquet" and os.path.exists(out + ".parts"))
+    if earlier and not (resume or force):  # hours of runs are not replaced by a command repeated by mistake
+        raise ParameterError("--out", out, "a new path: it holds a sweep; add --resume to complete it or "
+                             "--force to replace it")
     if kind == "parquet" and not resume and os.path.exists(out):
         os.remove(out) if os.path.isfile(out) else None
     writer = ZarrWriter(out, plan, resume) if kind == "zarr" else ParquetWriter(out, plan, resume)

@@ -69,6 +69,20 @@ def test_a_metric_no_run_reports_names_the_metrics_and_leaves_nothing(tmp_path, 
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow  # three sweeps, each with its local cluster
+def test_a_finished_sweep_is_not_replaced_by_a_repeated_command(tmp_path):
+    """The same command again (up-arrow, Enter) replaced hours of results without a word: it is
+    refused, the result untouched, unless --resume (complete it) or --force (replace it)."""
+    out = tmp_path / "s.zarr"
+    args = ["sweep", "free-tumble", "--grid", "duration=1:2:3", "--workers", "1", "--out", str(out), "--quiet"]
+    assert cli(*args).returncode == 0
+    stamp = {p: p.stat().st_mtime_ns for p in out.rglob("*")}
+    r = cli(*args)
+    assert r.returncode == 2 and "add --resume to complete it or --force to replace it" in r.stderr, r.stderr
+    assert {p: p.stat().st_mtime_ns for p in out.rglob("*")} == stamp
+    assert cli(*args, "--force").returncode == 0
+
+
 def test_bad_specs_from_python_and_the_names_the_scenario_uses():
     sc = th.scenario("libration-eccentric")
     # the issue's `e=` is accepted as the unique beginning of the scenario's `eccentricity`
