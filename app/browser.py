@@ -159,8 +159,8 @@ SETUP = r"""
   // What each frame need not draw. viser's background-image quad covers the canvas and, with no
   // image set, discards every pixel it covers: it is skipped while it has no image. No theoria
   // scene casts a shadow (every light is made without), so the renderer keeps no shadow maps.
-  // In software WebGL (no GPU) each of these costs the frame rate: playback 23 -> 30 frames a
-  // second without the quad (SwiftShader, 1280x800).
+  // In software WebGL (no GPU) each costs frames: with app/page.py's canvas without multisampling,
+  // playback at 1280x800 went from 22.7 to 33.2 poses a second (SwiftShader; docs/app.md).
   T.lighten = (st) => {
     if (st.gl && st.gl.shadowMap && st.gl.shadowMap.enabled) st.gl.shadowMap.enabled = false;
     const bg = T.P.bg || (T.P.bg = st.scene.children.find(o => o.isMesh && o.material && o.material.uniforms &&

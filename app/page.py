@@ -41,8 +41,8 @@ body:has(#theoria-loading) .mantine-ScrollArea-root{visibility:hidden}
 LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div>'
 # Run before viser's client starts. In software WebGL (no GPU: SwiftShader, llvmpipe; the names
 # viser's own check looks for) multisampled antialiasing is the dearest part of each frame, so
-# the page asks for a canvas without it (playback 18 -> 27 frames a second at 1280x800, with
-# the other savings of app/browser.py `lighten`). viser then shows a notice that rendering is in
+# the page asks for a canvas without it (with the savings of app/browser.py `lighten`,
+# middle-axis-flip at 1280x800 played 22.7 -> 33.2 poses a second: docs/app.md). viser then shows a notice that rendering is in
 # software ("Software WebGL rendering detected"), which would sit over a projected scene all
 # lesson: it is taken down as it appears.
 SOFTWARE_GL_JS = r"""
