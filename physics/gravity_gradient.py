@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from .inertia import ellipsoid_moments
+from .kept import kept
 
 
 def torque_first_order(inertia, s_body, gm=1.0):
@@ -69,7 +70,14 @@ def ellipsoid_quadrature(semi_axes, mass=1.0, n_radial=16, n_polar=16, n_azimuth
     in φ (spectrally accurate for periodic integrands). Integrates polynomials of degree
     < 2·n exactly, so second moments are exact: Σm x² = M a²/5.
     """
-    a = np.asarray(semi_axes, float)
+    pts, w = _unit_ball_rule(int(n_radial), int(n_polar), int(n_azimuth))
+    return pts * np.asarray(semi_axes, float), mass * w
+
+
+@kept(8)
+def _unit_ball_rule(n_radial, n_polar, n_azimuth):
+    """The rule of `ellipsoid_quadrature` on the unit ball, weights summing to 1 (made once per size;
+    read-only)."""
     xr, wr = np.polynomial.legendre.leggauss(n_radial)
     rho = 0.5 * (xr + 1.0)
     wrho = 0.5 * wr * rho**2
@@ -79,9 +87,11 @@ def ellipsoid_quadrature(semi_axes, mass=1.0, n_radial=16, n_polar=16, n_azimuth
     R, MU, PH = np.meshgrid(rho, mu, phi, indexing="ij")
     W = wrho[:, None, None] * wmu[None, :, None] * wphi[None, None, :]
     st = np.sqrt(1.0 - MU**2)
-    pts = np.stack([R * st * np.cos(PH), R * st * np.sin(PH), R * MU], axis=-1).reshape(-1, 3) * a
+    pts = np.stack([R * st * np.cos(PH), R * st * np.sin(PH), R * MU], axis=-1).reshape(-1, 3)
     w = W.ravel()
-    return pts, mass * w / w.sum()  # Σw = 4π/3 (volume of the unit ball)
+    w = w / w.sum()  # Σw = 4π/3 (volume of the unit ball)
+    pts.flags.writeable = w.flags.writeable = False
+    return pts, w
 
 
 def exact_torque_force(semi_axes, s_body, gm=1.0, mass=1.0, n=(16, 16, 32)):

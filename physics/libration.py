@@ -25,6 +25,7 @@ from scipy.integrate import solve_ivp
 from scipy.special import ellipk, ellipkm1
 
 from . import hansen
+from .kept import kept
 from .params import ParameterError
 
 CASES = ("locked", "librating", "separatrix", "circulating")
@@ -504,7 +505,8 @@ def spin_orbit_section(theta0, thetadot0, e, omega0, n_orbits, steps_per_orbit=1
     b = np.zeros(N)
     lsum = np.zeros(N)
     if progress is None:
-        _section_run(th, wd, k, s2f, c2f, h, int(n_orbits), ck, dk, out_t, out_w, bool(lyapunov), a, b, lsum)
+        _section_run(th, wd, k, s2f, c2f, h, int(n_orbits), ck, dk, out_t, out_w, bool(lyapunov), a, b, lsum,
+                     False, True)
     else:
         per = max(1, int(n_orbits) // SECTION_CHUNKS)
         for start in range(0, int(n_orbits), per):
@@ -585,6 +587,7 @@ def periapse_map_trace(theta, thetadot, e, omega0, steps_per_orbit=128, d=1e-6):
     return float(np.trace(J))
 
 
+@kept(64)  # moving a slider other than e or ω₀ reuses it
 def continue_resonance(p, e, omega0, dw=0.05, steps_per_orbit=128):
     """Follow the p resonance's fixed point of the periapse map from small ω₀ (where it sits at
     Goldreich & Peale's centre: θ = 0 or π/2, θ̇ = p) up to `omega0`, in steps of dw.

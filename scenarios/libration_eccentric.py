@@ -13,6 +13,7 @@ from scipy.integrate import solve_ivp
 from ..physics import libration as lib
 from ..physics import quaternion as quat
 from ..physics.integrator import PointMass, integrate, step_count
+from ..physics.kept import kept
 from ..physics.orbits import KeplerOrbit
 from ..physics.params import Param, ParameterError
 from ..physics.trajectory import Trajectory
@@ -51,9 +52,21 @@ class ForcedSolution:
         self.sol = solve_ivp(lib.planar_rhs(self.orbit, gamma, n * n), (0.0, P), [lam0, lamdot0],
                              method="DOP853", rtol=1e-12, atol=1e-13, dense_output=True).sol
 
+    def once(self, name: str, compute):
+        """A property of the forced solution alone (its stability, Euler's start), computed once."""
+        if name not in self.__dict__:
+            self.__dict__[name] = compute()
+        return self.__dict__[name]
+
     def zeta(self, t):
         tt = np.remainder(np.asarray(t, float), self.P)
         return self.orbit.true_anomaly(tt) - self.sol(tt)[0]
+
+
+@kept(32)
+def forced_solution(gamma, e, n, progress=None) -> ForcedSolution:
+    """The forced solution of these numbers, made once (read-only): moving any other slider reuses it."""
+    return ForcedSolution(gamma, e, n, progress=progress)
 
 
 def _forced_amplitude_of_run(t, zeta, n, period, free_period):
@@ -82,7 +95,7 @@ def _setup(values, progress=None):
     P = 2 * np.pi / n
     duration = values["orbits"] * P
     step = P / values["steps_per_orbit"]
-    fs = ForcedSolution(g, e, n, progress=progress)
+    fs = forced_solution(float(g), float(e), float(n), progress=progress)
     dz = np.radians(values["free_zeta0_deg"])
     nst = int(np.ceil(duration / step))
     return SimpleNamespace(g=g, e=e, n=n, I=planar_moments(g), gm=n * n, orbit=KeplerOrbit(a=1.0, e=e, n=n), P=P,
@@ -126,7 +139,8 @@ def _finish(values, s, t, L, q):
     free_period = lib.measured_period(t, z_free) if dz != 0 else np.nan
     amp_run = _forced_amplitude_of_run(t, zeta, n, P, free_period)
     # is there a libration at all? the forced solution's stability (Floquet) and the run itself
-    half_trace = lib.monodromy_half_trace(fs.orbit, g, gm, fs.lam0, fs.lamdot0) if g != 0 else 1.0
+    half_trace = fs.once("half_trace", lambda: lib.monodromy_half_trace(fs.orbit, g, gm, fs.lam0, fs.lamdot0)) \
+        if g != 0 else 1.0
     forced_stable = abs(half_trace) <= 1.0
     free_max = float(np.max(np.abs(z_free)))
     tumbles = free_max >= 0.5 * np.pi  # the run went over to the next face pair: it circulates
@@ -135,8 +149,8 @@ def _finish(values, s, t, L, q):
     euler_left, euler_max, euler_orbit = (False, 0.0, None)
     if g != 0:
         fdot0 = float(fs.orbit.true_anomaly_rate(np.array([0.0]))[0]) / n
-        euler_left, euler_max, euler_orbit = lib.leaves_libration(
-            e, g, -lib.equilibrium_zeta(g), fdot0 - m1, fs.lam0, orbits=EULER_START_ORBITS)
+        euler_left, euler_max, euler_orbit = fs.once("euler_start", lambda: lib.leaves_libration(
+            e, g, -lib.equilibrium_zeta(g), fdot0 - m1, fs.lam0, orbits=EULER_START_ORBITS))
     mt = {
         "forced_amplitude_rad": amp_run,
         "forced_amplitude_periodic_rad": float(np.hypot(a[0], b[0])),
@@ -154,7 +168,7 @@ def _finish(values, s, t, L, q):
     # modern: the linearised free period about the forced solution (Floquet, exact in e), lengthened by
     # the free swing's own amplitude φ²/4 (pendulum); only worth computing when there is a free part
     if dz != 0 and g > 0 and w0 < 0.5 * n and not tumbles:
-        nu = lib.free_libration_floquet(fs.orbit, g, gm, fs.lam0, fs.lamdot0)
+        nu = fs.once("floquet_nu", lambda: lib.free_libration_floquet(fs.orbit, g, gm, fs.lam0, fs.lamdot0))
         mt["free_period_floquet"] = 2 * np.pi / nu if nu > 0 else np.nan
         mt["free_period_modern"] = mt["free_period_floquet"] * (1 + dz**2 / 4)
     warnings: list[str] = []

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 from ..physics import quaternion as quat
 from ..physics.integrator import PointMass, integrate, samples_kept
+from ..physics.kept import kept
 from ..physics.params import Param, ParameterError
 from ..physics.precession import (TYPOS_844_849, euler_N, fit_pole, linear_theory,
                           pole_angles, resonance_849)
@@ -112,10 +113,11 @@ def fit_circular(t, axis, delta, eps_gyro):
     return fit_pole(t, axis, {"2phi": 2 * phi, "free": w * t}), phi
 
 
+@kept(32)  # depends on two of the scenario's numbers: other sliders reuse it
 def resonance_sweep(flattening, obliquity, ratios=(20.0, 8.0, 4.0, 3.0, 2.5, 2.2), orbits=30, steps=100):
     """The 2φ nutation in obliquity measured at several ε/δ beside Euler's (§844) and the corrected
     value: shows the growth toward ε = 2δ (Euler) / ε = 2δA/C (corrected). Rows (ε/δ, simulated,
-    Euler, corrected)."""
+    Euler, corrected), a tuple."""
     out = []
     for r in ratios:
         t, L, q, I, N, corr = simulate_circular(r, flattening, obliquity, 0.0, orbits, steps, max_samples=4000)
@@ -123,7 +125,7 @@ def resonance_sweep(flattening, obliquity, ratios=(20.0, 8.0, 4.0, 3.0, 2.5, 2.2
         fit, _ = fit_circular(t, traj.figure_axis, 1.0, corr.eps_gyro)
         out.append((r, -fit.obliquity["2phi"][1], linear_theory(N, r, 1.0, obliquity).obliquity_amplitude,
                     corr.obliquity_amplitude))
-    return out
+    return tuple(out)
 
 
 def _check_circular(values):

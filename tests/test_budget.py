@@ -16,6 +16,7 @@ import theoria as th
 from theoria.app.cli import main
 from theoria.physics import integrator
 from theoria.physics.errors import BudgetExceeded, ParameterError
+from theoria.physics.kept import forget
 from theoria.scenarios.base import all_scenarios, get
 from theoria.scenarios.budget import MAX_MEMORY, MAX_STEPS, held_bytes
 
@@ -64,6 +65,7 @@ def test_cost_estimate_against_the_real_run(name, label):
     given = {} if label == "defaults" else sc.presets[label]
     values = sc.resolve(given)
     est = sc.cost_of(values)
+    forget()  # the estimate is for a run made afresh, without pieces kept from an earlier run
     with count_steps() as counted:
         run = sc.simulate_fn(values)
     samples = len(run.trajectory.t)

@@ -1,0 +1,47 @@
+"""Pieces of a run kept for the next run that shares their numbers.
+
+A slider moved in class usually changes one number. A piece of a run that depends on other
+numbers only (Hyperion's resonance branches, the forced libration on an eccentric orbit, the
+precession's resonance table, the ellipsoid's quadrature rule) is made once per process and reused:
+`@kept(n)` keeps the last n results of a pure function of hashable numbers, results that are never
+written to. A `progress` keyword is not part of the key (it only reports, and may stop the work by
+raising: nothing is kept then). `forget()` drops them all (a cost measured on a run made afresh).
+"""
+from __future__ import annotations
+
+import functools
+import threading
+from collections import OrderedDict
+
+_KEPT: list[OrderedDict] = []
+_LOCK = threading.Lock()
+
+
+def kept(maxsize: int):
+    def wrap(fn):
+        store: OrderedDict = OrderedDict()
+        _KEPT.append(store)
+
+        @functools.wraps(fn)
+        def call(*args, progress=None, **kwargs):
+            key = (args, tuple(sorted(kwargs.items())))
+            with _LOCK:
+                if key in store:
+                    store.move_to_end(key)
+                    return store[key]
+            out = fn(*args, **kwargs) if progress is None else fn(*args, progress=progress, **kwargs)
+            with _LOCK:
+                store[key] = out
+                while len(store) > maxsize:
+                    store.popitem(last=False)
+            return out
+
+        call.cache_clear = store.clear
+        return call
+    return wrap
+
+
+def forget() -> None:
+    with _LOCK:
+        for store in _KEPT:
+            store.clear()
