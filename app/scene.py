@@ -468,7 +468,7 @@ class SceneView:
         `tracks()`); only what it cannot move is sent."""
         if self.n == 0:
             return
-        k = int(np.clip(k, 0, self.n - 1))
+        k = min(max(int(k), 0), self.n - 1)
         self.frame = k
         moving = moving and self.page_plays
         for it, hs in self._animated:

@@ -854,9 +854,9 @@ class ClientSession:
     def _frame_index(self) -> int:
         if self.drawing is None:
             return 0
-        t = self.drawing.times
+        t = self.drawing.times  # called for every playback tick of every browser: no numpy wrappers
         target = t[0] + self.clock * (t[-1] - t[0])
-        return int(np.clip(np.searchsorted(t, target), 0, len(t) - 1))
+        return min(max(int(t.searchsorted(target)), 0), len(t) - 1)
 
     def _show_clock(self, force: bool = False) -> None:
         if self.result is None:
