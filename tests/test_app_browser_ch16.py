@@ -28,14 +28,18 @@ def _assert_camera_on_the_earth(s):
     """The paused view's camera is on the Earth's direction of the frame shown. The camera the
     server holds is replaced by each camera message the browser sends, and a browser on a loaded
     machine may still send one from before the last frame it was given: wait for the browser to
-    settle (a paused view stops moving), then compare."""
+    settle (a paused view stops moving), then compare. The pause itself is a message from the
+    browser too: the camera follows the Earth while playing, so it is waited for first."""
+    t0 = time.time()
+    while s.playing and time.time() - t0 < WAIT_MS / 1000:
+        time.sleep(0.1)
+    assert not s.playing
     t0 = time.time()
     while True:
         e, cam = _earth_dir_and_camera(s)
         if np.dot(cam, e) > 0.999 or time.time() - t0 > WAIT_MS / 1000:
             break
         time.sleep(0.2)
-    assert not s.playing
     assert np.dot(cam, e) > 0.999, (cam, e)
 
 
