@@ -42,9 +42,9 @@ LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div>'
 # Run before viser's client starts. In software WebGL (no GPU: SwiftShader, llvmpipe; the names
 # viser's own check looks for) multisampled antialiasing is the dearest part of each frame, so
 # the page asks for a canvas without it (with the savings of app/browser.py `lighten`,
-# middle-axis-flip at 1280x800 played 22.7 -> 33.2 poses a second: docs/app.md). viser then shows a notice that rendering is in
-# software ("Software WebGL rendering detected"), which would sit over a projected scene all
-# lesson: it is taken down as it appears.
+# middle-axis-flip at 1280x800 played 22.7 -> 33.2 poses a second: docs/app.md). viser then shows
+# a notice that rendering is in software ("Software WebGL rendering detected"), which would sit
+# over a projected scene all lesson: it is taken down as it appears.
 SOFTWARE_GL_JS = r"""
 (() => {
   let name = '';

@@ -5,7 +5,9 @@ numbers only (Hyperion's resonance branches, the forced libration on an eccentri
 precession's resonance table, the ellipsoid's quadrature rule) is made once per process and reused:
 `@kept(n)` keeps the last n results of a pure function of hashable numbers, results that are never
 written to. A `progress` keyword is not part of the key (it only reports, and may stop the work by
-raising: nothing is kept then). `forget()` drops them all (a cost measured on a run made afresh).
+raising: nothing is kept then). `forget()` drops everything kept so (a cost measured on a run made
+afresh); the older per-scenario tables made with functools.lru_cache (earth-long-view's secular
+calibration, the ephemerides) are not among them.
 """
 from __future__ import annotations
 

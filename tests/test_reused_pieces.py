@@ -22,8 +22,6 @@ CASES = [
 ]
 
 
-
-
 def _same(a, b) -> None:
     assert a.metrics.keys() == b.metrics.keys()
     for k in a.metrics:
