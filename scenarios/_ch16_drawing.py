@@ -16,6 +16,7 @@ drawing's frames, computed once.
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import numpy as np
@@ -104,6 +105,23 @@ class Panel:
     @property
     def normal(self) -> np.ndarray:
         return np.cross(self.r, self.u)
+
+
+# sideways reach of a body's scene on the screen from its centre: the celestial sphere and F's label
+SCENE_REACH = CELESTIAL_RADIUS + 0.3
+PANEL_VIEW_BACK = 1.3  # the camera this much farther back when a chart stands beside the body
+
+
+def frame_with_panel(d: Drawing, panel: Panel) -> None:
+    """Aim the view at the middle of the body's scene and a chart beside it (left of it on the
+    screen), the camera moved sideways and a little back, still looking the same way. Aimed at
+    the body alone, the chart's left half and its title were off a 1280×800 screen."""
+    right, _, look = camera_basis(d.camera)
+    left = float((panel.c - look) @ right) - 0.5 * panel.size
+    shift = 0.5 * (left + SCENE_REACH) * right
+    pos = np.asarray(d.camera.position, float)
+    d.camera = dataclasses.replace(d.camera, look_at=tuple(look + shift),
+                                   position=tuple(look + shift + PANEL_VIEW_BACK * (pos - look)))
 
 
 def great_arcs(a, b, radius: float, n: int = ARC_POINTS) -> np.ndarray:

@@ -27,7 +27,7 @@ from .budget import Cost, trajectory_bytes
 from ._libration import planar_moments, zeta_of
 from .drawing import Label, Option, Points, Segments
 from ._ch16_drawing import (ORBIT_OPTION, PANEL_COLOR, ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force,
-                            f_and_zeta)
+                            f_and_zeta, frame_with_panel)
 
 
 RESONANCES = (0.5, 1.0, 1.5, 2.0, 2.5)
@@ -165,7 +165,7 @@ def _draw(run, spec, view):
     # the section is a point cloud, not a time series: drawn here, left out of the time plot
     d.plot = {k: v for k, v in run.plot_series.items() if not k.startswith("section_")}
     if view.option("section", spec) and "section_theta_mod_pi" in run.plot_series:
-        _section(d, run)
+        frame_with_panel(d, _section(d, run))
     return d
 
 

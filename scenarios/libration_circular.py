@@ -21,7 +21,8 @@ from .checks import register_check
 from ._libration import planar_moments, run_samples, stride_for, zeta_of
 from .drawing import Label, Option, Points, Segments, Sphere
 from ._ch16_drawing import (ORBIT_OPTION, PANEL_AXES_COLOR, PANEL_COLOR, POINT_COLOR, SEPARATRIX_COLOR, ZETA_COLOR,
-                            ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force, f_and_zeta, wrap)
+                            ZETA_OPTION, Panel, body_scene, camera_basis, centre_of_force, f_and_zeta,
+                            frame_with_panel, wrap)
 from . import _validity
 
 # the run's first integral may wander by at most this fraction of the gap 1 − k² to the separatrix
@@ -184,7 +185,7 @@ def _draw(run, spec, view):
     d.plot = {k: v for k, v in run.plot_series.items() if not k.startswith("separatrix_")}
     s = run.trajectory.series
     if view.option("portrait", spec) and "zeta_dot" in s:
-        _phase_portrait(d, s)
+        frame_with_panel(d, _phase_portrait(d, s))
     return d
 
 

@@ -417,3 +417,30 @@ def test_a_new_run_updates_the_live_viser_nodes_in_place(runs):
     finally:
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
+
+
+# The canvas of a 1280×800 browser with the control panel over its right side (app/browser.py
+# `frame` draws the look-at point in the middle of the part left free): the panel covers 400 px,
+# 572 px in presenter mode (measured on screenshots at 1280×800).
+PANEL_COVERS_PX = (400.0, 572.0)
+
+
+@pytest.mark.parametrize("name,chart", [("hyperion", "section/frame"), ("libration-circular", "portrait/frame")])
+def test_a_chart_beside_the_body_is_on_the_screen_with_the_body(runs, name, chart):
+    """The surface of section and the phase portrait stand left of the body: with the view aimed at
+    the body, their left half and their titles were off a 1280×800 screen. Projected as the
+    browser draws them (drawing.py's `_project` matches the screenshots' scale), the chart and the
+    body's celestial sphere both fit in the part of the canvas the panel leaves free."""
+    from theoria.scenarios.drawing import CELESTIAL_RADIUS, _project
+
+    _, d = _drawing(runs, name)
+    right = ch16.camera_basis(d.camera)[0]
+    points = np.concatenate([np.asarray(d.item(chart).points, float).reshape(-1, 3),
+                             [CELESTIAL_RADIUS * right, -CELESTIAL_RADIUS * right]])  # the sphere about the body
+    x = _project(points, d.camera)[0][:, 0]
+    for covered in PANEL_COVERS_PX:
+        shown = x - covered / 2  # the look-at point drawn in the middle of the free part
+        assert shown.min() >= 0 and shown.max() <= 1280 - covered, (covered, shown.min(), shown.max())
+    # with the chart switched off the view is the body's own again
+    _, alone = _drawing(runs, name, **{name == "hyperion" and "section" or "portrait": False})
+    assert alone.camera == get(name).camera
