@@ -24,7 +24,10 @@ from viser import _messages
 #   throttled sender (50 ms, the latest message wins), so a value typed and submitted within 50 ms
 #   (Enter right after the last key, or typing into a field just after leaving another, whose
 #   submit opened the window) reached the server as the submit alone and the server took the
-#   field's previous text. Held back longer than the throttle, the submit goes after the value.
+#   field's previous text. Held back longer than the throttle, the submit goes after the value;
+#   and the value itself is sent once more, directly, just before it: a value pasted within 50 ms
+#   of another message waited in the throttle and was replaced by the form's "changed" message.
+#   (theoria's forms hold one text field each, named by their label's `for`.)
 # - present(on): presenter mode's large type (the panel scaled about its top right corner).
 # - tracks(d), clock(c), the player: the page plays the scene by itself (app/scene.py `tracks()`).
 #   Each frame it draws, after viser has applied the server's state (viser's nodes do that in a
@@ -93,7 +96,14 @@ SETUP = r"""
     clearTimeout(f.__theoriaTimer);  // Enter then blur: one submit
     f.__theoriaTimer = setTimeout(() => {
       f.__theoriaNow = true;
-      try { if (f.isConnected) f.requestSubmit(); } finally { f.__theoriaNow = false; }
+      try {
+        if (!f.isConnected) return;
+        const m = window.__viserMutable, label = f.querySelector('label[for]');
+        const field = f.querySelector('input:not([type=hidden]):not([type=checkbox])');
+        if (m && m.sendMessage && label && field)  // the value again, past the throttle
+          m.sendMessage({type: 'GuiUpdateMessage', uuid: label.htmlFor, updates: {value: field.value}});
+        f.requestSubmit();
+      } finally { f.__theoriaNow = false; }
     }, T.SUBMIT_AFTER_MS);
   }, true);
   T.P = {d: null, clock: 0, k: 0, rate: 0, playing: false, at: 0, hooked: false};

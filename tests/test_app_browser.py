@@ -279,6 +279,36 @@ def test_slider_changes_scene_and_bad_value_keeps_it(browser, flip_app):
         p.close()
 
 
+def test_a_value_typed_just_after_leaving_another_field_is_taken(browser, flip_app):
+    """viser sends a panel's messages through one throttled sender where the newest message wins
+    (50 ms). A value pasted into a field 125 ms after leaving another (whose submit went out at
+    120 ms) waited in that sender and was replaced by the form's "changed" signal: the server
+    never saw it, and Enter ran the old value again. Done in the page's own time, as a quick
+    hand does it; the server must take the new length."""
+    url, sessions = flip_app
+    p = Page(browser, url).wait_ready()
+    nudge, duration = _label("middle-axis-flip", "perturbation"), _label("middle-axis-flip", "duration")
+    try:
+        session = list(sessions.values())[-1]
+        p.page.evaluate("""([a, b, inputs]) => {
+          const field = (l) => eval(inputs)(l)[0];
+          const set = Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, 'value').set;
+          const A = field(a), B = field(b);
+          A.form.requestSubmit();  // leaving the first field: its submit goes out 120 ms later
+          setTimeout(() => {
+            set.call(B, '17');  // a paste: one input event
+            B.dispatchEvent(new Event('input', {bubbles: true}));
+            B.form.requestSubmit();  // Enter
+          }, 125);
+        }""", [nudge, duration, INPUTS_JS])
+        t0 = time.time()
+        while session.good_values.get("duration") != 17.0 and time.time() - t0 < 20:
+            time.sleep(0.1)
+        assert session.good_values.get("duration") == 17.0, session.good_values
+    finally:
+        p.close()
+
+
 def test_two_browsers_hold_independent_states(browser, flip_app):
     url, sessions = flip_app
     a = Page(browser, url).wait_ready()
