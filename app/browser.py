@@ -34,7 +34,11 @@ from viser import _messages
 #   render-loop callback of priority -1000; the player's runs at -999), it sets the poses, scales
 #   and visibility of frame k, where k follows the clock the server last sent (extrapolated at
 #   its rate while playing, exactly the server's frame while paused), and asks for the next frame
-#   while playing. Chunks of a path: chunk j is shown from its start frame on.
+#   while playing. Chunks of a path: chunk j is shown from its start frame on. Per-frame props
+#   (label text, segment and arrow points) change only while playing: the player hands viser the
+#   same node update the server would send (a SceneNodeUpdateMessage in viser's own queue, under
+#   the node's owner), once each time the frame it has them for changes. Paused, the server sets
+#   them, exactly; the next play starts from whatever the server set.
 SETUP = r"""
 (() => {
   if (window.theoria) return;
@@ -112,6 +116,11 @@ SETUP = r"""
     for (let i = 0; i < bin.length; i++) u[i] = bin.charCodeAt(i);
     return new C(u.buffer);
   };
+  const half = (h) => {  // an IEEE 754 half-precision number
+    const e = (h >> 10) & 31, f = h & 1023, s = h & 32768 ? -1 : 1;
+    if (e === 0) return s * f * 5.960464477539063e-8;
+    return e === 31 ? (f ? NaN : s * Infinity) : s * (1 + f / 1024) * Math.pow(2, e - 15);
+  };
   T.tracks = (d) => {
     d.t = d.times ? b64(d.times, Float32Array) : new Float32Array([0]);
     for (const tr of d.tracks) {
@@ -119,10 +128,21 @@ SETUP = r"""
       tr.v = b64(tr.data, tr.attr === 'wxyz' ? Int16Array : tr.attr === 'visible' ? Uint8Array : Float32Array);
       delete tr.data;
     }
+    for (const pr of d.props || []) {
+      if (pr.prop === 'text') pr.v = b64(pr.data, Uint32Array);
+      else if (pr.dtype === 'f4') pr.v = b64(pr.data, Float32Array);
+      else pr.v = Float32Array.from(b64(pr.data, Uint16Array), half);
+      pr.last = -1;
+      delete pr.data;
+    }
     T.P.d = d;
     T.hook();
   };
-  T.clock = (c) => { Object.assign(T.P, c); T.P.at = performance.now(); T.hook(); T.redraw(); };
+  T.clock = (c) => {
+    Object.assign(T.P, c); T.P.at = performance.now();
+    if (T.P.d) for (const pr of T.P.d.props || []) pr.last = -1;  // the server may have set them meanwhile
+    T.hook(); T.redraw();
+  };
   T.redraw = () => { const m = window.__viserMutable; if (m && m.requestRender) m.requestRender(); };
   T.frameAt = (c) => {  // the first frame whose time is not before c (the server's searchsorted)
     const t = T.P.d.t; let lo = 0, hi = t.length;
@@ -139,6 +159,7 @@ SETUP = r"""
     const P = T.P, d = P.d, m = window.__viserMutable;
     if (!d || !m || !d.n) return;
     const k = T.shown(), R = m.nodeRefFromName, on = (g) => g == null || d.groups[g] !== false;
+    P.frame = k;
     for (const tr of d.tracks) {
       const o = R[tr.node];
       if (!o) continue;
@@ -149,13 +170,22 @@ SETUP = r"""
       else if (tr.attr === 'visible') o.visible = on(tr.group) && v[i] > 0;
       if (!o.matrixAutoUpdate) o.updateMatrix();
     }
+    if (P.playing && d.props && m.messageQueue) {
+      for (const pr of d.props) {
+        const j = Math.floor(k / pr.stride);
+        if (j === pr.last || !on(pr.group)) continue;
+        pr.last = j;
+        const value = pr.prop === 'text' ? pr.strings[pr.v[j]] : pr.v.subarray(j * pr.per, (j + 1) * pr.per);
+        m.messageQueue.push({type: 'SceneNodeUpdateMessage', name: pr.node, owner: d.owner,
+                             updates: {[pr.prop]: value}});
+      }
+    }
     for (const c of d.chunks) {
       if (!on(c.group)) continue;
       let n = 0;
       while (n < c.starts.length && c.starts[n] <= k) n++;
       for (let j = 0; j < c.nodes.length; j++) { const o = R[c.nodes[j]]; if (o) o.visible = j < n; }
     }
-    P.frame = k;
     if (P.playing && state && state.invalidate) state.invalidate();
   };
   T.hook = () => {

@@ -21,13 +21,16 @@ turns the frame (a pose update) and re-sends the arrow only when its length chan
 VECTOR_LENGTH_TOL.
 
 **A page that plays by itself.** `tracks()` hands the page (app/browser.py's player) everything
-that only moves: frame and marker poses, label positions, visibility, the growing paths' chunks,
-and the length of each turning arrow (as a scale of the arrow drawn once). With `page_plays` set,
-`set_frame(k, moving=True)` then sends only what the page cannot move itself (label text,
-per-frame segments, arrays of arrows): during playback a browser draws every frame it can
-without a message from the server, and a hundred browsers playing cost the server almost nothing.
-Paused, stepped or scrubbed, `set_frame(k)` sets everything as before, so the server's state and
-the page's agree whenever the clock stands still.
+that changes with time: frame and marker poses, label positions, visibility, the growing paths'
+chunks, the length of each turning arrow (as a scale of the arrow drawn once), and the per-frame
+props the page gives viser's own update path: label text (each distinct string once, then an index
+per frame), per-frame segments and arrays of arrows (float16 points; a long run's are kept for
+every s-th frame, within TRACK_POINTS_BYTES and TRACK_TEXT_CHARS). With `page_plays` set,
+`set_frame(k, moving=True)` sends nothing at all: during playback a browser draws every frame it
+can without a message from the server, and a hundred browsers playing cost the server only the
+time read-out. Paused, stepped or scrubbed, `set_frame(k)` sets everything exactly as before (the
+server's values, not the page's every s-th frame), so the server's state and the page's agree
+whenever the clock stands still.
 """
 from __future__ import annotations
 
@@ -82,7 +85,13 @@ VECTOR_LENGTH_TOL = 0.02
 # below a point's size: half the bytes per update.
 PATH_PRECISION = "float16"
 FLOAT16_MAX = 6.5e4
-PAGE_ATTRS = {"wxyz", "position", "visible"}  # what a page moves by itself during playback
+PAGE_ATTRS = {"wxyz", "position", "visible"}  # the poses a page moves by itself during playback
+# A page is sent the per-frame props (label text, segment and arrow points) of one scene within
+# these sizes: a run whose props would exceed them gives the page every s-th frame's (the smallest
+# s that fits). A lunar orbit's 28-segment trail over 3,000 frames is 1 MB in float16: s = 8, still
+# 19 updates a second while the run plays in 20 s (app/session.py RUN_SECONDS).
+TRACK_POINTS_BYTES = 128_000
+TRACK_TEXT_CHARS = 64_000
 
 
 def _b64(a: np.ndarray) -> str:
@@ -172,6 +181,48 @@ def _tuple(v) -> tuple:
 def _rgb(c):
     a = np.asarray(c)
     return tuple(int(x) for x in a) if a.ndim == 1 else np.asarray(a, np.uint8)
+
+
+def _stride(n: int, size_at) -> int:
+    """The smallest s (1, 2, 3, ...) for which every s-th of n frames fits: size_at(s) ≤ 1."""
+    s = 1
+    while s < n and size_at(s) > 1.0:
+        s = max(s + 1, int(s * 1.25))
+    return s
+
+
+def _points_track(pts: np.ndarray) -> dict:
+    """Per-frame points (F, ...) as the page takes them: flat, float16 when every value fits."""
+    pts = np.asarray(pts, float)
+    n = len(pts)
+    flat = pts.reshape(n, -1)
+    f16 = bool(np.isfinite(flat).all() and np.abs(flat).max(initial=0.0) < FLOAT16_MAX)
+    per_bytes = flat.shape[1] * (2 if f16 else 4)
+    s = _stride(n, lambda s: -(-n // s) * per_bytes / TRACK_POINTS_BYTES)
+    data = flat[::s].astype("<f2" if f16 else "<f4")
+    return {"data": _b64(data), "dtype": "f2" if f16 else "f4", "per": int(flat.shape[1]), "stride": int(s)}
+
+
+def _text_track(texts) -> dict:
+    """Per-frame text: each distinct string once (in order of first use) and an index per frame."""
+    texts = [str(t) for t in texts]
+    n = len(texts)
+
+    def table(s):
+        seen: dict[str, int] = {}
+        idx = [seen.setdefault(t, len(seen)) for t in texts[::s]]
+        return list(seen), idx
+
+    s = _stride(n, lambda s: sum(map(len, table(s)[0])) / TRACK_TEXT_CHARS)
+    strings, idx = table(s)
+    return {"strings": strings, "data": _b64(np.asarray(idx, "<u4")), "stride": int(s)}
+
+
+def _arrow_points(it: Arrows) -> np.ndarray:
+    """(F, K, 2, 3): each frame's arrows from their origins (what viser's arrows take as points)."""
+    o = np.asarray(it.origins, float).reshape(1, -1, 3)
+    v = np.asarray(it.vectors, float)
+    return np.stack([np.broadcast_to(o, v.shape), o + v], axis=2)
 
 
 @dataclass
@@ -487,8 +538,16 @@ class SceneView:
     # ---- what the page moves by itself -----------------------------------------------------------
     @staticmethod
     def _page_moves(it: Item) -> bool:
-        """Only poses and visibility: label text, per-frame segments and arrays of arrows are sent."""
-        return isinstance(it, (Frame, Mesh, Sphere, Label, Light)) and set(it.animated()) <= PAGE_ATTRS
+        """Poses and visibility of every node; a label's text; the points of per-frame segments and
+        of an array of arrows from fixed origins."""
+        anim = set(it.animated())
+        if isinstance(it, Label):
+            return anim <= PAGE_ATTRS | {"text"}
+        if isinstance(it, Segments):
+            return anim <= {"points", "visible"}
+        if isinstance(it, Arrows):
+            return anim <= {"vectors", "visible"}
+        return isinstance(it, (Frame, Mesh, Sphere, Light)) and anim <= PAGE_ATTRS
 
     def server_moves(self) -> bool:
         """Something shown changes with time that the page cannot move by itself."""
@@ -500,10 +559,14 @@ class SceneView:
         """What the page needs to play by itself: the frames' times (0..1 of the run), and per node
         its poses, visibility or scale at every frame, base64 little-endian (quaternions as int16
         × 32767, positions float32, visibility uint8, a turning arrow's scale float32), with the
-        group whose checkbox hides it. The growing paths: their chunk nodes and the frame at which
-        each appears."""
+        group whose checkbox hides it. Per-frame props (`prop` tracks, given to viser as the
+        server's own node updates, under `owner`): points, float16 where they fit, `per` numbers a
+        frame, for every `stride`-th frame; text, each distinct string once and a uint32 index per
+        `stride`-th frame. The growing paths: their chunk nodes and the frame at which each
+        appears."""
         d = self.drawing
-        out = {"n": self.n, "groups": dict(self.overlays), "tracks": [], "chunks": []}
+        out = {"n": self.n, "groups": dict(self.overlays), "tracks": [], "chunks": [], "props": [],
+               "owner": str(getattr(self.scene, "_owner_id", ""))}
         if d is None or self.n == 0:
             return out
         t = np.asarray(d.times, float)
@@ -525,7 +588,7 @@ class SceneView:
                 frame, arrow, label, drawn, (wxyz, lengths) = self._vectors[it.name]
                 if drawn > 0:  # the arrow as drawn, turned and scaled to each frame's length
                     add(frame.name, "wxyz", wxyz, it.group)
-                    add(arrow.name, "scale", lengths / drawn, it.group)
+                    add(arrow.name, "scale", np.maximum(lengths / drawn, 1e-6), it.group)  # a zero scale has no inverse
                     if label is not None:
                         pos = np.zeros((len(lengths), 3))
                         pos[:, 2] = 1.1 * lengths
@@ -536,6 +599,16 @@ class SceneView:
                     if attr == "visible":
                         for h in hs:
                             add(h.name, attr, np.asarray(it.visible, bool), group)
+                    elif attr == "text":
+                        out["props"].append({"node": hs[0].name, "prop": "text", "group": group,
+                                             **_text_track(it.text)})
+                    elif attr in ("points", "vectors"):
+                        pts = np.asarray(it.points, float) if attr == "points" else _arrow_points(it)
+                        out["props"].append({"node": hs[0].name, "prop": "points", "group": group,
+                                             **_points_track(pts)})
+                        if attr == "vectors":  # the labels at the tips follow them
+                            for j, h in enumerate(hs[1:]):
+                                add(h.name, "position", 1.08 * pts[:, j, 1], group)
                     else:
                         add(hs[0].name, attr, getattr(it, attr), group)
         for group, paths in self._chunks.items():
@@ -574,13 +647,22 @@ class SceneView:
             elif isinstance(it, Arrows):
                 o = _f32(np.asarray(it.origins, float).reshape(-1, 3))
                 h.points = np.stack([o, o + _f32(value)], 1)
+                for j, lab in enumerate(hs[1:]):  # the labels at the tips
+                    lab.position = _tuple(1.08 * h.points[j, 1])
 
     def _set_vector(self, name: str, k: int, force: bool) -> None:
         frame, arrow, label, drawn, (wxyz, lengths) = self._vectors[name]
         length = float(lengths[k])
         frame.wxyz = wxyz[k]
-        if self.page_plays and drawn > 0:
-            return  # drawn once: the page scales it to each frame's length (tracks())
+        if self.page_plays:  # drawn once, at its longest: the page scales it to each frame's length (tracks())
+            if drawn <= 0 and float(np.max(lengths)) > 0:
+                drawn = float(np.max(lengths))
+                arrow.points = np.array([[[0, 0, 0], [0, 0, drawn]]], np.float32)
+                if label is not None:
+                    label.position = (0.0, 0.0, 1.1 * drawn)
+                self._vectors[name][3] = drawn
+            if drawn > 0:
+                return
         if force or drawn < 0 or abs(length - drawn) > VECTOR_LENGTH_TOL * max(drawn, 1e-9):
             arrow.points = np.array([[[0, 0, 0], [0, 0, length]]], np.float32)
             if label is not None:

@@ -101,6 +101,7 @@ class ViserProtocolClient:
         self.path_msgs = 0  # path point-cloud messages received (scene rebuilds)
         self.frames = 0
         self.messages = 0
+        self.types: dict[str, int] = {}  # message type → how many arrived
         self.bytes = 0
         self.changed = asyncio.Event()
         self._reader = None
@@ -145,6 +146,7 @@ class ViserProtocolClient:
     def _handle(self, m: dict) -> None:
         self.messages += 1
         typ = m.get("type", "")
+        self.types[typ] = self.types.get(typ, 0) + 1
         if typ == "LocalStorageGetItemRequestMessage":
             # the page answers at once: asked for its address (app/browser.py), a page gives it, which
             # tells the server it runs theoria's JavaScript and plays the scene by itself; else nothing

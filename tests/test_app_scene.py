@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from theoria.app.controls import slider_range
+from theoria.app import scene as scene_mod
 from theoria.app.scene import MAX_DRAW_POINTS, SceneView, densify
 from theoria.scenarios.drawing import Option, Sphere, View, shape_semi_axes, standard
 from theoria.physics.inertia import ellipsoid_moments
@@ -213,3 +214,71 @@ def test_a_scenarios_own_drawing_moves_redraws_on_its_option_and_is_pruned():
     spec2, res2, d2 = _drawing("free-tumble")
     view.show(d2)
     assert "/world/marker" not in view._h
+
+
+def _decoded(track: dict) -> np.ndarray:
+    """A `prop` track as the page decodes it (app/browser.py): one row per kept frame."""
+    import base64
+
+    raw = base64.b64decode(track["data"])
+    if "strings" in track:
+        return np.asarray(track["strings"], object)[np.frombuffer(raw, "<u4")]
+    return np.frombuffer(raw, "<f2" if track["dtype"] == "f2" else "<f4").astype(float).reshape(-1, track["per"])
+
+
+@pytest.mark.parametrize("name", ["libration-circular", "lunar-perturbation", "syzygy", "initial-axis"])
+def test_a_page_that_plays_is_given_everything_that_moves(name):
+    """With the page playing by itself, the server moves nothing during playback: every label's
+    text and every per-frame segment is in the tracks, and decoded as the page decodes them they are
+    the drawing's own values at each kept frame (within float16's 1e-3 of a scene unit). A turning
+    arrow that starts at zero length (at rest) is drawn at its longest and scaled by the page."""
+    from theoria.scenarios.drawing import Label, Segments
+
+    scene = FakeScene()
+    view = SceneView(scene)
+    view.page_plays = True
+    spec, res, d = _drawing(name, **get(name).preview)
+    view.show(d)
+    assert not view.server_moves()
+    tr = view.tracks()
+    props = {(p["node"], p["prop"]): p for p in tr["props"]}
+    checked = 0
+    for it in d.items:
+        anim = it.animated() if view._on(it.group) else []
+        if isinstance(it, Label) and "text" in anim:
+            p = props[(f"/world/{it.name}", "text")]
+            assert list(_decoded(p)) == [str(t) for t in it.text][::p["stride"]]
+            checked += 1
+        if isinstance(it, Segments) and "points" in anim:
+            p = props[(f"/world/{it.name}", "points")]
+            want = np.asarray(it.points, float)[::p["stride"]].reshape(len(_decoded(p)), -1)
+            assert np.abs(_decoded(p) - want).max() <= 2e-3 * max(1.0, np.abs(want).max())
+            assert p["stride"] == 1 or len(p["data"]) * 3 / 4 <= 1.05 * scene_mod.TRACK_POINTS_BYTES
+            checked += 1
+    assert checked or name == "initial-axis"
+    scene.log.clear()
+    for k in range(0, d.n_frames, max(1, d.n_frames // 50)):
+        view.set_frame(k, moving=True)
+    assert not scene.log  # playing: not one message from the server
+    scales = [t for t in tr["tracks"] if t["attr"] == "scale"]
+    assert len(scales) == sum(1 for v in view._vectors.values() if v[3] > 0) and (name != "initial-axis" or scales)
+
+
+def test_a_long_runs_props_are_kept_for_every_sth_frame_within_the_budget():
+    """A trail of 28 segments over 3,000 frames (1 MB in float16) is given for every s-th frame, the
+    smallest s that fits TRACK_POINTS_BYTES; text beyond TRACK_TEXT_CHARS likewise."""
+    from theoria.app.scene import TRACK_POINTS_BYTES, TRACK_TEXT_CHARS, _points_track, _text_track
+
+    pts = np.random.default_rng(1).uniform(-2, 2, (3000, 28, 2, 3))
+    p = _points_track(pts)
+    per_frame = 28 * 6 * 2
+    s = p["stride"]
+    assert -(-3000 // s) * per_frame <= TRACK_POINTS_BYTES < -(-3000 // (s - 1)) * per_frame
+    assert np.abs(_decoded(p) - pts[::s].reshape(-1, 168)).max() < 2e-3
+    texts = [f"t = {k:.4f} yr, a read-out of some length" for k in range(3000)]
+    t = _text_track(texts)
+    assert sum(map(len, t["strings"])) <= TRACK_TEXT_CHARS and t["stride"] > 1
+    assert list(_decoded(t)) == texts[::t["stride"]]
+    assert _text_track(["a", "b", "a"])["strings"] == ["a", "b"]  # each distinct string once
+    big = _points_track(np.full((10, 1, 2, 3), 1e6))  # beyond float16: float32
+    assert big["dtype"] == "f4" and np.allclose(_decoded(big), 1e6)

@@ -333,11 +333,14 @@ def test_small_class_with_an_abusive_client():
         assert _idle_within(pool, 8.0), "simulations ran on after every student left"
 
 
-def test_a_page_plays_by_itself_and_the_server_sends_no_frames():
+@pytest.mark.parametrize("scenario", ["middle-axis-flip", "libration-circular"])
+def test_a_page_plays_by_itself_and_the_server_sends_no_frames(scenario):
     """A page that runs theoria's JavaScript (it answers the address probe) gets the scene's moving
-    parts once and plays them itself: while it plays, the server sends it no orientation at all,
-    only the time read-out twice a second. A client that does not run it gets every frame."""
-    with _server() as (srv, sessions, url, log):
+    parts once and plays them itself: while it plays, the server sends it no orientation and no
+    node update at all (libration's phase-angle label, its arc and the line to the centre change
+    every frame), only the time read-out twice a second. A client that does not run it gets every
+    frame."""
+    with _server(scenario) as (srv, sessions, url, log):
         async def main():
             page, bare = ViserProtocolClient(url), ViserProtocolClient(url, runs_js=False)
             for c in (page, bare):
@@ -345,13 +348,14 @@ def test_a_page_plays_by_itself_and_the_server_sends_no_frames():
             for c in (page, bare):
                 assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
             await asyncio.sleep(1.0)
-            before = {id(c): (dict(c.poses), c.frames) for c in (page, bare)}
+            before = {id(c): (dict(c.poses), c.frames, c.types.get("SceneNodeUpdateMessage", 0)) for c in (page, bare)}
             await asyncio.sleep(3.0)
             out = {}
             for c in (page, bare):
-                poses0, frames0 = before[id(c)]
+                poses0, frames0, updates0 = before[id(c)]
                 out[c.runs_js] = (c.poses.get("/world/body", 0) - poses0.get("/world/body", 0),
-                                  sum(c.poses.values()) - sum(poses0.values()), c.frames - frames0)
+                                  sum(c.poses.values()) - sum(poses0.values()), c.frames - frames0,
+                                  c.types.get("SceneNodeUpdateMessage", 0) - updates0)
             tracks = [src for src in page.scripts if "theoria.tracks(" in src]
             plays = sorted(s.page_plays for s in list(sessions.values()))
             for c in (page, bare):
@@ -360,10 +364,13 @@ def test_a_page_plays_by_itself_and_the_server_sends_no_frames():
 
         out, tracks, plays = asyncio.run(main())
         assert tracks and '"/world/body"' in tracks[-1] and '"chunks"' in tracks[-1]
-        body, all_poses, frames = out[True]
-        assert all_poses == 0, out
+        body, all_poses, frames, node_updates = out[True]
+        assert all_poses == 0 and node_updates == 0, out
         assert frames <= 3 * 3 + 2, out  # the time read-out (2 a second), nothing per frame
         assert out[False][0] >= 3 * 5, out  # the server plays for a page without the player
+        if scenario == "libration-circular":
+            assert out[False][3] >= 3 * 5, out  # ... text and segments too
+            assert '"props"' in tracks[-1] and '"/world/zeta_label"' in tracks[-1]
         assert plays == [False, True]
 
 

@@ -350,6 +350,59 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
         ctx.close()
 
 
+# the points of a line-segments node as the page draws them (its three.js geometry)
+SEGMENT_JS = """(name) => { const g = window.__viserMutable.nodeRefFromName[name]; let out = null;
+  if (g) g.traverse(o => { if (!out && o.isLineSegments2) out = Array.from(o.geometry.attributes.instanceStart.data.array); });
+  return out; }"""
+# every node update the page's player hands to viser, recorded as (node, text) for label text
+SPY_JS = """() => { const q = window.__viserMutable.messageQueue; window.__texts = [];
+  const push = q.push.bind(q);
+  q.push = (...ms) => { for (const m of ms) if (m.type === 'SceneNodeUpdateMessage' && 'text' in m.updates)
+    window.__texts.push([m.name, m.updates.text, window.theoria.P.frame]); return push(...ms); }; }"""
+
+
+def test_the_page_plays_label_text_and_segments_and_stops_where_the_server_does(browser, app):
+    """Libration in a circular orbit: the line from the body to F, the arc of the phase angle and its
+    read-out change every frame. Playing, the page moves them itself (the server's own handles do
+    not change: it sends nothing); the text it gives viser is the run's own text at the frame the
+    page shows. Paused, the page draws exactly the server's line."""
+    import numpy as np
+
+    from theoria.scenarios import get
+
+    base, sessions = app
+    spec = get("libration-circular")
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(spec))
+    try:
+        s = _session_for(sessions, before, spec.name)
+        assert s.page_plays and s.tick_hz() < 10  # nothing for the server to move
+        _page_plays(page)
+        server_line = np.array(s.view._h["/world/f_direction"].points, float).ravel()
+        page.evaluate(SPY_JS)
+        seen = set()
+        for _ in range(12):
+            seen.add(tuple(np.round(page.evaluate(SEGMENT_JS, "/world/f_direction"), 4)))
+            time.sleep(0.15)
+        assert len(seen) >= 4, seen  # the line to F turns on the page
+        assert np.array_equal(np.array(s.view._h["/world/f_direction"].points, float).ravel(), server_line)
+        texts = page.evaluate("() => window.__texts")
+        label = next(it for it in s.drawing.items if it.name == "zeta_label")
+        assert len({t for _, t, _ in texts}) >= 4, texts
+        for name, text, k in texts:  # the text of the frame shown (the track keeps every frame's here)
+            assert name == "/world/zeta_label" and text == str(label.text[k]), (text, k)
+        page.get_by_role("button", name="Pause").click()
+        assert _wait_for(lambda: not s.playing)
+        time.sleep(0.8)
+        k = page.evaluate("() => window.theoria.P.frame")
+        assert k == s.view.frame
+        line = np.array(page.evaluate(SEGMENT_JS, "/world/f_direction"))
+        want = np.asarray(next(it for it in s.drawing.items if it.name == "f_direction").points[k], float).ravel()
+        assert np.abs(line - want).max() < 1e-5, (line, want)
+    finally:
+        ctx.close()
+
+
 def _wait_for(cond, limit: float = 20.0) -> bool:
     t0 = time.time()
     while not cond():
