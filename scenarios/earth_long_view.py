@@ -376,7 +376,9 @@ def _cost(values):
     sample_years, after the mean orbits' 40-year REBOUND run (cached). Secular model: a pole per
     sample from the averaged torque, after a 4-year REBOUND calibration (cached). Kept: each state
     with the Sun's and the Moon's directions, Vondrák's pole beside it, and ten series (the pole's
-    angles, the obliquity and the distance from Vondrák's pole)."""
+    angles, the obliquity and the distance from Vondrák's pole). A zoom window: the full torque over
+    `zoom_years` at step_days, a state a day (`zoom_in`: its time, the full and the secular pole and
+    their offset, 9 numbers a state), after the mean orbits' run."""
     calibrated = EP.calibrated_moon_elements.cache_info().currsize > 0
     steps = 0.0 if calibrated else CALIBRATION_STEPS
     if values["model"] == "full":
@@ -388,7 +390,13 @@ def _cost(values):
         cached = secular_calibration.cache_info().currsize > 0
         steps += SECULAR_STEPS_PER_YEAR * values["years"] + 10 + (
             0 if cached else SECULAR_CALIBRATION_YEARS * YR * REBOUND_STEPS_PER_DAY)  # REBOUND's steps, not its samples
-    return Cost(steps, samples, trajectory_bytes(samples, bodies=3, series=10))
+    zoom_bytes = 0.0
+    if values["zoom_years"] > 0:
+        n, kept = rotation_run(values["zoom_years"] * YR, values["step_days"], 1.0)
+        orbits_needed = values["model"] != "full" and mean_orbits.cache_info().currsize == 0
+        steps += n + (REBOUND_STEPS_PER_DAY * 40 * YR if orbits_needed else 0)
+        zoom_bytes = 9 * 8 * kept
+    return Cost(steps, samples, trajectory_bytes(samples, bodies=3, series=10, extra=zoom_bytes))
 
 
 register(Scenario(
@@ -424,7 +432,9 @@ register(Scenario(
               label="Zoom window length (full torque)", advanced=True),
     ),
     camera=Camera((3.6, -3.2, 4.4), (0.0, 0.0, 0.6)),  # the pole's circle near the top of the sphere
-    preview={'step_days': 5.0, 'sample_years': 50.0},
+    # the first picture: the secular sky alone, sparsely stored; a zoom window with the full torque
+    # (a REBOUND run of up to 40 years, seconds) comes with the refined run
+    preview={'step_days': 5.0, 'sample_years': 50.0, 'zoom_years': 0.0},
     simulate_fn=_earth_long,
     draw=_draw,
     options={**{k: v for k, v in EARTH_OPTIONS.items() if k != "wiggle"},  # sampled every few years: no nutation
