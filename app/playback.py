@@ -13,8 +13,9 @@ browser plays at 60 frames a second; thirty at ~10; a hundred at ~3 (the run's c
 time, frames are skipped, not slowed). A paused session costs nothing.
 
 A page that plays by itself (app/scene.py `tracks()`) moves the poses on its own at its own frame
-rate; its session asks for ticks only for the time read-out (`tick_hz()`, 2 a second), unless the
-scene has something only the server can move (label text, per-frame segments).
+rate, label text and per-frame lines included; its session asks for ticks only for the time
+read-out (`tick_hz()`, 2 a second), unless the server moves the camera (the Moon seen from the
+Earth).
 
 While a browser's action is being answered (a new scene drawn and sent: `showing()`), playback
 takes PLAY_CPU_SHARE_ACTING instead: the frames are the ones skipped, not the answer delayed. A

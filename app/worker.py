@@ -79,7 +79,15 @@ COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes
 # browsers moving sliders ask for several runs a second, and a slow one in the quick child made
 # every other browser wait for it.
 SLOW_JOB_S = 0.3
+# A run expected to take longer is shown first from its scenario's preview. Not lower: at 0.1 s (a
+# Cassini, Moon or Hyperion slider previewed first) a hundred browsers' p95 went from 0.6 to 1.2 s
+# (one run each), every such action drawn twice by the server's one interpreter.
 PREVIEW_AFTER_S = SLOW_JOB_S
+# A run expected to take at most this much CPU is tiny (a slider on the rigid-body scenes: 3-20 ms).
+# One child of the server's pool takes tiny runs only: with a hundred browsers, the three quick
+# children are mostly busy with previews and runs of 50-300 ms, and a 6-ms run that waited for one
+# of them waited 0.5-1.8 s at the 95th percentile.
+TINY_JOB_S = 0.03
 CACHE_BYTES = 1e9  # finished runs and their drawings kept in memory by the server (LRU)
 MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
 CHILD_NICE = 5  # children run below the server: the event loop and the pose stream come first
@@ -503,7 +511,8 @@ class _Slot:
 
     def __init__(self, pool: "SimPool", index: int, jit: bool = True, use_process: bool = True):
         self.pool, self.index, self.jit, self.use_process = pool, index, jit, use_process
-        self.quick = jit and index < pool.quick_n  # takes quick runs and previews only
+        self.tiny = jit and index == pool.tiny_index  # takes tiny runs only
+        self.quick = jit and (index < pool.quick_n or self.tiny)  # takes quick runs and previews only
         self.proc: subprocess.Popen | None = None
         self.inbox: Connection | None = None  # child → us
         self.outbox: Connection | None = None
@@ -511,6 +520,7 @@ class _Slot:
         self.busy_since: float | None = None
         self.runs = 0
         self.kills = 0
+        self.seen: set[str] = set()  # scenarios the child has run since it started
         self.ready = not use_process  # a child is up and has imported the scenarios
         self._thread = threading.Thread(target=self._loop, daemon=True,
                                         name=f"theoria-sim-{'jit' if jit else 'nojit'}-{index}")
@@ -546,6 +556,7 @@ class _Slot:
         os.close(w2)
         self.outbox = Connection(w1, readable=False)
         self.inbox = Connection(r2, writable=False)
+        self.seen = set()
         threading.Thread(target=self._stderr, args=(self.proc,), daemon=True,
                          name=f"theoria-sim-log-{self.index}").start()
         if not self._wait_ready():
@@ -773,8 +784,9 @@ class SimPool:
     scenario is not compiled on this machine yet, a run cache and a disk store."""
 
     def __init__(self, slots: int | None = None, use_processes: bool | None = None, store: bool = True,
-                 cache_bytes: float = CACHE_BYTES, first: str | None = None):
-        """`first`: the scenario browsers will ask for first (see `prepare`)."""
+                 cache_bytes: float = CACHE_BYTES, first: str | None = None, tiny: bool | None = None):
+        """`first`: the scenario browsers will ask for first (see `prepare`). `tiny`: one more child
+        for tiny runs only (TINY_JOB_S; the server's pool has it, a pool of `slots` only if asked)."""
         if use_processes is None:
             use_processes = os.name == "posix" and os.environ.get("THEORIA_SIM_PROCESSES", "1") != "0"
         # the quick children (one more than the cores, at most 4) only ever take quick runs and
@@ -785,6 +797,10 @@ class SimPool:
         cores = os.cpu_count() or 1
         self.quick_n = slots // 2 if slots else min(4, cores + 1)
         self.slots_n = slots or self.quick_n + min(3, cores)
+        self.tiny_index = None  # the child for tiny runs, started last (the first child shows the first scene)
+        if tiny if tiny is not None else slots is None:
+            self.tiny_index = self.slots_n
+            self.slots_n += 1
         self.use_processes = use_processes
         self.cache = RunCache(cache_bytes)
         self.store = RunStore() if store else None
@@ -798,6 +814,7 @@ class SimPool:
         # is expected in proportion to its steps (a slider at a long duration makes a slow run of
         # a scenario whose default is quick)
         self._seconds: dict[tuple, tuple[float, float]] = {}
+        self._cheapest: dict[str, tuple[float, float]] = {}  # scenario → (seconds, steps) of its cheapest run per step
         self._apply = FairDrawing(APPLY_THREADS)
         self._timers: list = []
         self._timer_cv = threading.Condition()
@@ -1007,6 +1024,14 @@ class SimPool:
         t = self.expected_seconds(job.spec, job.values, job.preview, steps=job.steps)
         return t is None or t > SLOW_JOB_S
 
+    def _tiny(self, job: Job) -> bool:
+        """A run for the tiny child: its scenario's cheapest run so far, scaled by integrator steps,
+        within TINY_JOB_S."""
+        best = self._cheapest.get(job.spec.name)
+        if job.background or job.overran or best is None or not best[1] > 0:
+            return False
+        return best[0] * job.steps / best[1] <= TINY_JOB_S
+
     def quick_waiting(self) -> bool:
         """A browser's quick run waits in the queue (for a quick child)."""
         with self._cv:
@@ -1023,6 +1048,8 @@ class SimPool:
         if not slot.jit:
             return self._cold(job)
         if slot.quick and (job.background or self._slow(job)):
+            return False
+        if slot.tiny and not self._tiny(job):
             return False
         # a browser waiting goes first; compiling a scenario a browser waits for (a warm job) does not wait
         if job.background and not job.key.endswith("#warm") and any(
@@ -1086,8 +1113,20 @@ class SimPool:
         run.spec = job.spec
         if slot.jit and slot.use_process and not job.local:
             self.warm.add(job.spec.name)
+        first = job.spec.name not in slot.seen
+        slot.seen.add(job.spec.name)
         if slot.jit:  # a pure-Python time says nothing about the compiled run
-            self._seconds[(job.spec.name, job.preview)] = (seconds if cpu is None else cpu, job.steps)
+            took = (seconds if cpu is None else cpu, job.steps)
+            # a child's first run of a scenario also loads its compiled code and makes the pieces a
+            # process keeps (earth-long-view's calibration: 0.44 s before a 20-ms run): it teaches
+            # the expected time only when nothing else has
+            if not first or (job.spec.name, job.preview) not in self._seconds:
+                self._seconds[(job.spec.name, job.preview)] = took
+            # per step, the cheapest run seen: a child's first run of a scenario also loads its
+            # compiled code (the flip's 6-ms run took 46 ms), which says nothing about the next
+            best = self._cheapest.get(job.spec.name)
+            if took[1] > 0 and (best is None or took[0] / took[1] < best[0] / best[1]):
+                self._cheapest[job.spec.name] = took
         self.cache.put(job.cache_key, run, seconds)
         if job.background and self.store is not None and not job.local:
             self.store.put(job.cache_key, run, seconds)

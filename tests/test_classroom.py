@@ -609,6 +609,83 @@ def test_a_run_misjudged_as_quick_gives_way_to_a_quick_one(name, long, quick):
         pool.close()
 
 
+def test_a_tiny_run_does_not_wait_for_busy_children():
+    """A slider on a rigid-body scene (a run of a few milliseconds) is taken by the child kept for
+    tiny runs while the other children are busy with long runs; that child never takes anything but
+    tiny runs. Three children: one quick, one slow, one tiny."""
+    from theoria.scenarios import get
+
+    flip, ecc = get("middle-axis-flip"), get("libration-eccentric")
+    pool = worker_mod.SimPool(slots=2, store=False, tiny=True)
+    assert [(s.quick, s.tiny) for s in pool.slots] == [(True, False), (False, False), (True, True)]
+    done, took = {}, []
+    take = pool._take
+
+    def spy(slot):
+        job = take(slot)
+        if job is not None:
+            took.append((slot.index, job.spec.name))
+        return job
+
+    pool._take = spy
+
+    def submit(tag, spec, given):
+        ev = threading.Event()
+        w = worker_mod.SimulationWorker(tag, lambda req, r, sec: (done.setdefault(tag, r), ev.set()),
+                                        lambda req, e: (done.update({tag: e}), ev.set()), lambda *a: None, pool=pool)
+        w.submit(spec, given)
+        return ev
+
+    try:
+        assert submit("warm-flip", flip, {}).wait(300)
+        assert submit("warm-ecc", ecc, {"orbits": 5.0}).wait(300)
+        flip_job = worker_mod.Job("k", flip, flip.resolve({"spin": 5.2}))
+        for k in range(6):  # a child's first run of a scenario also loads its compiled code
+            if pool._tiny(flip_job):
+                break
+            assert submit(f"warm-flip-{k}", flip, {"spin": 5.0 + 0.01 * k}).wait(300)
+        assert pool._tiny(flip_job) and not pool._tiny(worker_mod.Job("k", ecc, ecc.resolve({"orbits": 5.0})))
+        pool._seconds[(ecc.name, False)] = (1e-3, 1e8)  # long runs judged quick: no preview, any child
+        longs = [submit(f"long{a}", ecc, {"orbits": 400.0, "steps_per_orbit": 4000, "asymmetry": a})
+                 for a in (0.05, 0.06)]
+        assert _wait(lambda: all(s.job is not None and s.job.spec is ecc for s in pool.slots[:2]), 60)
+        assert submit("tiny", flip, {"spin": 5.2}).wait(60)
+        assert not isinstance(done["tiny"], Exception)
+        assert not any(k.startswith("long") for k in done)  # answered while both long runs run
+        assert all(ev.wait(300) for ev in longs)
+        assert (2, flip.name) in took and (2, ecc.name) not in took, took
+    finally:
+        pool.close()
+
+
+def test_a_childs_first_run_of_a_scenario_does_not_set_the_expected_time():
+    """A child's first run of a scenario also loads its compiled code and makes what the process
+    keeps (earth-long-view's calibration: 0.44 s before a 20-ms run): it sets the time expected of
+    the scenario's next runs only when nothing else has, else the next run of 20 ms would be judged
+    slow and wait behind runs of seconds."""
+    import types
+
+    from theoria.scenarios import get
+
+    spec = get("earth-long-view")
+    pool = worker_mod.SimPool(slots=2, store=False, use_processes=False)
+    try:
+        values = spec.resolve({})
+        a, b = pool.slots[:2]
+
+        def done(slot, cpu):
+            job = worker_mod.Job(f"k{cpu}", spec, values)
+            pool._done(job, types.SimpleNamespace(), cpu, slot, cpu=cpu)
+            return pool.expected_seconds(spec, values)
+
+        assert done(a, 0.46) == pytest.approx(0.46)  # the first time anywhere: the only estimate there is
+        assert done(a, 0.02) == pytest.approx(0.02)
+        assert done(b, 0.45) == pytest.approx(0.02)  # b's first run: its calibration, not the run
+        assert done(b, 0.03) == pytest.approx(0.03)
+    finally:
+        pool.close()
+
+
 def test_the_browser_drawn_least_recently_is_drawn_first():
     """Finished runs are drawn for the browser served least recently first: a browser whose runs
     finish ten times a second (a flooded slider) queues its next drawing behind a browser that has
