@@ -282,3 +282,36 @@ def test_a_long_runs_props_are_kept_for_every_sth_frame_within_the_budget():
     assert _text_track(["a", "b", "a"])["strings"] == ["a", "b"]  # each distinct string once
     big = _points_track(np.full((10, 1, 2, 3), 1e6))  # beyond float16: float32
     assert big["dtype"] == "f4" and np.allclose(_decoded(big), 1e6)
+
+
+def test_viser_pose_updates_are_sent_exactly_when_numpy_would_send_them():
+    """theoria replaces viser's "did the pose change?" test (np.allclose on four numbers) by the same
+    test in plain Python: for random, equal, nearly equal and NaN poses it sends a message exactly
+    when np.allclose(new, old) is false, and the node then holds the new pose."""
+    from viser import _scene_handles as sh
+
+    import theoria.app.scene  # noqa: F401  (installs it)
+
+    if getattr(sh._set_pose_vector, "__wrapped__", None) is None:
+        pytest.skip("this viser has no _set_pose_vector of the expected form")
+    rng = np.random.default_rng(3)
+    cases = []
+    for _ in range(400):
+        old = rng.normal(size=4)
+        kind = rng.integers(4)
+        new = (old.copy() if kind == 0 else old * (1 + rng.choice([1e-7, 1e-6, 3e-6, 1e-4, 1e-3]) * rng.normal(size=4))
+               if kind == 1 else old + rng.choice([1e-9, 1e-8, 3e-8, 1e-6]) * rng.normal(size=4) if kind == 2
+               else rng.normal(size=4))
+        cases.append((old, new))
+    cases += [(np.zeros(4), np.array([np.nan, 0, 0, 0])), (np.array([np.nan, 0, 0, 0]), np.array([np.nan, 0, 0, 0])),
+              (np.zeros(4), np.array([1e-8, 0, 0, 0])), (np.zeros(4), np.array([1.1e-8, 0, 0, 0]))]
+    sent_when = []
+    for old, new in cases:
+        current, queued = old.astype(np.float64).copy(), []
+        sh._set_pose_vector(current, tuple(new), 4, queued.append, lambda v: v)
+        sent_when.append(bool(queued))
+        assert not np.allclose(new, old) == bool(queued), (old, new)
+        if queued:
+            assert len(queued) == 1 and np.array_equal(current, new, equal_nan=True)
+            assert np.array_equal(np.asarray(queued[0], float), new, equal_nan=True)
+    assert 0 < sum(sent_when) < len(cases)  # both outcomes were tried
