@@ -798,7 +798,7 @@ class SimPool:
         self.quick_n = slots // 2 if slots else min(4, cores + 1)
         self.slots_n = slots or self.quick_n + min(3, cores)
         self.tiny_index = None  # the child for tiny runs, started last (the first child shows the first scene)
-        if tiny if tiny is not None else slots is None:
+        if (slots is None) if tiny is None else tiny:
             self.tiny_index = self.slots_n
             self.slots_n += 1
         self.use_processes = use_processes
