@@ -105,13 +105,25 @@ def _limits(args) -> dict:
     return {"max_steps": steps, "max_memory": memory}
 
 
-def _parse_sets(items: list[str] | None) -> dict[str, str]:
+def _parse_sets(items: list[str] | None, spec=None) -> dict[str, str]:
+    """`--set key=value` items; a parameter given twice with two values (as `spec` reads them, when
+    given) is refused: the last one silently won."""
+    def same(k, a, b):
+        if a == b:
+            return True
+        try:
+            return spec is not None and spec.param(k).parse(a) == spec.param(k).parse(b)
+        except (ParameterError, KeyError):
+            return False
+
     out = {}
     for item in items or []:
         if "=" not in item:
             raise ParameterError("--set", item, "key=value")
-        k, v = item.split("=", 1)
-        out[k.strip()] = v.strip()
+        k, v = (x.strip() for x in item.split("=", 1))
+        if k in out and not same(k, out[k], v):
+            raise ParameterError("--set", item, f"each parameter once ({k} is also given as {k}={out[k]})")
+        out[k] = v
     return out
 
 
@@ -125,10 +137,14 @@ def _scenario_values(name: str, sets: list[str] | None, duration: float | None, 
             given.update(sc.presets[sc.preset_name(preset)])
         except ParameterError as e:
             raise ParameterError("--preset", preset, e.allowed) from None
-    given.update(_parse_sets(sets))
+    sets = _parse_sets(sets, sc)
+    given.update(sets)
     if duration is not None:
         if not any(p.name == "duration" for p in sc.params):
             raise ParameterError("--duration", duration, f"not a parameter of {name}")
+        if "duration" in sets and sc.param("duration").parse(sets["duration"]) != duration:
+            raise ParameterError("--duration", f"{duration:g}", f"the same as --set duration={sets['duration']}, "
+                                 "or one of the two")
         given["duration"] = duration
     return sc, sc.resolve(given)
 

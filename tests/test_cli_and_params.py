@@ -42,6 +42,10 @@ def test_param_parse_errors():
     (["run", "free-tumble", "--set", "nosuchkey=1"], "nosuchkey=1"),
     (["run", "free-tumble", "--set", "duration=-5"], "duration=-5"),
     (["run", "free-tumble", "--set", "inertia"], "key=value"),
+    # one parameter given two values: refused, not the last one silently taken
+    (["run", "free-tumble", "--set", "duration=3", "--set", "duration=4"],
+     "--set=duration=4: each parameter once (duration is also given as duration=3)"),
+    (["run", "free-tumble", "--set", "duration=3", "--duration", "5"], "--duration=5: the same as --set duration=3"),
     (["run", "no-such-scenario"], "scenario=no-such-scenario"),
     (["run", "middle-axis-flip", "--set", "inertia=1,1,2"], "three different moments"),
     (["run", "initial-axis", "--set", "torque=0,0,0"], "torque=0,0,0"),
@@ -64,6 +68,13 @@ def test_bad_set_exits_2_with_one_line(args, needle, cli):
     assert code == 2
     err = err.strip()
     assert len(err.splitlines()) == 1 and needle in err, err
+
+
+def test_the_same_value_given_twice_is_taken(cli):
+    for args in (["--set", "duration=3", "--set", "duration=3.0"], ["--set", "duration=3", "--duration", "3"]):
+        code, out, err = cli("run", "free-tumble", *args, "--json")
+        assert code == 0, err
+        assert json.loads(out)["params"]["duration"]["value"] == 3.0
 
 
 @pytest.mark.slow
