@@ -217,7 +217,7 @@ def _stride(n: int, size_at) -> int:
     """The smallest s (1, 2, 3, ...) for which every s-th of n frames fits: size_at(s) ≤ 1."""
     s = 1
     while s < n and size_at(s) > 1.0:
-        s = max(s + 1, int(s * 1.25))
+        s += 1
     return s
 
 
@@ -596,7 +596,7 @@ class SceneView:
         appears."""
         d = self.drawing
         out = {"n": self.n, "groups": dict(self.overlays), "tracks": [], "chunks": [], "props": [],
-               "owner": str(getattr(self.scene, "_owner_id", ""))}
+               "owner": str(getattr(self.scene, "_owner_id", ""))}  # viser 1.1 drops an update of another owner's node
         if d is None or self.n == 0:
             return out
         t = np.asarray(d.times, float)

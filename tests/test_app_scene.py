@@ -278,6 +278,7 @@ def test_a_long_runs_props_are_kept_for_every_sth_frame_within_the_budget():
     texts = [f"t = {k:.4f} yr, a read-out of some length" for k in range(3000)]
     t = _text_track(texts)
     assert sum(map(len, t["strings"])) <= TRACK_TEXT_CHARS and t["stride"] > 1
+    assert sum(map(len, set(texts[::t["stride"] - 1]))) > TRACK_TEXT_CHARS  # the smallest stride that fits
     assert list(_decoded(t)) == texts[::t["stride"]]
     assert _text_track(["a", "b", "a"])["strings"] == ["a", "b"]  # each distinct string once
     big = _points_track(np.full((10, 1, 2, 3), 1e6))  # beyond float16: float32
