@@ -149,6 +149,9 @@ def _scenario_values(name: str, sets: list[str] | None, duration: float | None, 
     return sc, sc.resolve(given)
 
 
+SECTION_COLUMN = 26  # `theoria list`: the width of the § column
+
+
 def cmd_list(args) -> int:
     from theoria.scenarios import all_scenarios
 
@@ -167,7 +170,11 @@ def cmd_list(args) -> int:
         if s.group != group:
             group = s.group
             print(f"{'' if s is items[0] else chr(10)}{group}")
-        print(f"  {s.name:<{w}}  {s.section:<26} {s.title}")
+        if len(s.section) <= SECTION_COLUMN:
+            print(f"  {s.name:<{w}}  {s.section:<{SECTION_COLUMN}} {s.title}")
+        else:  # a long section (a modern source beside Euler's §) has the line to itself
+            print(f"  {s.name:<{w}}  {s.section}")
+            print(f"  {'':<{w}}  {'':<{SECTION_COLUMN}} {s.title}")
         for n in s.presets:
             print(f"  {'':<{w}}    --preset \"{n}\"")
     return 0

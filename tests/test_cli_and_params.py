@@ -125,6 +125,16 @@ def test_preset_flag_gives_the_preset_values_and_set_overrides_them(cli):
     assert code == 0
     assert text.index("ch. 15") < text.index("ch. 16") < text.index("three bodies")
     assert '--preset "Brick: the flip"' in text
+    # every title starts in the same column, on the scenario's line or, after a long section, below it
+    from theoria.scenarios import all_scenarios
+    lines = text.splitlines()
+    columns = set()
+    for s in all_scenarios():
+        at = next(i for i, line in enumerate(lines) if line.split()[:1] == [s.name])
+        line = lines[at] if lines[at].endswith(s.title) else lines[at + 1]
+        assert line.endswith(" " + s.title), (s.name, lines[at:at + 2])
+        columns.add(len(line) - len(s.title))
+    assert len(columns) == 1, columns
 
 
 @pytest.mark.slow
