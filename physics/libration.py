@@ -156,11 +156,10 @@ def second_order_full(alpha, beta, A, N):
 
 
 def planar_rhs(orbit, gamma, gm):
-    """y = (λ, λ̇): C λ̈ = (3GM/2r³)(B−A) sin 2(f − λ) for an orbit with anomalies(t)."""
+    """y = (λ, λ̇): C λ̈ = (3GM/2r³)(B−A) sin 2(f − λ) for an orbit with anomalies_at(t) (f, r at one t)."""
 
     def rhs(t, y):
-        f, r = orbit.anomalies(np.array([t]))
-        f, r = f[0], r[0]
+        f, r = orbit.anomalies_at(t)
         return [y[1], 1.5 * gm * gamma / r**3 * np.sin(2.0 * (f - y[0]))]
 
     return rhs
@@ -183,10 +182,10 @@ def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-
     runs = [0]
 
     def rhs(t, z):  # (λ, λ̇) and the 2×2 matrix Φ = ∂(λ, λ̇)(t)/∂(λ, λ̇)(0), row-major
-        f, r = orbit.anomalies(np.array([t]))
-        c = 1.5 * gm * gamma / r[0] ** 3
-        k = -2.0 * c * np.cos(2.0 * (f[0] - z[0]))  # ∂λ̈/∂λ
-        return [z[1], c * np.sin(2.0 * (f[0] - z[0])), z[4], z[5], k * z[2], k * z[3]]
+        f, r = orbit.anomalies_at(t)
+        c = 1.5 * gm * gamma / r ** 3
+        k = -2.0 * c * np.cos(2.0 * (f - z[0]))  # ∂λ̈/∂λ
+        return [z[1], c * np.sin(2.0 * (f - z[0])), z[4], z[5], k * z[2], k * z[3]]
 
     def shoot(y):
         runs[0] += 1
@@ -529,11 +528,11 @@ def spin_orbit_rhs_vectorised(e, omega0):
     orb = KeplerOrbit(a=1.0, e=e, n=1.0)
 
     def rhs(t, y):
-        f, r = orb.anomalies(np.array([t]))
+        f, r = orb.anomalies_at(t)
         N = y.shape[0] // 2
         out = np.empty_like(y)
         out[:N] = y[N:]
-        out[N:] = -0.5 * omega0**2 / r[0] ** 3 * np.sin(2.0 * (y[:N] - f[0]))
+        out[N:] = -0.5 * omega0**2 / r ** 3 * np.sin(2.0 * (y[:N] - f))
         return out
 
     return rhs

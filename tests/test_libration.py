@@ -310,6 +310,10 @@ class _EulerOrbit:
         t = np.asarray(t, float)
         return self.A * t + self.alpha * np.sin(self.A * t), (1 + self.beta * np.cos(self.A * t)) ** (-1 / 3)
 
+    def anomalies_at(self, t):
+        f, r = self.anomalies(t)
+        return float(f), float(r)
+
     def true_anomaly_rate(self, t):
         return self.A * (1 + self.alpha * np.cos(self.A * np.asarray(t, float)))
 
