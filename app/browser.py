@@ -14,10 +14,11 @@ from viser import _messages
 
 # Installed once per page.
 #
-# - frame(): the control panel floats over the right of the canvas; the camera's view is offset
-#   (three.js setViewOffset) by half the width the panel covers, so the point the camera looks at
-#   is drawn in the middle of the free part of the canvas, and orbiting still turns about it.
-#   Re-run on resize, on panel changes and every half second (the panel can be folded).
+# - frame(): the control panel is docked beside the canvas, but a user can drag it to float over
+#   the canvas; then the camera's view is offset (three.js setViewOffset) by half the width the
+#   panel covers, so the point the camera looks at is drawn in the middle of the free part of the
+#   canvas, and orbiting still turns about it. Re-run on resize, on panel changes and every half
+#   second (the panel can be folded).
 # - focusout on a text field inside a form submits the form: a typed value is taken on Enter or
 #   when the field loses focus, never per keystroke.
 # - a form's submit waits SUBMIT_AFTER_MS: viser 1.1 sends all of a panel's messages through one
@@ -28,7 +29,7 @@ from viser import _messages
 #   and the value itself is sent once more, directly, just before it: a value pasted within 50 ms
 #   of another message waited in the throttle and was replaced by the form's "changed" message.
 #   (theoria's forms hold one text field each, named by their label's `for`.)
-# - present(on): presenter mode's large type (the panel scaled about its top right corner).
+# - present(on, scale): presenter mode's large type (the docked panel's content zoomed by scale).
 # - tracks(d), clock(c), the player: the page plays the scene by itself (app/scene.py `tracks()`).
 #   Each frame it draws, after viser has applied the server's state (viser's nodes do that in a
 #   render-loop callback of priority -1000; the player's runs at -999), it sets the poses, scales
@@ -212,13 +213,13 @@ SETUP = r"""
     const q = query ? '?' + query : '';
     if (window.location.search !== q) history.replaceState(null, '', window.location.pathname + q);
   };
-  T.present = (on) => {
+  T.present = (on, scale) => {
     let s = document.getElementById('theoria-present');
     if (on && !s) {
       s = document.createElement('style');
       s.id = 'theoria-present';
-      // scaled about its top right corner: the panel stays where it floats (zoom moved it off screen)
-      s.textContent = T.PANEL + '{transform:scale(1.45);transform-origin:top right}';
+      // the docked panel is widened by the server by the same factor; zoom lays it out again in it
+      s.textContent = T.PANEL + '{zoom:' + scale + '}';
       document.head.appendChild(s);
     } else if (!on && s) s.remove();
     setTimeout(T.frame, 50);
