@@ -255,6 +255,11 @@ def call(client, name: str, *args) -> bool:
     return run_js(client, f"window.theoria && window.theoria.{name}({', '.join(json.dumps(a) for a in args)});")
 
 
+def call_json(client, name: str, arg: str) -> bool:
+    """`call` with its one argument already JSON."""
+    return run_js(client, f"window.theoria && window.theoria.{name}({arg});")
+
+
 def read_address(client, timeout: float = 10.0) -> str | None:
     """The address the browser opened (with its query), or None (no answer, or a fake client). A
     page answers within milliseconds; the generous timeout is for a loaded machine, where a link

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import json
 from dataclasses import dataclass
 
 import numpy as np
@@ -122,6 +123,49 @@ PAGE_ATTRS = {"wxyz", "position", "visible"}  # the poses a page moves by itself
 # 19 updates a second while the run plays in 20 s (app/session.py RUN_SECONDS).
 TRACK_POINTS_BYTES = 128_000
 TRACK_TEXT_CHARS = 64_000
+# The tracks of recently shown drawings, as JSON: a class shown the same cached scene (a preset, a
+# scenario's defaults) shares one Drawing, and each browser's tracks differ from another's only by
+# the node owner and the overlays' checkboxes. 3-400 kB a scene.
+TRACKS_CACHE_BYTES = 32_000_000
+
+
+class _TracksCache:
+    """JSON of `SceneView._tracks_body` by (drawing, what the view drew of it), within a byte
+    budget, least recently used first out. A drawing is held weakly: a run dropped from the run
+    cache takes its entries' meaning with it (an id reused later does not match)."""
+
+    def __init__(self, max_bytes: int = TRACKS_CACHE_BYTES):
+        import threading
+        from collections import OrderedDict
+
+        self.max_bytes = max_bytes
+        self._items: OrderedDict = OrderedDict()
+        self._bytes = 0
+        self._lock = threading.Lock()
+
+    def get(self, drawing, signature):
+        with self._lock:
+            hit = self._items.get((id(drawing), signature))
+            if hit is None or hit[0]() is not drawing:
+                return None
+            self._items.move_to_end((id(drawing), signature))
+            return hit[1]
+
+    def put(self, drawing, signature, text: str) -> None:
+        import weakref
+
+        with self._lock:
+            key = (id(drawing), signature)
+            old = self._items.pop(key, None)
+            if old is not None:
+                self._bytes -= len(old[1])
+            self._items[key] = (weakref.ref(drawing), text)
+            self._bytes += len(text)
+            while self._bytes > self.max_bytes and self._items:
+                self._bytes -= len(self._items.popitem(last=False)[1][1])
+
+
+_tracks_cache = _TracksCache()
 
 
 def _b64(a: np.ndarray) -> str:
@@ -594,9 +638,30 @@ class SceneView:
         frame, for every `stride`-th frame; text, each distinct string once and a uint32 index per
         `stride`-th frame. The growing paths: their chunk nodes and the frame at which each
         appears."""
+        return {**self._tracks_body(), **self._tracks_head()}
+
+    def tracks_json(self) -> str:
+        """`tracks()` as JSON; the part every browser shown this drawing shares is made once."""
         d = self.drawing
-        out = {"n": self.n, "groups": dict(self.overlays), "tracks": [], "chunks": [], "props": [],
-               "owner": str(getattr(self.scene, "_owner_id", ""))}  # viser 1.1 drops an update of another owner's node
+        if d is None or self.n == 0:
+            return json.dumps(self.tracks())
+        signature = (tuple(h.name for _, hs in self._animated for h in hs),
+                     tuple((v[0].name, v[1].name, v[2] and v[2].name, v[3]) for v in self._vectors.values()),
+                     tuple(h.name for paths in self._chunks.values() for p in paths for h in p.handles))
+        body = _tracks_cache.get(d, signature)
+        if body is None:
+            body = json.dumps(self._tracks_body())
+            _tracks_cache.put(d, signature, body)
+        return body[:-1] + ", " + json.dumps(self._tracks_head())[1:]
+
+    def _tracks_head(self) -> dict:
+        """What differs between browsers shown the same drawing: the overlays and the nodes' owner."""
+        return {"groups": dict(self.overlays),
+                "owner": str(getattr(self.scene, "_owner_id", ""))}  # viser 1.1 drops an update of another owner's node
+
+    def _tracks_body(self) -> dict:
+        d = self.drawing
+        out = {"n": self.n, "tracks": [], "chunks": [], "props": []}
         if d is None or self.n == 0:
             return out
         t = np.asarray(d.times, float)

@@ -933,7 +933,7 @@ class ClientSession:
         """The scene's moving parts, for a page that plays by itself, then its clock."""
         self._server_moves = self.view.server_moves()
         if self.page_plays:
-            browser.call(self.client, "tracks", self.view.tracks())
+            browser.call_json(self.client, "tracks", self.view.tracks_json())
             self._send_clock()
 
     def _send_clock(self) -> None:

@@ -264,6 +264,61 @@ def test_a_page_that_plays_is_given_everything_that_moves(name):
     assert len(scales) == sum(1 for v in view._vectors.values() if v[3] > 0) and (name != "initial-axis" or scales)
 
 
+def test_browsers_shown_one_drawing_share_its_tracks_and_each_gets_its_own_owner_and_overlays():
+    """The tracks sent as JSON are `tracks()`, exactly. Two views shown the same Drawing (a class
+    on a cached scene) share the body, made once; each keeps its own node owner and overlay
+    checkboxes. A view of another drawing, or of the same one with a group built that the first
+    did not build, gets its own tracks."""
+    import json
+
+    _, _, d = _drawing("initial-axis", **get("initial-axis").preview)
+    views = []
+    for owner in ("a", "b"):
+        scene = FakeScene()
+        scene._owner_id = owner
+        v = SceneView(scene)
+        v.page_plays = True
+        v.show(d)
+        views.append(v)
+    views[1].overlays[next(iter(views[1].overlays))] = False
+    made = []
+    body = scene_mod.SceneView._tracks_body
+    scene_mod.SceneView._tracks_body = lambda self: made.append(1) or body(self)
+    try:
+        texts = [v.tracks_json() for v in views]
+    finally:
+        scene_mod.SceneView._tracks_body = body
+    assert len(made) == 1  # the second browser reused the first one's
+    for v, text in zip(views, texts):
+        assert json.loads(text) == json.loads(json.dumps(v.tracks()))
+    assert json.loads(texts[0])["owner"] == "a" and json.loads(texts[1])["owner"] == "b"
+    assert json.loads(texts[0])["groups"] != json.loads(texts[1])["groups"]
+    _, _, other = _drawing("initial-axis", **{**get("initial-axis").preview, "duration": 1.5})
+    views[1].show(other)
+    assert json.loads(views[1].tracks_json()) == json.loads(json.dumps(views[1].tracks()))
+    assert json.loads(views[1].tracks_json())["times"] != json.loads(texts[0])["times"]
+
+
+def test_the_shared_tracks_stay_within_their_bytes_and_forget_a_dropped_drawing():
+    import gc
+
+    class D:  # stands for a Drawing
+        pass
+
+    cache = scene_mod._TracksCache(max_bytes=25)
+    a, b, c = D(), D(), D()
+    for d in (a, b, c):
+        cache.put(d, "sig", "x" * 10)
+    assert cache.get(a, "sig") is None and cache.get(b, "sig") == cache.get(c, "sig") == "x" * 10
+    assert cache.get(b, "other") is None
+    ident = id(c)
+    del c
+    gc.collect()
+    e = D()
+    if id(e) == ident:  # a new object at the dropped drawing's address is not it
+        assert cache.get(e, "sig") is None
+
+
 def test_a_long_runs_props_are_kept_for_every_sth_frame_within_the_budget():
     """A trail of 28 segments over 3,000 frames (1 MB in float16) is given for every s-th frame, the
     smallest s that fits TRACK_POINTS_BYTES; text beyond TRACK_TEXT_CHARS likewise."""
