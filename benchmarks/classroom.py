@@ -48,6 +48,7 @@ import threading
 import time
 
 import numpy as np
+from websockets.exceptions import ConnectionClosed
 
 from ..app.browser import ADDRESS_KEY
 from . import register_bench
@@ -468,6 +469,7 @@ async def _abuser(url: str, t_end: float, rec: dict) -> None:
     them, again and again until the soak ends."""
     c = ViserProtocolClient(url)
     await c.connect()
+    t_start = time.perf_counter()
     try:
         if not await c.wait_for(lambda: c.update_no >= 1, FIRST_SCENE_TIMEOUT_S):
             return
@@ -489,14 +491,17 @@ async def _abuser(url: str, t_end: float, rec: dict) -> None:
             async def send(k):
                 await c.send_gui(uuid, f"{v0 * (0.5 + (k % 97) / 97.0):.6g}")
                 await c.send_raw({"type": "GuiFormSubmitMessage", "uuid": c.components[uuid]["container"]})
-        sent = 0
         while time.perf_counter() < t_end:
             for k in range(ABUSE_MESSAGES):
+                if time.perf_counter() >= t_end:
+                    break
                 await send(k)
-                sent += 1
+                rec["abuse_sent"] = rec.get("abuse_sent", 0) + 1
             await asyncio.sleep(0.5)
-        rec["abuse_sent"] = sent
         rec["abuser_updates"] = c.update_no
+    except ConnectionClosed as e:  # the server may close a client that floods it
+        rec["abuser_closed_after_s"] = time.perf_counter() - t_start
+        rec["abuser_closed"] = f"{type(e).__name__}: {e}"
     except Exception as e:  # noqa: BLE001
         rec["errors"].append(f"abuser: {type(e).__name__}: {e}")
     finally:
@@ -579,6 +584,7 @@ async def _classroom(port: int, pid: int, soak_s: float, n: int, abusive: bool) 
         "rss_mb_after_disconnect": rss_after[0], "rss_mb_per_min_second_half": slope,
         "threads_max": int(thr.max()),
         "abuse_sent": rec.get("abuse_sent", 0),
+        "abuser_closed_after_s": rec.get("abuser_closed_after_s"),
     }
     for kind, _ in MIX:
         xs = [a["first"] for a in acts if a["kind"] == kind and a["first"] is not None]

@@ -31,7 +31,7 @@ import pytest
 import websockets
 
 from theoria.app import worker as worker_mod
-from theoria.app.server import GUI_BURST, GUI_RATE, Limits, make_server
+from theoria.app.server import GUI_BURST, GUI_RATE, READ_BURST, READ_RATE, Limits, make_server
 from theoria.benchmarks.classroom import SLIDER, ViserProtocolClient, _free_port
 
 # each test starts a server with its pool of simulation processes (seconds to minutes): CI runs them,
@@ -199,28 +199,38 @@ def test_flood_of_updates_is_coalesced_and_does_not_starve_another_client():
             for c in (abuser, student):
                 assert await c.wait_for(lambda c=c: c.update_no >= 1, 120)
             uuid = abuser.uuid_of(SLIDER)
+            gate = door.gates[min(door.gates)]  # the abuser connected first
+            read0 = gate.seen
             t0 = time.monotonic()
             for k in range(3000):
                 await abuser.send_gui(uuid, round(3.0 + 0.1 * (k % 50), 1))
             await abuser.send_gui(uuid, 9.5)  # the last value the abuser sent
+            # the server reads the flooding socket at READ_RATE a second after a burst, whatever the
+            # client writes (its writes wait in the sockets' buffers)
+            reads = []
+            for _ in range(4):
+                reads.append((time.monotonic() - t0, gate.seen - read0))
+                await asyncio.sleep(0.5)
             lat = await student.move_slider(SLIDER, 2.5, timeout=180)
-            await asyncio.sleep(2.0)
-            elapsed = time.monotonic() - t0
             final = None
-            for _ in range(600):  # the newest value reached the abuser's session
+            for _ in range(1200):  # the newest value reached the abuser's session
                 values = [s.controls.values().get("spin") for s in list(sessions.values())]
                 if 9.5 in values:
                     final = 9.5
                     break
                 await asyncio.sleep(0.1)
+            elapsed = time.monotonic() - t0
             seen = (len(sessions), list(door.gates.values()))
             for c in (abuser, student):
                 await c.close()
-            return lat, elapsed, final, seen
+            return lat, elapsed, final, seen, reads
 
-        lat, elapsed, final, (n_sessions, gates) = asyncio.run(main())
+        lat, elapsed, final, (n_sessions, gates), reads = asyncio.run(main())
         assert n_sessions == 2
         assert lat is not None, "the other client's slider got no redraw"
+        for t, n in reads:  # (+ what the websocket library queues before it stops reading: 16 messages)
+            assert n <= READ_BURST + READ_RATE * t + 16 + 1, (t, n, reads)
+        assert READ_BURST < reads[-1][1] < 3000, reads  # the flooding socket, read over seconds, not at once
         abuser_gate = max(gates, key=lambda g: g.coalesced)
         # the app saw at most what the rate allows; the rest was coalesced, the last value kept
         assert abuser_gate.coalesced >= 3000 - (GUI_BURST + GUI_RATE * elapsed) - 1
