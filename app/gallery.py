@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import re
 
-import numpy as np
-
 from theoria.physics.params import pretty_unit  # noqa: F401  (units as the panel prints them)
 from theoria.scenarios.base import GROUP_ORDER, section_key
 
@@ -69,21 +67,3 @@ def formula_markdown(formula: str) -> str:
         return ""
     esc = [ln.replace("*", "\\*").replace("_", "\\_") for ln in lines]
     return "**Euler:**\n\n" + "\n".join(f"> {ln}  " for ln in esc)
-
-
-# the control panel covers the right ~30 % of the canvas: orbit scenes are centred in the free part
-PANEL_SHIFT = 0.3
-
-
-def camera_view(spec) -> tuple[tuple, tuple]:
-    """(camera position, look-at point): the gallery's camera; orbit scenes are moved left of the
-    control panel by shifting the camera to the right (along the screen's right direction) by
-    PANEL_SHIFT of its distance."""
-    position, look_at = (np.asarray(v, float) for v in camera_for(spec))
-    if spec.kind != "rotation":
-        fwd = look_at - position
-        right = np.cross(fwd, (0.0, 0.0, 1.0))
-        if np.linalg.norm(right) > 0:
-            shift = PANEL_SHIFT * np.linalg.norm(fwd) * right / np.linalg.norm(right)
-            position, look_at = position + shift, look_at + shift
-    return tuple(float(x) for x in position), tuple(float(x) for x in look_at)

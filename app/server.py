@@ -44,7 +44,6 @@ from theoria.physics.errors import ParameterError
 from theoria.scenarios import all_scenarios, get
 
 from . import page
-from .gallery import camera_view  # noqa: F401  (the scenario's view, as the app frames it)
 from .panel import comparison_markdown, info_markdown  # noqa: F401
 from .session import ClientSession
 from .worker import MAX_TEXT_CHARS, RateLimitedLog, SimPool, shared_pool
