@@ -18,6 +18,7 @@ from .base import Comparison, Run, Scenario, register
 from .budget import Cost, trajectory_bytes
 from ..physics.three_body import syzygy as sz
 from .checks import register_check
+from ..physics.kept import kept
 from ._three_body import GROUP, orbit_trajectory
 
 
@@ -25,6 +26,18 @@ from ._three_body import GROUP, orbit_trajectory
 # 2-year measurement together (defaults and presets, measured): 60 per year of run is above that
 STEPS_PER_YEAR = 60
 N_SAMPLES = 4000  # the displayed run's samples (fewer when the Moon leaves)
+
+
+@kept(16)  # depends on the mass ratio and the side only: a slider of the displayed run reuses it
+def _measured_modes(m, side, guess, progress=None):
+    """A clean measurement of the swing and the escape: the exact linear mode at a tiny amplitude
+    plus a tinier seed of the escape over two years; fit η = a cos ωt + b sin ωt + c e^{λt} +
+    d e^{−λt} in the linear regime. (ω, λ, relative rms residual of the fit)."""
+    A_meas = 1e-6
+    tm, Sm, _ = sz.integrate(m, sz.initial_state(m, A_meas, side, "linear-mode", 1e-9), 2 * math.pi * 2.0,
+                             n_samples=8000, progress=progress)
+    etam, _ = sz.eta_and_distance(Sm, side)
+    return sz.fit_swing_and_escape(tm, etam, A_meas, guess=guess)
 
 
 def _syzygy(values, progress=None):
@@ -49,14 +62,8 @@ def _syzygy(values, progress=None):
     t, S, _ = sz.integrate(m, s0, 2 * math.pi * values["duration_yr"], n_samples=N_SAMPLES, progress=part(0.0, 0.5))
     eta, v = sz.eta_and_distance(S, side)
     left = t[-1] < 2 * math.pi * values["duration_yr"] * (1 - 1e-9)
-    # a clean measurement: the exact linear mode at a tiny amplitude plus a tinier seed of the
-    # escape; fit η = a cos ωt + b sin ωt + c e^{λt} + d e^{−λt} in the linear regime
-    A_meas = 1e-6
-    tm, Sm, _ = sz.integrate(m, sz.initial_state(m, A_meas, side, "linear-mode", 1e-9), 2 * math.pi * 2.0,
-                             n_samples=8000, progress=part(0.5, 1.0))
-    etam, _ = sz.eta_and_distance(Sm, side)
-    w_meas, lam_meas, fit_res = sz.fit_swing_and_escape(tm, etam, A_meas,
-                                                         guess=(modes["frequency"], modes["escape_exponent"]))
+    w_meas, lam_meas, fit_res = _measured_modes(m, side, (modes["frequency"], modes["escape_exponent"]),
+                                                progress=part(0.5, 1.0))
     w_run, n_half_run = sz.measured_frequency(t, eta, 1.5 * A)
     # amplitude relation of §16 on the displayed run's first swing
     first = t <= (2 * math.pi / modes["frequency"])
@@ -289,6 +296,7 @@ register(Scenario(
     draw=_draw,
     options=OPTIONS,
     cost_fn=_cost,
+    preview={"duration_yr": 1.0},  # the first year while a run of many is computed
     euler_formula=("m(1 − α)² = α² − α²(1 − α)³ (§7)\n"
                    "η = A sin ω, v = b(1 − 0.3117 A cos ω), ω = αζ, α⁴ + 2α² = 27 (§16)"),
     kind="orbit",

@@ -1,7 +1,7 @@
 """A slider moved in class usually changes one number. Pieces of a run that depend on other numbers
 only (Hyperion's resonance branches, the forced libration on an eccentric orbit and its stability,
-the precession's resonance table, the ellipsoid's quadrature rule) are kept and reused by the next
-run that shares those numbers. Reused or made afresh, a run's numbers must be the same, bit for
+the precession's resonance table, the ellipsoid's quadrature rule, the syzygy's measured swing)
+are kept and reused by the next run that shares those numbers. Reused or made afresh, a run's numbers must be the same, bit for
 bit, and a changed number must not reuse a piece made for another."""
 from __future__ import annotations
 
@@ -19,6 +19,7 @@ CASES = [
     ("libration-eccentric", {"orbits": 3.0}, ("free_zeta0_deg", 5.0), ("asymmetry", 0.07)),
     ("precession-circular", {"orbits": 3.0}, ("h", 0.01), ("flattening", 0.12)),
     ("gravity-gradient-accuracy", {"n_points": 4}, ("max_ratio", 0.4), ("semi_axes", (1.0, 0.7, 0.5))),
+    ("syzygy", {}, ("duration_yr", 2.5), ("mass_ratio", 1e-4)),
 ]
 
 
