@@ -1,13 +1,13 @@
 """Pieces of a run kept for the next run that shares their numbers.
 
-A slider moved in class usually changes one number. A piece of a run that depends on other
-numbers only (Hyperion's resonance branches, the forced libration on an eccentric orbit, the
-precession's resonance table, the ellipsoid's quadrature rule, the syzygy's measured swing) is
-made once per process and reused: `@kept(n)` keeps the last n results of a pure function of
-hashable numbers, results that are never written to. A `progress` keyword is not part of the key (it only reports, and may stop the work by
-raising: nothing is kept then). `forget()` drops everything kept so (a cost measured on a run made
-afresh); the older per-scenario tables made with functools.lru_cache (earth-long-view's secular
-calibration, the ephemerides) are not among them.
+A slider moved in class usually changes one number. A piece of a run that depends on other numbers
+only (Hyperion's resonance branches, the forced libration on an eccentric orbit, the precession's
+resonance table, the ellipsoid's quadrature rule, the syzygy's measured swing) is made once per
+process and reused: `@kept(n)` keeps the last n results of a pure function of hashable numbers,
+results that are never written to. A `progress` keyword is not part of the key (it only reports,
+and may stop the work by raising: nothing is kept then). `forget()` drops everything kept so (a
+cost measured on a run made afresh); the older per-scenario tables made with functools.lru_cache
+(earth-long-view's secular calibration, the ephemerides) are not among them.
 """
 from __future__ import annotations
 
