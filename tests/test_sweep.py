@@ -136,7 +136,7 @@ def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_pat
     sends it (the local cluster's workers too: they ignore it, the sweep stops them)."""
     out = tmp_path / "m.zarr"
     # (B − A)/C = 0.333 is refused at once (Euler's resonance A² = 2N): a column of refused runs
-    args = ["sweep", "libration-eccentric", "--grid", "e=0:0.2:4", "--grid", "asymmetry=0.01,0.1,0.2,0.333",
+    args = ["sweep", "libration-eccentric", "--grid", "e=0:0.2:12", "--grid", "asymmetry=0.01,0.1,0.2,0.333",
             "--out", str(out), "--chunk", "2", "--workers", "2", *CHEAP]
     p = subprocess.Popen([*THEORIA, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
                          start_new_session=True)
@@ -163,7 +163,7 @@ def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_pat
     assert p.returncode == (143 if sig == signal.SIGTERM else 130), err
     assert "Traceback" not in err and "runs/s" in err  # the progress bar: runs done, rate, time left
     done, total = _finished_chunks(out)
-    assert total == 8 and 2 <= done < total, (done, total)
+    assert total == 24 and 2 <= done < total, (done, total)
     import xarray as xr
 
     before = xr.open_zarr(out, consolidated=False).load()
