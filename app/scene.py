@@ -37,6 +37,9 @@ from __future__ import annotations
 import base64
 import hashlib
 import json
+import threading
+import weakref
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -135,9 +138,6 @@ class _TracksCache:
     cache takes its entries' meaning with it (an id reused later does not match)."""
 
     def __init__(self, max_bytes: int = TRACKS_CACHE_BYTES):
-        import threading
-        from collections import OrderedDict
-
         self.max_bytes = max_bytes
         self._items: OrderedDict = OrderedDict()
         self._bytes = 0
@@ -152,8 +152,6 @@ class _TracksCache:
             return hit[1]
 
     def put(self, drawing, signature, text: str) -> None:
-        import weakref
-
         with self._lock:
             key = (id(drawing), signature)
             old = self._items.pop(key, None)

@@ -9,9 +9,9 @@ What the server refuses, whoever asks (a student's browser or a script speaking 
   The server binds 127.0.0.1 unless `--host` says otherwise, opens no browser, sends no
   analytics, and stops when its parent process dies.
 - **A browser's messages are bounded**: its socket is read at most READ_RATE messages a second
-  (beyond, TCP holds the sender back: `_read_with_backpressure`). GUI updates (`Gate`) carry only a `value` of a plain
-  type (text at most MAX_TEXT_CHARS); with the panel's form submits, key commands and
-  localStorage answers, at most GUI_RATE a second reach the app, the rest are
+  (beyond, TCP holds the sender back: `_read_with_backpressure`). GUI updates (`Gate`) carry only
+  a `value` of a plain type (text at most MAX_TEXT_CHARS); with the panel's form submits, key
+  commands and localStorage answers, at most GUI_RATE a second reach the app, the rest are
   coalesced (the newest value per control wins, so a slider flood ends at its last value and
   costs the other students nothing); camera updates at most CAMERA_RATE a second.
 - **Connections are bounded** (`Door`): at most `max_connections` websockets in all and
