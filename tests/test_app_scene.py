@@ -312,10 +312,12 @@ def test_the_shared_tracks_stay_within_their_bytes_and_forget_a_dropped_drawing(
     assert cache.get(a, "sig") is None and cache.get(b, "sig") == cache.get(c, "sig") == "x" * 10
     assert cache.get(b, "other") is None
     ident = id(c)
-    del c
+    del c, d
     gc.collect()
+    # held weakly: the dropped drawing is gone, and a new object at its address does not match
+    assert sum(ref() is None for ref, _ in cache._items.values()) == 1
     e = D()
-    if id(e) == ident:  # a new object at the dropped drawing's address is not it
+    if id(e) == ident:
         assert cache.get(e, "sig") is None
 
 
