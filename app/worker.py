@@ -468,6 +468,7 @@ class Job:
     cancel: bool = False
     preempted: bool = False  # a background job stopped to free its child for a browser (queued again)
     overran: bool = False  # judged quick, it ran past QUICK_OVERRUN_S in a quick child: slow from now on
+    cpu: float | None = None  # CPU seconds the child spent on it (for the timing log)
     nojit_tried: bool = False
     progress: float | None = None
 
@@ -1017,20 +1018,31 @@ class SimPool:
                 and not job.spec.chaotic and job.spec.name not in self.warm)
 
     def _slow(self, job: Job) -> bool:
-        if job.preview and not job.background:  # a quick preview is what makes a slow run bearable:
-            return False  # it goes before every full run, whatever the loaded machine made of its time
+        if job.preview and not job.background:
+            # a quick preview is what makes a slow run bearable: it goes before every full run,
+            # unless even at its scenario's cheapest pace per step it would hold a quick child for
+            # long (earth-long-view's full integration previewed over 25,800 years: 2 s at that
+            # pace, 8 s of CPU in fact, while every quick run of the class waited for the child)
+            return self._least_seconds(job) > SLOW_JOB_S
         if job.overran:
             return True
         t = self.expected_seconds(job.spec, job.values, job.preview, steps=job.steps)
         return t is None or t > SLOW_JOB_S
 
+    def _least_seconds(self, job: Job) -> float:
+        """CPU seconds of `job` at its scenario's cheapest pace per integrator step so far (0 when
+        there is none yet): a lower bound that a loaded machine or a first run does not inflate."""
+        best = self._cheapest.get(job.spec.name)
+        if best is None or not best[1] > 0:
+            return 0.0
+        return best[0] * job.steps / best[1]
+
     def _tiny(self, job: Job) -> bool:
         """A run for the tiny child: its scenario's cheapest run so far, scaled by integrator steps,
         within TINY_JOB_S."""
-        best = self._cheapest.get(job.spec.name)
-        if job.background or job.overran or best is None or not best[1] > 0:
+        if job.background or job.overran or job.spec.name not in self._cheapest:
             return False
-        return best[0] * job.steps / best[1] <= TINY_JOB_S
+        return self._least_seconds(job) <= TINY_JOB_S
 
     def quick_waiting(self) -> bool:
         """A browser's quick run waits in the queue (for a quick child)."""
@@ -1110,6 +1122,7 @@ class SimPool:
         time: on a loaded machine a 50 ms run at low priority took a second, was judged slow, went
         to the slow children behind runs of seconds, and was timed slower still."""
         self._first_run.set()
+        job.cpu = cpu
         run.spec = job.spec
         if slot.jit and slot.use_process and not job.local:
             self.warm.add(job.spec.name)
@@ -1428,6 +1441,8 @@ class SimulationWorker:
             return
         req.stamps.setdefault("start", job.started or req.stamps["request"])
         req.stamps["simulated"] = time.perf_counter()
+        if job.cpu is not None:
+            req.stamps["cpu"] = job.cpu
         if req.preview:
             with self._lock:
                 full_pending = any(not r.preview and r.gen == req.gen for _, r in self._jobs.values())
@@ -1495,7 +1510,7 @@ def timing_log(name: str, req: Request, pool: "SimPool | None" = None) -> None:
     line = json.dumps({"scenario": name, "preview": bool(req.preview), "cached": bool(st.get("cached")),
                        "queued_s": st.get("start", r) - r, "run_s": st.get("simulated", r) - st.get("start", r),
                        "show_s": st.get("shown", r) - st.get("simulated", r), "total_s": st.get("shown", r) - r,
-                       "draw_s": st.get("shown", r) - st.get("drawing", r),
+                       "draw_s": st.get("shown", r) - st.get("drawing", r), "cpu_s": st.get("cpu"),
                        **({"pool": {**pool.stats, "kills": sum(s.kills for s in pool.slots),
                                     "queued": len(pool._queue), "busy": sum(s.job is not None for s in pool.slots)}}
                           if pool is not None else {})})

@@ -642,7 +642,8 @@ def run_classroom(soak_s: float | None = None, n: int = N_CLIENTS, abusive: bool
 def server_side(path: str) -> dict:
     """Where the server's part of an answer went, from its timing log (one line per scene shown):
     p50/p95 in ms of waiting for a simulation process, simulating, waiting to be drawn, drawing and
-    sending; runs from the cache have no wait and no simulation."""
+    sending; runs from the cache have no wait and no simulation. And the CPU seconds of the runs
+    shown, summed by scenario."""
     try:
         rows = [json.loads(line) for line in open(path)]
     except (OSError, ValueError):
@@ -654,6 +655,12 @@ def server_side(path: str) -> dict:
     for name, f in parts.items():
         xs = [f(r) for r in (computed if name in ("queued", "simulating") else rows)]
         out[f"server_{name}_ms_p50"], out[f"server_{name}_ms_p95"] = _pct(xs, 50), _pct(xs, 95)
+    # CPU of the runs shown, by scenario: where the simulation processes' cores went
+    cpu: dict[str, float] = {}
+    for r in computed:
+        if r.get("cpu_s") is not None:
+            cpu[r["scenario"]] = cpu.get(r["scenario"], 0.0) + r["cpu_s"]
+    out["server_run_cpu_s_by_scenario"] = {k: round(v, 2) for k, v in sorted(cpu.items(), key=lambda kv: -kv[1])}
     return out
 
 

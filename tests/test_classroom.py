@@ -668,6 +668,34 @@ def test_a_tiny_run_does_not_wait_for_busy_children():
         pool.close()
 
 
+def test_a_preview_that_would_take_seconds_is_left_to_the_slow_children():
+    """A preview goes before every full run, in a quick child, unless even at its scenario's
+    cheapest pace per step it would hold that child for long: earth-long-view's full integration
+    previewed over 25,800 years (~2 million steps; 8 s of CPU here) went to a quick child and every
+    quick run of the class waited for it. Judged from a secular run's pace (1 µs a step)."""
+    import types
+
+    from theoria.scenarios import get
+
+    spec = get("earth-long-view")
+    pool = worker_mod.SimPool(slots=2, store=False, use_processes=False)
+    try:
+        quick, slow = pool.slots[:2]
+        assert quick.quick and not slow.quick
+        secular = spec.resolve({})
+        pool._done(worker_mod.Job("k0", spec, secular), types.SimpleNamespace(), 0.024, quick, cpu=0.024)
+
+        def preview(given):
+            return worker_mod.Job("p", spec, spec.resolve({**given, **dict(spec.preview)}), preview=True)
+
+        cheap, dear = preview({}), preview({"model": "full"})
+        assert cheap.steps < 0.1 * dear.steps
+        assert not pool._slow(cheap) and pool._eligible(quick, cheap)
+        assert pool._slow(dear) and not pool._eligible(quick, dear) and pool._eligible(slow, dear)
+    finally:
+        pool.close()
+
+
 def test_a_childs_first_run_of_a_scenario_does_not_set_the_expected_time():
     """A child's first run of a scenario also loads its compiled code and makes what the process
     keeps (earth-long-view's calibration: 0.44 s before a 20-ms run): it sets the time expected of
