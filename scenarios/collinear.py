@@ -28,6 +28,13 @@ SATELLITE_LEFT = 0.1
 # DOP853 (rtol 1e-12) steps, measured on the defaults and presets: 48-98 for the three-body motions
 # (2 turns, a collapse, an expansion), 96-177 for the restricted case over 2 turns
 DOP853_STEPS_PER_TURN = 100
+# The turning line is unstable (Euler's collinear solutions are): after a turn or two the bodies
+# leave it and meet closely, and every further turn took 250-560 steps (four mass sets, 1-20 turns:
+# 9,437 steps and 2 s for 20 turns of the defaults, 122 steps for their 2). Costed at the first
+# turns' rate alone, 15 turns were expected to take a quarter of a second and took 1.3: the server
+# ran them without a preview, as quick, and they waited behind the class for over 30 s.
+DOP853_STEPS_PER_TURN_OFF_LINE = 500
+TURNS_ON_LINE = 2
 DOP853_STEPS_HOMOTHETIC = 200
 N_SAMPLES = 600  # samples of the three-body motions
 N_SAMPLES_RESTRICTED = 1200
@@ -287,14 +294,16 @@ def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
 
 
 def _cost(values):
-    """One DOP853 run; kept: 600 samples of the three bodies (1200 and the five L-point markers in
+    """One DOP853 run (the rotating line: slow once it has broken up); kept: 600 samples of the three bodies (1200 and the five L-point markers in
     the restricted case) with their integrated state and the ratio and spacing series."""
     motion = values["motion"]
     if motion == "restricted":
         grid = 3 * 8 * ZERO_VELOCITY_GRID**2
         return Cost(DOP853_STEPS_PER_TURN * values["turns"], N_SAMPLES_RESTRICTED,
                     trajectory_bytes(N_SAMPLES_RESTRICTED, bodies=6 + 5, series=3, extra=grid))
-    steps = DOP853_STEPS_PER_TURN * values["turns"] if motion == "rotating" else DOP853_STEPS_HOMOTHETIC
+    turns = values["turns"]
+    steps = (DOP853_STEPS_PER_TURN * turns + DOP853_STEPS_PER_TURN_OFF_LINE * max(0.0, turns - TURNS_ON_LINE)
+             if motion == "rotating" else DOP853_STEPS_HOMOTHETIC)
     series = 8 if motion == "rotating" else 7
     return Cost(steps, N_SAMPLES, trajectory_bytes(N_SAMPLES, bodies=6, series=series))
 

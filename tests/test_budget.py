@@ -33,7 +33,10 @@ HEAVY = {"earth-long-view", "earth", "lunar-perturbation", "hyperion", "libratio
 # values beyond the presets whose cost has a term of its own (label → given)
 EXTRA = {"earth-long-view": {"zoom, secular": {"zoom_years": 2.0, "step_days": 2.0, "sample_years": 50.0},
                              "zoom, full": {"model": "full", "years": 300.0, "sample_years": 50.0,
-                                            "zoom_years": 1.0, "step_days": 0.5}}}
+                                            "zoom_years": 1.0, "step_days": 0.5}},
+         # the turning line breaks up after a turn or two: each later turn costs five times more
+         "collinear": {"15 turns": {"turns": 15.0}, "20 turns, light middle body": {"turns": 20.0,
+                                                                                  "masses": (1.0, 1e-3, 1.0)}}}
 
 
 def _cases():
