@@ -294,8 +294,9 @@ def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
 
 
 def _cost(values):
-    """One DOP853 run (the rotating line: slow once it has broken up); kept: 600 samples of the three bodies (1200 and the five L-point markers in
-    the restricted case) with their integrated state and the ratio and spacing series."""
+    """One DOP853 run (the turning line: slower once it has broken up); kept: 600 samples of the
+    three bodies (1200 and the five L-point markers in the restricted case) with their integrated
+    state and the ratio and spacing series."""
     motion = values["motion"]
     if motion == "restricted":
         grid = 3 * 8 * ZERO_VELOCITY_GRID**2
