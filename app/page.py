@@ -3,8 +3,8 @@
 viser serves one self-contained `index.html` (its client inlined). theoria serves a copy with:
 
 - the tab titled "theoria" from the first byte (the session then names the scenario);
-- a visible line ("theoria — connecting…") in the page's root until viser's client replaces it,
-  so the page is never blank while the client starts and the first scene is prepared;
+- a visible line ("theoria — connecting…") from the first bytes parsed until the first scene is
+  drawn, so the page is never blank while the client starts and the first scene is prepared;
 - CSS that hides viser's own chrome a class has no use for from the first frame.
 
 The copy is written once per viser version into theoria's cache directory (a temporary
@@ -85,8 +85,10 @@ def themed_index(html: str) -> str:
     html = html.replace("<title>Viser</title>", f"<title>{TITLE}</title>", 1)
     html = html.replace('content="Viser client"', f'content="{TITLE}"', 1)
     html = html.replace("<head>", f"<head><script>{SOFTWARE_GL_JS}</script>", 1)
-    html = html.replace("</head>", f"<style>{CSS}</style></head>", 1)
-    html = html.replace("<body>", "<body>" + LOADING_HTML, 1)
+    # The line goes in before viser's inlined client (an 800 kB script in the head that the browser
+    # runs before it reads on), so that it is in the page from the first bytes parsed. The parser
+    # opens the body at the div; the client's script then runs from the body, as it may.
+    html = html.replace("</title>", f"</title><style>{CSS}</style>{LOADING_HTML}", 1)
     return html
 
 

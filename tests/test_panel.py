@@ -1,8 +1,10 @@
 """The panel's words and numbers (app/panel.py), the controls' parsing (app/controls.py), the view
-as a link (app/link.py) and the session's playback controls, without a browser."""
+as a link (app/link.py), the session's playback controls and the page's first bytes (app/page.py),
+without a browser."""
 from __future__ import annotations
 
 import math
+from html.parser import HTMLParser
 
 import numpy as np
 import pytest
@@ -170,3 +172,30 @@ def test_export_says_where_the_file_went_and_its_size(tmp_path, capsys):
     assert str(out) in text and out.exists()
     size = out.stat().st_size
     assert f"{size / 1e6:.1f} MB" in text or f"{size / 1e3:.0f} KB" in text or f"{size / 1e6:.0f} MB" in text
+
+
+def test_the_loading_line_is_parsed_before_viser_s_client_runs():
+    """viser's client is an 800 kB script inlined in the page's head, which the browser runs before
+    it parses on; on a loaded machine a page caught at that moment had its title and no body. The
+    line must come before it (and before the client's root) to be there from the first bytes."""
+    from theoria.app.page import LOADING, SOFTWARE_GL_JS, _viser_index, themed_index
+
+    order = []
+
+    class Tags(HTMLParser):
+        def handle_starttag(self, tag, attrs):
+            order.append((tag, dict(attrs).get("id")))
+
+        def handle_data(self, data):
+            if data.strip() == LOADING or data.strip() == SOFTWARE_GL_JS.strip():
+                order.append(("text", data.strip()[:20]))
+
+    Tags().feed(themed_index(_viser_index().read_text(encoding="utf-8")))
+    line = order.index(("div", "theoria-loading"))
+    assert order[line + 1] == ("text", LOADING[:20])
+    scripts = [i for i, (tag, _) in enumerate(order) if tag == "script"]
+    ours = order.index(("text", SOFTWARE_GL_JS.strip()[:20])) - 1
+    assert [i for i in scripts if i != ours], "viser's client script not found"
+    assert all(line < i for i in scripts if i != ours)
+    assert line < order.index(("div", "root"))
+    assert order.index(("title", None)) < line  # the tab is named before anything else
