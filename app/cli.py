@@ -228,10 +228,10 @@ def cmd_run(args) -> int:
     print(f"{sc.title} ({sc.name}, {sc.section})")
     print("parameters:")
     for p in sc.params:
-        print(f"  {p.name:<24} {number(values[p.name], 10)} {p.unit}")
+        print(f"  {p.name:<24} {number(values[p.name], 10)} {p.unit if p.unit != '1' else ''}".rstrip())
     print("metrics:")
     for k, v in out["metrics"].items():
-        print(f"  {k:<40} {number(v, 10)}")
+        print(f"  {k:<40} {number(v, 10)} {out['metric_units'][k] or ''}".rstrip())
     if result.comparisons:
         print("Euler / simulated / modern:")
         for c in result.comparisons:

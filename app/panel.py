@@ -13,6 +13,7 @@ import re
 
 import numpy as np
 
+from ..scenarios.units import NAME_SUFFIXES, unit_in_name
 from . import gallery
 from .format import human_number
 
@@ -89,31 +90,29 @@ def _finite(x) -> bool:
 
 # ---- metric keys in words --------------------------------------------------------------------
 
-# unit suffixes of metric names (design.md: a field's unit lives in its name), longest first
-_UNIT_SUFFIX = (
-    ("arcsec_per_yr", "″/yr"), ("arcsec_per_century", "″/century"), ("deg_per_yr", "°/yr"),
-    ("kg_m2_per_s", "kg·m²/s"), ("rad_per_s2", "rad/s²"), ("rad_per_s", "rad/s"), ("rad_per_day", "rad/day"),
-    ("per_s", "1/s"), ("per_yr", "1/yr"), ("per_day", "1/day"),
-    ("arcsec", "″"), ("mas", "mas"), ("deg", "°"), ("rad", "rad"), ("yr", "yr"), ("years", "yr"),
-    ("days", "days"), ("day", "days"), ("d", "days"), ("s", "s"), ("km", "km"), ("au", "au"), ("m", "m"), ("J", "J"),
-    ("pct", "%"), ("percent", "%"), ("hz", "Hz"),
-)
 _WORDS = {"rel": "relative", "abs": "absolute", "err": "error", "max": "largest", "min": "smallest",
           "num": "number of", "n": "number of", "dt": "step", "std": "spread", "rms": "rms", "obs": "observed",
           "sim": "simulated", "euler": "Euler's", "iau": "IAU", "llr": "LLR", "freq": "frequency",
           "amp": "amplitude", "init": "initial", "nut": "nutation", "prec": "precession", "lon": "longitude",
           "lat": "latitude", "ecc": "eccentricity", "incl": "inclination", "omega": "ω", "zeta": "ζ",
-          "eta": "η", "phi": "φ", "theta": "θ", "psi": "ψ", "eps": "ε", "delta": "δ", "L": "L"}
+          "eta": "η", "phi": "φ", "theta": "θ", "psi": "ψ", "eps": "ε", "delta": "δ", "alpha": "α", "beta": "β", "gamma": "γ", "L": "L",
+          "gp": "Goldreich–Peale", "k2": "k²"}
 
 
-def metric_label(key: str) -> str:
-    """A metric's name in words with its unit: "flip_interval_s" → "flip interval (s)",
-    "energy_rel_drift" → "energy relative drift"."""
-    unit = ""
-    for suffix, text in _UNIT_SUFFIX:
-        if key.endswith("_" + suffix):
-            key, unit = key[: -len(suffix) - 1], text
-            break
+def metric_label(key: str, unit: str | None = None) -> str:
+    """A metric's name in words with its unit: "polhode_period_s" → "Polhode period (s)",
+    "energy_rel_drift" → "Energy relative drift". `unit` is the scenario's (`Scenario.metric_unit`);
+    without it the unit is read from the name."""
+    found = unit_in_name(key)
+    if found is not None and unit in (None, found[1]):
+        key, unit = found
+    elif unit:  # the unit inside the name, before a qualifier: pole_direction_deg_euler
+        for suffix, u in NAME_SUFFIXES:
+            if u == unit and f"_{suffix}_" in key:
+                key = key.replace(f"_{suffix}_", "_", 1)
+                break
+    unit = gallery.pretty_unit(unit or "")
+    key = re.sub(r"^d([a-z]+)_dt(?=_|$)", r"\1_rate", key)  # dspin_dt: the rate of the spin
     words = []
     for w in re.split(r"_+", key):
         if not w:
@@ -123,7 +122,8 @@ def metric_label(key: str) -> str:
         else:
             words.append(_WORDS.get(w, w))
     text = " ".join(words)
-    text = text[:1].upper() + text[1:]
+    if text[:1].isascii():  # β stays β
+        text = text[:1].upper() + text[1:]
     return f"{text} ({unit})" if unit else text
 
 
@@ -194,8 +194,9 @@ def numbers_markdown(result) -> str:
     if result is None or not result.metrics:
         return ""
     lines = []
+    units = result.metric_units
     for k, v in result.metrics.items():
-        lines.append(f"- {_md(metric_label(k))}: {human_number(v, 6)}")
+        lines.append(f"- {_md(metric_label(k, units[k]))}: {human_number(v, 6)}")
     return "\n".join(lines)
 
 

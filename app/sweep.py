@@ -468,7 +468,7 @@ class ZarrWriter:
         plan = self.plan
         ds = self._xr.Dataset({n: (plan.dims, da.full(plan.shape, np.nan, chunks=plan.chunks)) for n in new})
         for n in new:
-            ds[n].attrs["units"] = _unit_of_metric(n)
+            ds[n].attrs["units"] = _unit_of_metric(plan.scenario, n)
         ds.attrs = dict(self.group.attrs)  # appending variables rewrites the group's attributes
         ds.to_zarr(self.path, mode="a", compute=False, consolidated=False)
         self.group = self._zarr.open_group(self.path, mode="r+")
@@ -586,9 +586,11 @@ class ParquetWriter:
         tables = [pq.read_table(os.path.join(self.parts, f)) for f in files]
         table = pa.concat_tables(tables, promote_options="default")
         sc = self.plan.scenario
+        units = {a.name: a.unit or "1" for a in self.plan.grid + self.plan.random}
+        metrics = [c for c in table.column_names if c not in units and c not in (SAMPLE, "status", "message")]
+        units.update({m: _unit_of_metric(sc, m) for m in metrics})
         meta = {"theoria_sweep": json.dumps(self.plan.spec()), "theoria_version": __version__,
-                "scenario": sc.name,
-                "units": json.dumps({a.name: a.unit or "1" for a in self.plan.grid + self.plan.random}),
+                "scenario": sc.name, "units": json.dumps(units),
                 "sessions": json.dumps(getattr(self, "sessions", []))}
         table = table.replace_schema_metadata({**(table.schema.metadata or {}), **{k.encode(): v.encode() for k, v in meta.items()}})
         tmp = self.path + ".tmp"
@@ -614,15 +616,10 @@ def _is_sweep_store(path):
         return False
 
 
-_UNIT_SUFFIXES = (("_rad", "rad"), ("_deg", "deg"), ("_s", "s"), ("_per_orbit", "1/orbit"),
-                  ("_per_unit_time", "1/time unit"), ("_J", "J"))
-
-
-def _unit_of_metric(name: str) -> str:
-    for suf, u in _UNIT_SUFFIXES:
-        if name.endswith(suf):
-            return u
-    return "see name"
+def _unit_of_metric(sc, name: str) -> str:
+    """A metric's unit as the stores write units ("1" for a pure number, as CF conventions do)."""
+    unit = sc.metric_unit(name)
+    return "1" if unit in ("", None) else unit
 
 
 # ------------------------------------------------------------------------------------- running

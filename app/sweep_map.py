@@ -64,27 +64,29 @@ def ramp_css() -> str:
 
 # ------------------------------------------------------------------------------ words for a map
 
+# names in words; the unit is the store's (the scenario's `metric_units`) unless given here
 _METRIC_WORDS = [
-    (r"lyapunov_probe_per_orbit", "Largest Lyapunov exponent of the drawn body", "per orbit"),
-    (r"lyapunov_probe_per_unit_time", "Largest Lyapunov exponent of the drawn body", "per time unit"),
+    (r"lyapunov_probe_per_orbit", "Largest Lyapunov exponent of the drawn body", None),
+    (r"lyapunov_probe_per_unit_time", "Largest Lyapunov exponent of the drawn body", None),
     (r"captured_(\d+)_(\d+)", r"Captured into the \1:\2 resonance", "1 yes, 0 no"),
     (r"captured_resonance", "Resonance it ends in (θ̇/n; 0: none)", ""),
-    (r"gp_capture_probability_(\d+)_(\d+)", r"Goldreich & Peale's probability of capture into \1:\2", ""),
-    (r"gp_series_half_width_([\d.]+)", r"Half-width of the \1 resonance (series in e)", ""),
-    (r"gp_half_width_([\d.]+)", r"Half-width of the \1 resonance", ""),
-    (r"final_spin_rate_n", "Final spin θ̇/n", "× the mean motion n"),
+    (r"gp_capture_probability_(\d+)_(\d+)", r"Goldreich & Peale's probability of capture into \1:\2", None),
+    (r"gp_series_half_width_([\d.]+)", r"Half-width of the \1 resonance (series in e)", None),
+    (r"gp_half_width_([\d.]+)", r"Half-width of the \1 resonance", None),
+    (r"final_spin_rate_n", "Final spin θ̇/n", ""),
 ]
 
 
 def metric_words(key: str, unit: str = "") -> tuple[str, str]:
     """A metric's name in words and its unit as printed: ("Largest Lyapunov exponent …", "per orbit")."""
+    unit = pretty_unit(unit) if unit not in ("see name",) else ""  # "see name": stores written before units
     for pat, name, u in _METRIC_WORDS:
         m = re.fullmatch(pat, key)
         if m:
-            return m.expand(name), u
+            return m.expand(name), unit if u is None else u
     text = re.sub(r" \(.*\)$", "", metric_label(key))
     text = re.sub(r"\b(\d+) (\d+)\b", r"\1:\2", text)  # a resonance p:q written as a key p_q
-    return text, pretty_unit(unit) if unit not in ("see name",) else ""
+    return text, unit
 
 
 def is_capture(metric: str) -> bool:

@@ -42,6 +42,9 @@ def integrate_body(values, omega0, torque=None, progress=None):
     return Trajectory(t, q, L, I)
 
 
+DRIFT_UNITS = {"energy_rel_drift": "", "momentum_rel_drift": ""}  # largest |E/E₀ − 1|, ||L|/|L₀| − 1|
+
+
 def drift_metrics(traj):
     de, dl = traj.relative_drift()
     return {"energy_rel_drift": de, "momentum_rel_drift": dl}

@@ -27,6 +27,7 @@ from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
 from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
 from .drawing import Camera, Drawing, Option, View, declutter_labels, standard
+from .units import metric_unit as unit_of_metric
 
 
 @dataclass(frozen=True)
@@ -82,8 +83,8 @@ class Run:
     """One simulation: parameters, trajectory, metrics, the Euler / simulated / modern table and
     the warnings. Every consumer (CLI, app, recorder, HTML replay, a notebook) reads this object.
 
-    - `metrics`: name → number; each name carries its unit (`flip_interval_s`), exactly the CLI's
-      `--json` "metrics".
+    - `metrics`: name → number, exactly the CLI's `--json` "metrics"; `metric_units` gives each
+      one's unit (in the name where it is a common one: `polhode_period_s`).
     - `comparisons`: the Euler / simulated / modern rows.
     - `warnings`: one sentence per result outside the validity of a formula or of the numerics
       (empty when the run is inside every limit; docs/validity.md lists them); `status` is "ok"
@@ -108,6 +109,12 @@ class Run:
     spec: "Scenario | None" = field(default=None, repr=False, compare=False)  # set by Scenario.simulate
 
     @property
+    def metric_units(self) -> dict[str, str | None]:
+        """name → the unit of each metric ("" for a pure number), as `Param.unit` writes units."""
+        spec = self._spec()
+        return {k: spec.metric_unit(k) for k in self.metrics}
+
+    @property
     def diverged(self) -> bool:
         return self.status == "diverged"
 
@@ -122,6 +129,7 @@ class Run:
             "scenario": self.scenario,
             "params": {p.name: {"value": jsonable(self.params[p.name]), "unit": p.unit} for p in spec.params},
             "metrics": {k: jsonable(v) for k, v in self.metrics.items()},
+            "metric_units": self.metric_units,
             "comparisons": [c.to_json() for c in self.comparisons],
             "notes": list(self.notes),
             "status": self.status,
@@ -354,6 +362,9 @@ class Scenario:
     # 0.96 per orbit). Such a scenario is computed only by the compiled code, so that the app, the
     # command line and a sweep show the same numbers for the same values.
     chaotic: bool = False
+    # the units of the metrics whose names do not end in one (scenarios.units): name or whole-name
+    # pattern → unit as `Param.unit` writes it; "" for a pure number (a ratio, a cosine, a count)
+    metric_units: Mapping[str, str] = field(default_factory=dict)
 
     def __post_init__(self):
         for p in self.params:
@@ -410,6 +421,11 @@ class Scenario:
         resolved = self.resolve(self._merge(given, preset, values))
         check_budget(self, resolved, max_steps, max_memory)
         return self.simulate_fn(resolved, progress=progress)
+
+    def metric_unit(self, key: str) -> str | None:
+        """The unit of metric `key` ("" for a pure number; None when neither its name nor the
+        scenario says, which the tests do not allow for any metric a scenario returns)."""
+        return unit_of_metric(key, self.metric_units)
 
     def cost(self, given: Mapping[str, Any] | None = None, /, *, preset: str | None = None, **values) -> Cost:
         """What `simulate` with the same values would cost, without running it: integrator steps,

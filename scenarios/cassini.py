@@ -301,4 +301,5 @@ register(Scenario(
         ("Moon: started 1° off, the axis circles the state", {"start_offset_deg": 1.0, "years": 80.0}),
         ("Moon: a node twice as slow", {"node_period_yr": 37.2, "years": 80.0}),
     ),
+    metric_units={"opposite_side_fraction": "", "node_cycles_averaged": ""},
 ))

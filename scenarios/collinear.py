@@ -358,6 +358,7 @@ register(Scenario(
         ("Earth–Moon L1: the satellite drifts off (unstable)", {"motion": "restricted", "lagrange_point": "L1"}),
         ("Earth–Moon L2", {"motion": "restricted", "lagrange_point": "L2"}),
     ),
+    metric_units={"alpha": "", "ratio_max_rel_deviation": "", "spacing_vs_euler_max_rel_error": ""},
 ))
 
 

@@ -419,4 +419,5 @@ register(Scenario(
         ("Earth: one 18.6-year nod", {"years": 18.6}),
         ("Earth: one year, the half-year nod", {"years": 1.0}),
     ),
+    metric_units={"euler_excess_predicted": "", "euler_excess_measured": ""},  # fractions of the rate
 ))

@@ -18,7 +18,7 @@ from ..physics import quaternion as quat
 from ..physics.euler_equations import direction_cosines_dot, omega_dot
 from ..physics.torque_free_exact import exact_free_motion
 from .checks import register_check
-from ._rigid_body import (INERTIA_PARAM, body_cost, check_body, drift_metrics, free_body_warnings, integrate_body,
+from ._rigid_body import (DRIFT_UNITS, INERTIA_PARAM, body_cost, check_body, drift_metrics, free_body_warnings, integrate_body,
                           middle_axis_crossings)
 
 
@@ -103,6 +103,7 @@ register(Scenario(
         ("Tumble: spin near the short axis, a small polhode", {"omega0": (0.3, 0.3, 2.0)}),
         ("Symmetric top (A = B): a steady cone", {"inertia": (3.0, 3.0, 4.0), "omega0": (1.0, 0.0, 1.5)}),
     ),
+    metric_units=DRIFT_UNITS,
 ))
 
 

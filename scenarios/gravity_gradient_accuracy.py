@@ -121,6 +121,8 @@ register(Scenario(
         ("Accuracy: a long needle", {"semi_axes": (1.0, 0.2, 0.2)}),
         ("Accuracy: nearly a sphere", {"semi_axes": (1.0, 0.98, 0.96)}),
     ),
+    # the errors' orders are the slopes of log error against log size/distance
+    metric_units={"torque_error_order": "", "force_error_order": "", r"(torque|force)_rel_error_at_(max|min)_ratio": ""},
 ))
 
 

@@ -132,6 +132,7 @@ register(Scenario(
         ("Pull: F oblique", {}),
         ("Pull: F in the AB plane, starts about C (§821)", {"direction": (1.0, 0.6, 0.0)}),
     ),
+    metric_units={"cos_OF_euler": "", "cos_OF_simulated": ""},
 ))
 
 

@@ -304,6 +304,9 @@ register(Scenario(
     ),
     batch=Batch(_batch, sweepable=("eccentricity", "omega0", "steps_per_orbit", "n_orbits", "probe_theta_deg",
                                    "probe_rate", "n_starts", "probe_orbits"), metrics=BATCH_METRICS, chunk=2048),
+    # rates as multiples of the mean motion n (the time unit is 1/n)
+    metric_units={"lyapunov_probe_per_unit_time": "n", "chaotic_fraction": "", r"gp_(series_)?half_width_[\d.]+": "n",
+                  r"overlap_[\d.]+_and_[\d.]+": "", r"island_rate_[\d.]+": "n", r"island_trace_[\d.]+": ""},
 ))
 
 

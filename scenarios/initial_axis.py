@@ -129,6 +129,7 @@ register(Scenario(
         ("Start: torque at 45° between A and B, axis at 27°", {"torque": (1.0, 1.0, 0.0)}),
         ("Start: torque about C only, turns about C", {"torque": (0.0, 0.0, 1.0)}),
     ),
+    metric_units={r"axis_cos_(alpha|beta|gamma)_(euler|simulated)": ""},  # direction cosines of the axis
 ))
 
 

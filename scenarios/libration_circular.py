@@ -261,6 +261,10 @@ register(Scenario(
         ("Libration: circulating", {"spin_ratio": 2.0}),
         ("Libration: case II (B < A)", {"asymmetry": -0.05}),
     ),
+    # times in the unit of `orbital_rate` (rad per time unit); ½ζ̇² − ½N cos 2ζ in its square
+    metric_units={"libration_period": "unit", "libration_period_euler": "unit", "libration_period_exact": "unit",
+                  "period_rel_error_vs_exact": "", "modulus_k2": "", "separatrix_gap_1_minus_k2": "",
+                  "first_integral_abs_drift": "1/unit^2"},
 ))
 
 

@@ -344,6 +344,9 @@ register(Scenario(
     batch=Batch(_batch,
                 sweepable=("asymmetry", "eccentricity", "orbital_rate", "free_zeta0_deg", "orbits", "steps_per_orbit"),
                 metrics=BATCH_METRICS, chunk=16),
+    # times in the unit of `orbital_rate` (rad per time unit)
+    metric_units={"free_period": "unit", "free_period_euler": "unit", "free_period_floquet": "unit",
+                  "free_period_modern": "unit", "forced_amplitude_rel_error": "", "forced_floquet_half_trace": ""},
 ))
 
 

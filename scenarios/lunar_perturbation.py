@@ -299,6 +299,9 @@ register(Scenario(
         ("Moon's orbit: one node cycle", {"duration_yr": 19.0}),
         ("Moon's orbit: Euler's series for the Sun's force", {"solar_force": "euler-series"}),
     ),
+    metric_units={"eccentricity_min": "", "eccentricity_max": "", "elements_vs_cartesian_max_error": "LD",
+                  "apse_first_order_fraction": "", "printed_sign_error_60d": "LD",
+                  "identity_inclination_node_residual": "", "identity_latitude_argument_residual": ""},
 ))
 
 

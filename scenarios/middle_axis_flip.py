@@ -14,7 +14,7 @@ from .drawing import Camera, standard
 from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
-from ._rigid_body import INERTIA_PARAM, body_cost, drift_metrics, free_body_warnings, integrate_body, middle_axis_crossings
+from ._rigid_body import DRIFT_UNITS, INERTIA_PARAM, body_cost, drift_metrics, free_body_warnings, integrate_body, middle_axis_crossings
 
 
 def _check_flip(values):
@@ -94,6 +94,8 @@ register(Scenario(
         ("Brick: a tiny nudge (10⁻⁶), rare flips", {"perturbation": 1e-06}),
         ("Brick: nearly symmetric, slow flips", {"inertia": (1.0, 1.9, 2.0)}),
     ),
+    metric_units={**DRIFT_UNITS, "flip_interval": "s", "flip_interval_exact": "s", "flip_interval_euler_808": "s",
+                  "flips_seen": ""},
 ))
 
 

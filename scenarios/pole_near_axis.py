@@ -215,6 +215,9 @@ register(Scenario(
         ("Pole: F at 45°, the fastest drift", {"zeta_deg": 45.0}),
         ("Pole: B ≠ C, the spin changes", {"moments": (1.2, 1.0, 0.8)}),
     ),
+    metric_units={"dspin_dt": "rad/s^2", "dspin_dt_euler": "rad/s^2", r"(dbeta_dt|dgamma_dt|pole_speed)(_euler)?": "rad/s",
+                  "pole_speed_euler_842": "rad/s", "N_843": "rad/s", "perpendicularity_841": "rad/s",
+                  "pole_direction_deg_euler": "deg"},
 ))
 
 

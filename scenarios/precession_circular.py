@@ -302,6 +302,12 @@ register(Scenario(
         ("Precession: ε/δ = 2.2, Euler's nutation fails", {"eps_over_delta": 2.2}),
         ("Precession: with a free wobble h", {"h": 0.02}),
     ),
+    # δ is the time unit's inverse (time is in 1/δ): a rate "δ" is a multiple of δ
+    metric_units={r"precession_rate(_euler|_corrected)?": "δ",
+                  r"nutation_(obliquity|longitude)(_euler|_corrected)?": "rad", "free_wobble_obliquity": "rad",
+                  "free_wobble_euler": "rad", "N": "δ", "N_over_delta": "", "C_over_A": "",
+                  r"resonance_denominator_(euler|corrected)": "δ^2", "eps_over_delta_resonance_corrected": "",
+                  "alpha_growth_rate_849": "δ", "fit_rms_longitude": "rad", "fit_rms_obliquity": "rad"},
 ))
 
 

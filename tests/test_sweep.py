@@ -291,6 +291,15 @@ def test_python_sweep_batched_to_zarr_and_parquet_and_the_map_replays_a_pixel(tm
     assert ds.attrs["sessions"][0]["path"] == "batched"
     assert ds["lyapunov_probe_per_orbit"].dims == ("eccentricity", "probe_rate")
     assert ds["probe_rate"].attrs["units"] == "n"
+    # every metric with the scenario's unit ("1" for a pure number), in both stores
+    import pyarrow.parquet as pq
+    table_units = json.loads(pq.read_schema(tmp_path / "h.parquet").metadata[b"units"])
+    metrics = [v for v in ds.data_vars if v != "status"]
+    assert "lyapunov_probe_per_unit_time" in metrics
+    for name in metrics:
+        assert ds[name].attrs["units"] == table_units[name] == (sc.metric_unit(name) or "1"), name
+    assert table_units["lyapunov_probe_per_orbit"] == "1/orbit" and table_units["lyapunov_probe_per_unit_time"] == "n"
+    assert table_units["probe_rate"] == "n"
     # the flat table: one row per run, the same numbers
     assert len(df) == 12 and set(df.columns) >= {"eccentricity", "probe_rate", "status", "lyapunov_probe_per_orbit"}
     for _, row in df.iterrows():

@@ -1,0 +1,70 @@
+"""Every number a run returns has a unit, and the unit is the right one.
+
+The right one is checked by dimensional analysis, which owes nothing to the code under test: make
+every rate of a scenario k times faster (every time k times shorter) and a metric measured in
+time^p must change by k^-p, a pure number or an angle not at all. A period declared in seconds
+that was in fact in turns, or a rate in "n" that was per orbit, fails here.
+"""
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+
+import theoria as th
+
+K = 2.0  # every rate ×2, every time ÷2
+
+# each unit's power of time (a unit not listed here makes the test fail: add it with its power)
+TIME_POWER = {"": 0, "1": 0, "rad": 0, "deg": 0, "s": 1, "unit": 1, "1/s": -1, "rad/s": -1, "rad/s^2": -2,
+              "1/unit^2": -2, "J": -2, "kg m^2/s": -1}
+
+# scenario → how to make it K times faster: parameter → factor (rates ×K, rates squared ×K², times ÷K)
+FASTER = {
+    "free-tumble": {"omega0": K, "duration": 1 / K, "step": 1 / K},
+    "middle-axis-flip": {"spin": K, "duration": 1 / K, "step": 1 / K},
+    "initial-axis": {"torque": K * K, "probe_time": 1 / K, "duration": 1 / K, "step": 1 / K},  # N m = kg m²/s²
+    "gravity-start": {"gm": K * K},  # m³/s²
+    "pole-near-axis": {"spin": K, "tidal": K * K},
+    "libration-circular": {"orbital_rate": K},
+    "libration-eccentric": {"orbital_rate": K},
+}
+
+
+def _scaled(values, factors):
+    out = dict(values)
+    for name, f in factors.items():
+        v = values[name]
+        out[name] = tuple(x * f for x in v) if isinstance(v, tuple) else v * f
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(FASTER))
+def test_metrics_change_with_the_time_scale_as_their_units_say(name):
+    sc = th.scenario(name)
+    base = {p: sc.parameters[p].default for p in sc.parameters}
+    slow = sc.simulate(**base)
+    fast = sc.simulate(**_scaled(base, FASTER[name]))
+    units = slow.metric_units
+    checked = 0
+    for key, v in slow.metrics.items():
+        w = fast.metrics[key]
+        # rounding-level numbers (a drift of 1e-15) and missing values carry no scale
+        if not (math.isfinite(v) and math.isfinite(w)) or abs(v) < 1e-8:
+            continue
+        want = K ** -TIME_POWER[units[key]]
+        assert w / v == pytest.approx(want, rel=1e-6), f"{name}: {key} in {units[key]!r}: ×{w / v:.6g}, not ×{want:g}"
+        checked += 1
+    assert checked >= 3, f"{name}: only {checked} metrics to check"
+
+
+@pytest.mark.parametrize("name", th.scenarios())
+def test_every_metric_has_a_unit_and_every_declared_unit_a_metric(name):
+    sc = th.scenario(name)
+    run = sc.simulate(**sc.preview)
+    unknown = [k for k, u in run.metric_units.items() if u is None]
+    assert not unknown, f"{name}: no unit in the name or in metric_units for {unknown}"
+    stale = [p for p in sc.metric_units if not any(k == p or re.fullmatch(p, k) for k in run.metrics)]
+    assert not stale, f"{name}: metric_units names metrics the scenario does not return: {stale}"
+    assert run.to_json()["metric_units"] == run.metric_units
