@@ -176,7 +176,8 @@ def test_hyperion_section_points_and_resonance_lines(runs):
     right, up, _ = ch16.camera_basis(d.camera)
     centre = corners.mean(axis=0)
     size = np.ptp((corners - centre) @ right)
-    th, w = run.plot_series["section_theta_mod_pi"], run.plot_series["section_theta_dot"]
+    sec = run.extras["section"]
+    th, w = sec["theta_mod_pi"].ravel(), sec["theta_dot"].ravel()  # start by start
     ok = np.isfinite(th) & np.isfinite(w)
     # y0, y1 from the points: the lowest and highest drawn point are the run's extreme θ̇/n
     fy = (pts - centre) @ up / size + 0.5
@@ -187,7 +188,8 @@ def test_hyperion_section_points_and_resonance_lines(runs):
     assert np.allclose(pts, p.map(th[ok], w[ok]), atol=1e-9)  # the run's (θ mod π, θ̇/n)
     # chaotic (λ > 0.05 per orbit) red, regular blue
     red = np.all(np.asarray(own["section/points"].colors) == (215, 60, 40), axis=1)
-    assert np.array_equal(red, run.plot_series["section_lyapunov_per_orbit"][ok] > 0.05)
+    per_point = np.repeat(sec["lyapunov_per_orbit"], sec["theta_mod_pi"].shape[1])
+    assert np.array_equal(red, per_point[ok] > 0.05)
     # the resonance lines map back to p ± gp_half_width_p
     lines = np.asarray(own["section/resonance_zones"].points, float)
     _, y = p.unmap(lines - 0.03 * p.normal)
