@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +28,7 @@ from . import kepler
 from . import quaternion as quat
 from .constants import ARCSEC_RAD, GM_SUN_AU3_DAY2, JULIAN_YEAR_DAYS, OBLIQUITY_J2000_RAD
 from .integrator import PointMass, integrate
+from .kept import new_store
 from .rebound_run import integrate_to
 
 # masses in solar masses (G = k²): from the ratios of the GM's
@@ -86,6 +88,15 @@ class Ephemeris:
     def sun(self, t):
         return _hermite(self.t, self.sun_x, self.sun_v, t)
 
+    def first(self, n: int) -> "Ephemeris":
+        """The first n samples (views)."""
+        return Ephemeris(self.t[:n], self.sun_x[:n], self.sun_v[:n], self.moon_x[:n], self.moon_v[:n])
+
+    def joined(self, more: "Ephemeris") -> "Ephemeris":
+        """These samples followed by `more`'s."""
+        return Ephemeris(*(np.concatenate([getattr(self, f), getattr(more, f)])
+                           for f in ("t", "sun_x", "sun_v", "moon_x", "moon_v")))
+
     def moon(self, t):
         return _hermite(self.t, self.moon_x, self.moon_v, t)
 
@@ -142,13 +153,45 @@ def make_simulation(moon_elements=None):
     return sim
 
 
+# The longest ephemeris made for each start, sampling and Moon, with its simulation where it ended
+# (a few kept, ~7 MB per century): the earth scene's sliders other than the span (H, obliquity,
+# the step) do not move the orbits, a shorter span is the start of a longer one, and a longer one
+# goes on from where the kept one ended. A run integrates to the same sample times in the same
+# order, so its samples are bit for bit those of one run made afresh over the whole span.
+_EPHEMERIDES_KEPT = 2
+_ephemerides = new_store()
+_ephemerides_lock = threading.Lock()
+
+
 def integrate_orbits(duration_days, sample_days=0.5, moon_elements=None, t_start=0.0) -> Ephemeris:
     """Integrate the Sun–Earth–Moon problem with REBOUND IAS15 from J2000 over
     [t_start, t_start + duration] and return the geocentric Sun and Moon sampled every
-    `sample_days` (samples from t_start − sample to the end + sample, for interpolation)."""
-    sim = make_simulation(moon_elements)
+    `sample_days` (samples from t_start − sample to the end + sample, for interpolation).
+    Read-only arrays: the same run is handed to every caller that asks for it or a shorter span."""
     n = int(np.ceil(duration_days / sample_days)) + 3
-    tg = t_start - sample_days + sample_days * np.arange(n)
+    key = (float(sample_days), None if moon_elements is None else tuple(map(float, moon_elements)), float(t_start))
+    with _ephemerides_lock:
+        made = _ephemerides.pop(key, None)  # taken out: only this caller goes on with its simulation
+    if made is not None and len(made[0].t) >= n:
+        eph, sim = made
+        out = eph.first(n)
+    else:
+        eph, sim = made if made is not None else (None, make_simulation(moon_elements))
+        tg = t_start - sample_days + sample_days * np.arange(n)
+        more = _sample(sim, tg[0 if eph is None else len(eph.t):])
+        eph = out = more if eph is None else eph.joined(more)
+        for a in (eph.t, eph.sun_x, eph.sun_v, eph.moon_x, eph.moon_v):
+            a.flags.writeable = False
+    with _ephemerides_lock:
+        _ephemerides[key] = (eph, sim)
+        while len(_ephemerides) > _EPHEMERIDES_KEPT:
+            _ephemerides.popitem(last=False)
+    return out
+
+
+def _sample(sim, tg) -> Ephemeris:
+    """The geocentric Sun and Moon of `sim` integrated to each time of tg in turn."""
+    n = len(tg)
     out = np.empty((n, 3, 6))
     xyz = np.empty((3, 3))
     vel = np.empty((3, 3))

@@ -43,6 +43,15 @@ def kept(maxsize: int):
     return wrap
 
 
+def new_store() -> OrderedDict:
+    """An empty store for a piece kept by a rule of its own (a longer run answering a shorter one);
+    `forget()` clears it with the rest."""
+    store: OrderedDict = OrderedDict()
+    with _LOCK:
+        _KEPT.append(store)
+    return store
+
+
 def forget() -> None:
     with _LOCK:
         for store in _KEPT:

@@ -1,5 +1,6 @@
 """A slider moved in class usually changes one number. Pieces of a run that depend on other numbers
-only (Hyperion's resonance branches, the forced libration on an eccentric orbit and its stability,
+only (Hyperion's section and resonance branches, the Sun's and Moon's orbits of the Earth's
+precession, the forced libration on an eccentric orbit and its stability,
 the precession's resonance table, the ellipsoid's quadrature rule, the syzygy's measured swing)
 are kept and reused by the next run that shares those numbers. Reused or made afresh, a run's numbers must be the same, bit for
 bit, and a changed number must not reuse a piece made for another."""
@@ -20,6 +21,9 @@ CASES = [
     ("precession-circular", {"orbits": 3.0}, ("h", 0.01), ("flattening", 0.12)),
     ("gravity-gradient-accuracy", {"n_points": 4}, ("max_ratio", 0.4), ("semi_axes", (1.0, 0.7, 0.5))),
     ("syzygy", {}, ("duration_yr", 2.5), ("mass_ratio", 1e-4)),
+    # the Sun's and Moon's orbits: a longer span goes on from the kept run, a shorter one is its start
+    ("earth", {"years": 2.0, "step_days": 2.0}, ("H", 0.0033), ("years", 3.0)),
+    ("earth", {"years": 3.0, "step_days": 2.0}, ("obliquity_deg", 23.0), ("years", 2.0)),
 ]
 
 
@@ -32,7 +36,7 @@ def _same(a, b) -> None:
     assert a.notes == b.notes
 
 
-@pytest.mark.parametrize("name,base,keeps,changes", CASES, ids=[c[0] for c in CASES])
+@pytest.mark.parametrize("name,base,keeps,changes", CASES, ids=[f"{c[0]}:{c[3][0]}={c[3][1]}" for c in CASES])
 def test_a_run_with_kept_pieces_is_the_run_made_afresh(name, base, keeps, changes):
     spec = get(name)
     after_keep = {**base, keeps[0]: keeps[1]}
