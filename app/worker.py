@@ -61,6 +61,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from theoria.physics import kept
 from theoria.physics.errors import Cancelled, ParameterError, show_value
 
 from .playback import showing
@@ -382,8 +383,9 @@ def _die_with_parent() -> None:
 
 def child_main(read_fd: int, write_fd: int) -> None:
     """A simulation child: reads ("run", job id, scenario, values, limit s) and answers
-    ("done", id, run, seconds, CPU seconds) | ("cancelled", id) | ("failed", id, payload), with
-    ("progress", id, fraction) in between. SIGUSR1 cancels the run in progress."""
+    ("done", id, run, seconds, CPU seconds, reused) | ("cancelled", id) | ("failed", id, payload), with
+    ("progress", id, fraction) in between (`reused`: the run took a piece kept from an earlier one,
+    physics.kept). SIGUSR1 cancels the run in progress."""
     _die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in the terminal stops the server, which stops us
     cancel = {"flag": False}
@@ -408,7 +410,7 @@ def child_main(read_fd: int, write_fd: int) -> None:
             return
         _, jid, name, values, limit = msg
         cancel["flag"] = False
-        t0, cpu0 = time.perf_counter(), time.process_time()
+        t0, cpu0, reused0 = time.perf_counter(), time.process_time(), kept.reused()
         last = [0.0]
 
         def progress(frac, jid=jid):
@@ -428,7 +430,7 @@ def child_main(read_fd: int, write_fd: int) -> None:
             run = get(name).simulate_fn(values, progress=progress)
             dt = time.perf_counter() - t0
             run.spec = None
-            outbox.send(("done", jid, run, dt, time.process_time() - cpu0))
+            outbox.send(("done", jid, run, dt, time.process_time() - cpu0, kept.reused() > reused0))
         except Cancelled:
             outbox.send(("cancelled", jid))
         except BaseException as e:  # noqa: BLE001 — every failure goes back as a message
@@ -645,7 +647,7 @@ class _Slot:
                 self.job = None
 
     def _run_here(self, job: Job) -> None:
-        t0 = time.perf_counter()
+        t0, reused0 = time.perf_counter(), kept.reused()  # other threads' runs may count too: then not learned
 
         def progress(frac):
             if job.cancel or job.preempted or self.pool.closed:
@@ -662,7 +664,7 @@ class _Slot:
         except BaseException as e:  # noqa: BLE001
             self.pool._failed(job, _error_payload(e), self, exc=e)
             return
-        self.pool._done(job, run, time.perf_counter() - t0, self)
+        self.pool._done(job, run, time.perf_counter() - t0, self, reused=kept.reused() > reused0)
 
     def _run_child(self, job: Job) -> None:
         if self.proc is None or self.proc.poll() is not None:
@@ -725,7 +727,7 @@ class _Slot:
                 self.pool._progress(job, msg[2])
             elif kind == "done":
                 self.runs += 1
-                self.pool._done(job, msg[2], msg[3], self, cpu=msg[4] if len(msg) > 4 else None)
+                self.pool._done(job, msg[2], msg[3], self, cpu=msg[4], reused=msg[5])
                 return
             elif kind == "cancelled":
                 self.pool._cancelled(job)
@@ -814,8 +816,8 @@ class SimPool:
         # (scenario, preview) → (seconds, integrator steps) of its last compiled run: a job's time
         # is expected in proportion to its steps (a slider at a long duration makes a slow run of
         # a scenario whose default is quick)
-        self._seconds: dict[tuple, tuple[float, float]] = {}
-        self._cheapest: dict[str, tuple[float, float]] = {}  # scenario → (seconds, steps) of its cheapest run per step
+        self._seconds: dict[tuple, tuple[float, float, bool]] = {}  # (seconds, steps, made afresh)
+        self._cheapest: dict[str, tuple[float, float, bool]] = {}  # scenario → its cheapest run per step, as above
         self._apply = FairDrawing(APPLY_THREADS)
         self._timers: list = []
         self._timer_cv = threading.Condition()
@@ -860,7 +862,8 @@ class SimPool:
             hit = self.store.get(key)
             if hit is not None:
                 self.cache.put(key, hit[0], hit[1])
-                self._seconds.setdefault((name, False), (hit[1], _steps(hit[0].spec, values)))
+                # a stored run's time, as it was made then (afresh or not: unknown, so not afresh)
+                self._seconds.setdefault((name, False), (hit[1], _steps(hit[0].spec, values), False))
                 self.stats["store_hits"] += 1
         elif hit is not None:
             self.stats["cache_hits"] += 1
@@ -872,7 +875,7 @@ class SimPool:
         known = self._seconds.get((spec.name, preview)) or self._seconds.get((spec.name, not preview))
         if known is None:
             return None
-        seconds, then = known
+        seconds, then = known[:2]
         new = _steps(spec, values) if steps is None else steps
         if not (then > 0 and new > 0):
             return seconds
@@ -1117,10 +1120,12 @@ class SimPool:
             self._cv.notify_all()
             return list(job.waiters)
 
-    def _done(self, job: Job, run, seconds: float, slot: _Slot, cpu: float | None = None) -> None:
+    def _done(self, job: Job, run, seconds: float, slot: _Slot, cpu: float | None = None, reused: bool = False) -> None:
         """`cpu`: the child's CPU seconds for the run. A job's size is judged by it, not by the wall
         time: on a loaded machine a 50 ms run at low priority took a second, was judged slow, went
-        to the slow children behind runs of seconds, and was timed slower still."""
+        to the slow children behind runs of seconds, and was timed slower still. `reused`: the run
+        took pieces kept from an earlier one (Hyperion's section: 24 ms against 140 ms made afresh),
+        which says little of the next run's time: it is learnt only while no run made afresh is."""
         self._first_run.set()
         job.cpu = cpu
         run.spec = job.spec
@@ -1129,16 +1134,19 @@ class SimPool:
         first = job.spec.name not in slot.seen
         slot.seen.add(job.spec.name)
         if slot.jit:  # a pure-Python time says nothing about the compiled run
-            took = (seconds if cpu is None else cpu, job.steps)
+            took = (seconds if cpu is None else cpu, job.steps, not reused)  # (…, made afresh)
             # a child's first run of a scenario also loads its compiled code and makes the pieces a
             # process keeps (earth-long-view's calibration: 0.44 s before a 20-ms run): it teaches
-            # the expected time only when nothing else has
-            if not first or (job.spec.name, job.preview) not in self._seconds:
+            # the expected time only when nothing else has; a run made afresh replaces one that reused
+            known = self._seconds.get((job.spec.name, job.preview))
+            if known is None or (not first and (not reused or not known[2])):
                 self._seconds[(job.spec.name, job.preview)] = took
             # per step, the cheapest run seen: a child's first run of a scenario also loads its
-            # compiled code (the flip's 6-ms run took 46 ms), which says nothing about the next
+            # compiled code (the flip's 6-ms run took 46 ms), which says nothing about the next; a
+            # run made afresh goes before every run that reused
             best = self._cheapest.get(job.spec.name)
-            if took[1] > 0 and (best is None or took[0] / took[1] < best[0] / best[1]):
+            if took[1] > 0 and (best is None or (not reused and not best[2])
+                                or (reused == (not best[2]) and took[0] / took[1] < best[0] / best[1])):
                 self._cheapest[job.spec.name] = took
         self.cache.put(job.cache_key, run, seconds)
         if job.background and self.store is not None and not job.local:

@@ -28,7 +28,7 @@ from . import kepler
 from . import quaternion as quat
 from .constants import ARCSEC_RAD, GM_SUN_AU3_DAY2, JULIAN_YEAR_DAYS, OBLIQUITY_J2000_RAD
 from .integrator import PointMass, integrate
-from .kept import new_store
+from .kept import new_store, note_reuse
 from .rebound_run import integrate_to
 
 # masses in solar masses (G = k²): from the ratios of the GM's
@@ -172,6 +172,8 @@ def integrate_orbits(duration_days, sample_days=0.5, moon_elements=None, t_start
     key = (float(sample_days), None if moon_elements is None else tuple(map(float, moon_elements)), float(t_start))
     with _ephemerides_lock:
         made = _ephemerides.pop(key, None)  # taken out: only this caller goes on with its simulation
+    if made is not None:
+        note_reuse()
     if made is not None and len(made[0].t) >= n:
         eph, sim = made
         out = eph.first(n)

@@ -17,6 +17,19 @@ from collections import OrderedDict
 
 _KEPT: list[OrderedDict] = []
 _LOCK = threading.Lock()
+_reuses = 0  # pieces handed out again in this process: a run that reused one says little of the next
+
+
+def reused() -> int:
+    """How many times a kept piece has been handed out again in this process so far."""
+    return _reuses
+
+
+def note_reuse() -> None:
+    """Count a piece kept by a rule of its own (`new_store`) handed out again."""
+    global _reuses
+    with _LOCK:
+        _reuses += 1
 
 
 def kept(maxsize: int):
@@ -27,9 +40,11 @@ def kept(maxsize: int):
         @functools.wraps(fn)
         def call(*args, progress=None, **kwargs):
             key = (args, tuple(sorted(kwargs.items())))
+            global _reuses
             with _LOCK:
                 if key in store:
                     store.move_to_end(key)
+                    _reuses += 1
                     return store[key]
             out = fn(*args, **kwargs) if progress is None else fn(*args, progress=progress, **kwargs)
             with _LOCK:
