@@ -95,8 +95,8 @@ _WORDS = {"rel": "relative", "abs": "absolute", "err": "error", "max": "largest"
           "sim": "simulated", "euler": "Euler's", "iau": "IAU", "llr": "LLR", "freq": "frequency",
           "amp": "amplitude", "init": "initial", "nut": "nutation", "prec": "precession", "lon": "longitude",
           "lat": "latitude", "ecc": "eccentricity", "incl": "inclination", "omega": "ω", "zeta": "ζ",
-          "eta": "η", "phi": "φ", "theta": "θ", "psi": "ψ", "eps": "ε", "delta": "δ", "alpha": "α", "beta": "β", "gamma": "γ", "L": "L",
-          "gp": "Goldreich–Peale", "k2": "k²"}
+          "eta": "η", "phi": "φ", "theta": "θ", "psi": "ψ", "eps": "ε", "delta": "δ", "alpha": "α",
+          "beta": "β", "gamma": "γ", "L": "L", "gp": "Goldreich–Peale", "k2": "k²"}
 
 
 def metric_label(key: str, unit: str | None = None) -> str:

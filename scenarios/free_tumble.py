@@ -18,8 +18,8 @@ from ..physics import quaternion as quat
 from ..physics.euler_equations import direction_cosines_dot, omega_dot
 from ..physics.torque_free_exact import exact_free_motion
 from .checks import register_check
-from ._rigid_body import (DRIFT_UNITS, INERTIA_PARAM, body_cost, check_body, drift_metrics, free_body_warnings, integrate_body,
-                          middle_axis_crossings)
+from ._rigid_body import (DRIFT_UNITS, INERTIA_PARAM, body_cost, check_body, drift_metrics, free_body_warnings,
+                          integrate_body, middle_axis_crossings)
 
 
 def _free_tumble(values, progress=None):

@@ -14,7 +14,8 @@ from .drawing import Camera, standard
 from .base import Comparison, Run, Scenario, register
 from .base import get
 from .checks import register_check
-from ._rigid_body import DRIFT_UNITS, INERTIA_PARAM, body_cost, drift_metrics, free_body_warnings, integrate_body, middle_axis_crossings
+from ._rigid_body import (DRIFT_UNITS, INERTIA_PARAM, body_cost, drift_metrics, free_body_warnings, integrate_body,
+                          middle_axis_crossings)
 
 
 def _check_flip(values):

@@ -307,7 +307,8 @@ register(Scenario(
         ("Syzygy: the Moon leaves", {"escape_seed": 0.01, "duration_yr": 6.0}),
     ),
     # the Sun's mean motion is the unit of rate (time in years/2π); distances in the Moon's b
-    metric_units={"syzygy_distance_lunar_units_euler": "b", "alpha_sun_distance": "", "alpha_euler_sun_distance": "", "reduced_mass": "",
+    metric_units={"syzygy_distance_lunar_units_euler": "b", "alpha_sun_distance": "", "alpha_euler_sun_distance": "",
+                  "reduced_mass": "",
                   r"oscillation_frequency(_euler|_linear|_run)?": "n_sun", r"escape_exponent(_linear|_hill)?": "n_sun",
                   r"amplitude_ratio(_euler|_linear)?": "", "fit_rms_residual_rel": "", "swings_before_escape": ""},
 ))

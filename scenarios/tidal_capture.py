@@ -219,7 +219,8 @@ register(Scenario(
     preview={"orbits": 2000.0},
     batch=Batch(_batch, sweepable=("eccentricity", "omega0", "tide_rate", "spin_rate", "initial_angle_deg", "orbits",
                                    "steps_per_orbit"), metrics=BATCH_METRICS, chunk=256),
-    metric_units={"captured_resonance": "n", r"captured_\d+_\d+": "", r"gp_capture_probability_\d+_\d+": "", r"tide_to_resonance_ratio_[\d.]+": ""},
+    metric_units={"captured_resonance": "n", r"captured_\d+_\d+": "", r"gp_capture_probability_\d+_\d+": "",
+                  r"tide_to_resonance_ratio_[\d.]+": ""},
 ))
 
 
