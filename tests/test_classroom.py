@@ -754,7 +754,6 @@ def test_a_run_that_reused_kept_pieces_does_not_teach_the_pace():
         run("the drawn body moved", {"eccentricity": 0.11, "probe_rate": 1.1})  # the section is reused
         assert pace[2]  # learnt from a run made afresh
         assert pool._cheapest[spec.name] == pace
-        assert pool._seconds[(spec.name, False)][2]
     finally:
         pool.close()
 

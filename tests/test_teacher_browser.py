@@ -382,16 +382,21 @@ def test_the_page_plays_label_text_and_segments_and_stops_where_the_server_does(
         page.evaluate(SPY_JS)
         drawn = np.asarray(next(it for it in s.drawing.items if it.name == "f_direction").points, float)
         drawn = drawn.reshape(len(drawn), -1)
-        seen = set()
+        seen, late = set(), []
+        tol = 2e-3 * max(1.0, np.abs(drawn).max())
         for _ in range(12):
             line, k = page.evaluate(f"() => [({SEGMENT_JS})('/world/f_direction'), window.theoria.P.frame]")
             seen.add(tuple(np.round(line, 4)))
             # the page's float16 decoding gives the run's own line, of a frame just shown: a node
             # update reaches the geometry through viser's queue and a React commit, 3-5 drawn frames
-            # (~12 frames of this run, 0.15 s, in software WebGL) after the player hands it over
-            err = np.abs(drawn[max(0, k - 40):k + 1] - np.asarray(line)).max(axis=1).min()
-            assert err < 2e-3 * max(1.0, np.abs(drawn).max()), (k, err)
+            # (~12 frames of this run, 0.15 s, in software WebGL) after the player hands it over;
+            # on a loaded machine (the whole suite in CI) once more than 40 frames after
+            err = np.abs(drawn[:k + 1] - np.asarray(line)).max(axis=1)
+            assert err.min() < tol, (k, err.min())  # one of the run's lines, of a frame already shown
+            if err[max(0, k - 40):].min() >= tol:
+                late.append(k - int(np.flatnonzero(err < tol)[-1]))
             time.sleep(0.15)
+        assert len(late) <= 2, late  # nearly always within 40 frames of the frame the player shows
         assert len(seen) >= 4, seen  # the line to F turns on the page
         assert np.array_equal(np.array(s.view._h["/world/f_direction"].points, float).ravel(), server_line)
         texts = page.evaluate("() => window.__texts")
