@@ -23,7 +23,9 @@ print("presets:", "; ".join(sc.presets))
 
 # 3. A run: spin a brick slowly about its middle axis with a 1 % nudge, for 200 seconds.
 run = sc.simulate(spin=1, perturbation=0.01, duration=200)
-print(f"\nflips seen: {run.metrics['flips_seen']:.0f}, interval between flips: {run.metrics['flip_interval']:.4f} s")
+units = run.metric_units  # every metric's unit ("" for a pure number such as a count)
+print(f"\nflips seen: {run.metrics['flips_seen']:.0f}, "
+      f"interval between flips: {run.metrics['flip_interval']:.4f} {units['flip_interval']}")
 for c in run.comparisons:  # Euler says / simulated / modern
     print(f"  {c.label}: Euler {c.euler:.6f}, simulated {c.simulated:.6f}, modern {c.modern:.6f} {c.unit}")
 print("warnings:", run.warnings or "none")
