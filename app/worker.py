@@ -1145,8 +1145,8 @@ class SimPool:
             # compiled code (the flip's 6-ms run took 46 ms), which says nothing about the next; a
             # run made afresh goes before every run that reused
             best = self._cheapest.get(job.spec.name)
-            if took[1] > 0 and (best is None or (not reused and not best[2])
-                                or (reused == (not best[2]) and took[0] / took[1] < best[0] / best[1])):
+            rank = lambda t: (not t[2], t[0] / t[1])  # noqa: E731 — made afresh first, then the cheaper
+            if took[1] > 0 and (best is None or rank(took) < rank(best)):
                 self._cheapest[job.spec.name] = took
         self.cache.put(job.cache_key, run, seconds)
         if job.background and self.store is not None and not job.local:
