@@ -619,6 +619,26 @@ def test_a_run_misjudged_as_quick_gives_way_to_a_quick_one(name, long, quick):
         pool.close()
 
 
+def test_simulation_children_use_one_thread_each_for_blas_and_numba():
+    """The pool's parallelism is its processes: a child's least-squares fits and numba's parallel
+    loops run on one thread instead of spinning a second one on a core another child is using
+    (with two threads the Moon's preview took twice the CPU on a busy machine, a tidal-capture run
+    a third more). A user's own setting is kept."""
+    import os
+
+    import psutil
+
+    pool = worker_mod.SimPool(slots=2, store=False)
+    try:
+        assert _wait(lambda: all(s.ready and s.proc is not None for s in pool.slots), 120)
+        for s in pool.slots:
+            env = psutil.Process(s.proc.pid).environ()
+            for var in ("OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
+                assert env.get(var) == os.environ.get(var, "1"), (var, env.get(var))
+    finally:
+        pool.close()
+
+
 def test_a_tiny_run_does_not_wait_for_busy_children():
     """A slider on a rigid-body scene (a run of a few milliseconds) is taken by the child kept for
     tiny runs while the other children are busy with long runs; that child never takes anything but
