@@ -89,32 +89,33 @@ def _K(v, u, cosmu):
 
 
 @njit(cache=True)
-def rhs_cartesian(t, y, mu, mus, sun):
-    """Moon relative to the Earth: r̈ = −μ r/v³ + μ_S[R(1/w³ − 1/u³) − r/w³] (§XIV)."""
+def _cartesian_into(out, y, mu, mus, sx, sy, u):
+    """rhs_cartesian with the Sun's state (sx, sy, u) given, written into `out`."""
     X, Y, Z = y[0], y[1], y[2]
-    sx, sy, u, th = sun_state(t, sun)
     v = math.sqrt(X * X + Y * Y + Z * Z)
     cosmu = (X * sx + Y * sy) / (v * u)
     K, w = _K(v, u, cosmu)
     w3 = w**3
-    out = np.empty(6)
     out[0], out[1], out[2] = y[3], y[4], y[5]
     out[3] = -mu * X / v**3 + mus * (sx * K - X / w3)
     out[4] = -mu * Y / v**3 + mus * (sy * K - Y / w3)
     out[5] = -mu * Z / v**3 + mus * (-Z / w3)
+
+
+@njit(cache=True)
+def rhs_cartesian(t, y, mu, mus, sun):
+    """Moon relative to the Earth: r̈ = −μ r/v³ + μ_S[R(1/w³ − 1/u³) − r/w³] (§XIV)."""
+    sx, sy, u, th = sun_state(t, sun)
+    out = np.empty(6)
+    _cartesian_into(out, y, mu, mus, sx, sy, u)
     return out
 
 
 @njit(cache=True)
-def rhs_elements(t, y, mu, mus, sun, sign4=1.0, series=0.0):
-    """Euler's element equations (§XXVII–XXVIII, corrected as in the module docstring), per
-    unit time: each d/d∅ times d∅/dt = √(μp)/v². y = (p, q, Υ, ψ, ω, σ).
-    sign4 = +1: the corrected sign of the last term of dΥ (§XXVII.4); −1: as printed.
-    series = 1: Euler's expansion of §XXXIII, 1/w³ − 1/u³ ≈ 3v cos μ/u⁴ + 3v²(5cos²μ − 1)/(2u⁵)
-    (and 1/w³ = 1/u³ + that), instead of the exact distances."""
+def _elements_into(out, y, mu, mus, sx, sy, u, th, sign4, series):
+    """rhs_elements with the Sun's state (sx, sy, u, th) given, written into `out`."""
     p, q, Y, psi, om, sig = y[0], y[1], y[2], y[3], y[4], y[5]
     n = mus / mu
-    sx, sy, u, th = sun_state(t, sun)
     cY, sY = math.cos(Y), math.sin(Y)
     v = p / (1.0 + q * cY)
     dphi = math.sqrt(mu * p) / (v * v)
@@ -130,7 +131,6 @@ def rhs_elements(t, y, mu, mus, sun, sign4=1.0, series=0.0):
         K = 3.0 * v * cosmu / u**4 + 3.0 * v * v * (5.0 * cosmu * cosmu - 1.0) / (2.0 * u**5)
         w3 = 1.0 / (1.0 / u**3 + K)
     den = 1.0 + q * cY
-    out = np.empty(6)
     out[0] = -2.0 * n * v**3 * u * K * sinnu
     out[1] = n * v * v * u * K * (cosmu * sY - sinnu * (q + 2.0 * cY + q * cY * cY) / den) - n * v**3 * sY / w3
     out[2] = 1.0 - n * v**3 * cY / (q * w3) + sign4 * (n * v * v * u * K / q) * (cosmu * cY + (2.0 + q * cY) * sinnu * sY / den)
@@ -140,31 +140,69 @@ def rhs_elements(t, y, mu, mus, sun, sign4=1.0, series=0.0):
     out[5] = 1.0 - dpsi * co
     for k in range(6):
         out[k] *= dphi
+
+
+@njit(cache=True)
+def rhs_elements(t, y, mu, mus, sun, sign4=1.0, series=0.0):
+    """Euler's element equations (§XXVII–XXVIII, corrected as in the module docstring), per
+    unit time: each d/d∅ times d∅/dt = √(μp)/v². y = (p, q, Υ, ψ, ω, σ).
+    sign4 = +1: the corrected sign of the last term of dΥ (§XXVII.4); −1: as printed.
+    series = 1: Euler's expansion of §XXXIII, 1/w³ − 1/u³ ≈ 3v cos μ/u⁴ + 3v²(5cos²μ − 1)/(2u⁵)
+    (and 1/w³ = 1/u³ + that), instead of the exact distances."""
+    sx, sy, u, th = sun_state(t, sun)
+    out = np.empty(6)
+    _elements_into(out, y, mu, mus, sx, sy, u, th, sign4, series)
     return out
+
+
+@njit(cache=True)
+def _rhs_into(out, which, y, mu, mus, sun_at, sign4, series):
+    if which == 0:
+        _cartesian_into(out, y, mu, mus, sun_at[0], sun_at[1], sun_at[2])
+    else:
+        _elements_into(out, y, mu, mus, sun_at[0], sun_at[1], sun_at[2], sun_at[3], sign4, series)
 
 
 @njit(cache=True)
 def _rk4(which, y0, i0, h, nsteps, stride, mu, mus, sun, sign4, series):
     """nsteps RK4 steps from step i0 (the time of step i is i·h, formed so in every piece: a
-    piece that started at i0·h and added i·h rounded its times differently from the uncut run)."""
+    piece that started at i0·h and added i·h rounded its times differently from the uncut run).
+
+    The arithmetic of `y + ½h·k1` … `y + h/6·(k1 + 2k2 + 2k3 + k4)` element by element, in
+    buffers made once; the Sun's place is found once for the two middle stages (same time) and
+    taken over from the step before when its end time is this step's start: half the Kepler
+    solutions and no array made per step, the same numbers bit for bit."""
+    m = y0.size
     nout = nsteps // stride + 1
-    out = np.empty((nout, y0.size))
+    out = np.empty((nout, m))
     y = y0.copy()
     out[0] = y
+    k1, k2, k3, k4, tmp = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    s0, s_mid, s1 = np.empty(4), np.empty(4), np.empty(4)
     t = i0 * h
+    t_end_prev = np.nan
     k = 1
     for i in range(1, nsteps + 1):
-        if which == 0:
-            k1 = rhs_cartesian(t, y, mu, mus, sun)
-            k2 = rhs_cartesian(t + 0.5 * h, y + 0.5 * h * k1, mu, mus, sun)
-            k3 = rhs_cartesian(t + 0.5 * h, y + 0.5 * h * k2, mu, mus, sun)
-            k4 = rhs_cartesian(t + h, y + h * k3, mu, mus, sun)
+        if t == t_end_prev:
+            s0[:] = s1
         else:
-            k1 = rhs_elements(t, y, mu, mus, sun, sign4, series)
-            k2 = rhs_elements(t + 0.5 * h, y + 0.5 * h * k1, mu, mus, sun, sign4, series)
-            k3 = rhs_elements(t + 0.5 * h, y + 0.5 * h * k2, mu, mus, sun, sign4, series)
-            k4 = rhs_elements(t + h, y + h * k3, mu, mus, sun, sign4, series)
-        y = y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            s0[0], s0[1], s0[2], s0[3] = sun_state(t, sun)
+        s_mid[0], s_mid[1], s_mid[2], s_mid[3] = sun_state(t + 0.5 * h, sun)
+        t_end_prev = t + h
+        s1[0], s1[1], s1[2], s1[3] = sun_state(t_end_prev, sun)
+        _rhs_into(k1, which, y, mu, mus, s0, sign4, series)
+        for j in range(m):
+            tmp[j] = y[j] + 0.5 * h * k1[j]
+        _rhs_into(k2, which, tmp, mu, mus, s_mid, sign4, series)
+        for j in range(m):
+            tmp[j] = y[j] + 0.5 * h * k2[j]
+        _rhs_into(k3, which, tmp, mu, mus, s_mid, sign4, series)
+        for j in range(m):
+            tmp[j] = y[j] + h * k3[j]
+        _rhs_into(k4, which, tmp, mu, mus, s1, sign4, series)
+        c = h / 6.0
+        for j in range(m):
+            y[j] = y[j] + c * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
         t = (i0 + i) * h
         if i % stride == 0:
             out[k] = y
