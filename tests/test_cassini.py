@@ -51,6 +51,19 @@ def test_moon_keeps_its_cassini_state():
     assert abs(m["obliquity_mean_deg"] - m["obliquity_peale_deg"]) < 0.02
 
 
+def test_the_default_step_agrees_with_a_run_at_a_quarter_of_it():
+    """The default step (2 days) against the same run at 0.5 days, the finer run the reference: the
+    mean obliquity within 1e-4° (the E8 check's tolerance is 0.02°), the figure axis's greatest
+    distance from the plane of the normals within 0.5 %, the same side of the pole throughout."""
+    cassini = get("cassini")
+    coarse = cassini.simulate({}).metrics
+    fine = cassini.simulate({"step_days": 0.5}).metrics
+    assert cassini.resolve({})["step_days"] == 4 * 0.5
+    assert abs(coarse["obliquity_mean_deg"] - fine["obliquity_mean_deg"]) < 1e-4
+    assert abs(coarse["out_of_plane_max_arcsec"] / fine["out_of_plane_max_arcsec"] - 1) < 5e-3
+    assert coarse["opposite_side_fraction"] == fine["opposite_side_fraction"] == 1.0
+
+
 def test_bad_values_are_refused_naming_the_parameter():
     with pytest.raises(ParameterError) as e:
         get("cassini").simulate({"node_period_yr": 0.5})
