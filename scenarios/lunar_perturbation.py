@@ -39,12 +39,11 @@ def _lunar(values, progress=None):
     h, ds = values["step_days"], values["sample_days"]
     series = values["solar_force"] == "euler-series"
     part = (lambda a, b: None if progress is None else (lambda f: progress(a + (b - a) * f)))
-    t, E = le.integrate_rk4("elements", el0, days, h, ds, mu, mus, sun, euler_series=series, progress=part(0.1, 0.5))
-    if progress:
-        progress(0.5)
     r0, v0 = le.elements_to_cartesian(el0, mu)
-    _, C = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), days, h, ds, mu, mus, sun,
-                            progress=part(0.5, 0.9))
+    rv0 = np.concatenate([r0[0], v0[0]])
+    # Euler's element equations and the Cartesian reference side by side (one Sun for both)
+    t, (E, C) = le.integrate_rk4_together(("elements", "cartesian"), (el0, rv0), days, h, ds, mu, mus, sun,
+                                          euler_series=series, progress=part(0.1, 0.9))
     if progress:
         progress(0.9)
     P = le.elements_to_position(E)
@@ -55,11 +54,11 @@ def _lunar(values, progress=None):
     node_fo = 2 * math.pi / abs(fo["node_rate"]) / JULIAN_YEAR_DAYS
     apse_fo = 2 * math.pi / abs(fo["apse_rate"]) / JULIAN_YEAR_DAYS
     # Euler's identities (§VII–IX) on a dense 60-day piece of the Cartesian solution
-    td, Cd = le.integrate_rk4("cartesian", np.concatenate([r0[0], v0[0]]), 60.0, h, h, mu, mus, sun)
+    # and the dΥ equation with the sign as printed (§XXVII.4) beside it, the same 60 days
+    td, (Cd, Ep) = le.integrate_rk4_together(("cartesian", "elements"), (rv0, el0), 60.0, h, h, mu, mus, sun,
+                                             printed_sign=True)
     Ed = le.cartesian_to_elements(Cd[:, :3], Cd[:, 3:], mu)
     id1, id2 = le.euler_identity_residuals(td, Ed, Cd[:, :3], Cd[:, 3:])
-    # the dΥ equation with the sign as printed (§XXVII.4), same 60 days
-    _, Ep = le.integrate_rk4("elements", el0, 60.0, h, h, mu, mus, sun, printed_sign=True)
     err_printed = float(np.max(np.linalg.norm(le.elements_to_position(Ep) - Cd[: len(Ep), :3], axis=1)))
     metrics = {
         "node_period_yr": na["node_period_yr"],

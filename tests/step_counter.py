@@ -2,7 +2,7 @@
 (scenarios.budget): every integrator theoria uses is wrapped where it is called.
 
 - the rigid-body splitting (physics.integrator._run): its `n_steps` per chunk;
-- the lunar RK4 (physics.three_body.lunar_elements._rk4): its `nsteps`;
+- the lunar RK4 (physics.three_body.lunar_elements._rk4): its `nsteps` times the systems it advances;
 - the spin–orbit ensemble (physics.libration._section_run): members × orbits × steps per orbit;
 - scipy's Runge–Kutta methods (DOP853, RK45: `RungeKutta._step_impl`): one per accepted step;
 - REBOUND (`Simulation.integrate`): the growth of `steps_done`.
@@ -46,7 +46,7 @@ def count_steps():
         return run(L, q, I, h, n, *a)
 
     def rk4_(which, y0, i0, h, nsteps, *a):
-        counts["rk4"] += int(nsteps)
+        counts["rk4"] += int(nsteps) * len(which)  # the systems advanced side by side
         return rk4(which, y0, i0, h, nsteps, *a)
 
     def section_(theta, thetadot, k, s2f, c2f, h, n_orbits, *a):

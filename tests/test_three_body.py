@@ -452,18 +452,7 @@ def test_collinear_run_that_dop853_cannot_finish_is_reported_not_crashed(monkeyp
     assert np.all(np.isfinite(r.trajectory.bodies["A"]))
 
 
-@pytest.mark.parametrize("kind", ["cartesian", "elements"])
-def test_compiled_rk4_is_the_textbook_rk4_step_for_step(kind):
-    """The compiled loop (buffers made once, the Sun's place shared by the two middle stages and
-    taken over from the step before) is RK4 as written in any textbook, stage by stage from the
-    right-hand sides: the same numbers bit for bit, at a step whose times do not all add up exactly
-    (0.0137 d) and in pieces with a progress callback."""
-    el0, sun, mu, mus = le.initial_conditions(0.0549, 5.145, sun_eccentricity=0.0167)
-    r0, v0 = le.elements_to_cartesian(el0, mu)
-    y = np.concatenate([r0[0], v0[0]]) if kind == "cartesian" else np.array(el0, float)
-    h, n = 0.0137, 300
-    rhs = (lambda t, y: le.rhs_cartesian(t, y, mu, mus, sun)) if kind == "cartesian" else \
-        (lambda t, y: le.rhs_elements(t, y, mu, mus, sun, 1.0, 0.0))
+def _textbook_rk4(rhs, y, h, n):
     states, t = [y], 0.0
     for i in range(1, n + 1):
         k1 = rhs(t, y)
@@ -473,7 +462,27 @@ def test_compiled_rk4_is_the_textbook_rk4_step_for_step(kind):
         y = y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         t = i * h
         states.append(y)
-    textbook = np.array(states)
-    _, run = le.integrate_rk4(kind, states[0], n * h, h, h, mu, mus, sun)
-    _, pieces = le.integrate_rk4(kind, states[0], n * h, h, h, mu, mus, sun, progress=lambda f: None)
-    assert np.array_equal(run, textbook) and np.array_equal(pieces, textbook)
+    return np.array(states)
+
+
+def test_compiled_rk4_is_the_textbook_rk4_step_for_step():
+    """The compiled loop (buffers made once, the Sun's place shared by the two middle stages, taken
+    over from the step before, and shared by systems run side by side) is RK4 as written in any
+    textbook, stage by stage from the right-hand sides: the same numbers bit for bit, for each kind
+    alone, for the two side by side, at a step whose times do not all add up exactly (0.0137 d),
+    and in pieces with a progress callback."""
+    el0, sun, mu, mus = le.initial_conditions(0.0549, 5.145, sun_eccentricity=0.0167)
+    r0, v0 = le.elements_to_cartesian(el0, mu)
+    start = {"cartesian": np.concatenate([r0[0], v0[0]]), "elements": np.array(el0, float)}
+    rhs = {"cartesian": lambda t, y: le.rhs_cartesian(t, y, mu, mus, sun),
+           "elements": lambda t, y: le.rhs_elements(t, y, mu, mus, sun, 1.0, 0.0)}
+    h, n = 0.0137, 300
+    textbook = {k: _textbook_rk4(rhs[k], start[k], h, n) for k in start}
+    for kind in start:
+        _, run = le.integrate_rk4(kind, start[kind], n * h, h, h, mu, mus, sun)
+        _, pieces = le.integrate_rk4(kind, start[kind], n * h, h, h, mu, mus, sun, progress=lambda f: None)
+        assert np.array_equal(run, textbook[kind]) and np.array_equal(pieces, textbook[kind]), kind
+    for progress in (None, lambda f: None):
+        _, (E, C) = le.integrate_rk4_together(("elements", "cartesian"), (start["elements"], start["cartesian"]),
+                                              n * h, h, h, mu, mus, sun, progress=progress)
+        assert np.array_equal(E, textbook["elements"]) and np.array_equal(C, textbook["cartesian"])

@@ -165,23 +165,25 @@ def _rhs_into(out, which, y, mu, mus, sun_at, sign4, series):
 
 @njit(cache=True)
 def _rk4(which, y0, i0, h, nsteps, stride, mu, mus, sun, sign4, series):
-    """nsteps RK4 steps from step i0 (the time of step i is i·h, formed so in every piece: a
+    """nsteps RK4 steps from step i0 of k systems side by side: which[s] is system s's kind (0
+    Cartesian, 1 elements), y0[s] its state (the time of step i is i·h, formed so in every piece: a
     piece that started at i0·h and added i·h rounded its times differently from the uncut run).
+    Returns the states every `stride` steps, (rows, k, 6).
 
-    The arithmetic of `y + ½h·k1` … `y + h/6·(k1 + 2k2 + 2k3 + k4)` element by element, in
-    buffers made once; the Sun's place is found once for the two middle stages (same time) and
-    taken over from the step before when its end time is this step's start: half the Kepler
-    solutions and no array made per step, the same numbers bit for bit."""
-    m = y0.size
+    Each system's arithmetic is `y + ½h·k1` … `y + h/6·(k1 + 2k2 + 2k3 + k4)` element by element,
+    in buffers made once; the Sun's place is found once per stage for all the systems, once for
+    the two middle stages (same time), and taken over from the step before when its end time is
+    this step's start: a system's numbers are those of the textbook RK4 run alone, bit for bit."""
+    k_sys, m = y0.shape
     nout = nsteps // stride + 1
-    out = np.empty((nout, m))
+    out = np.empty((nout, k_sys, m))
     y = y0.copy()
     out[0] = y
     k1, k2, k3, k4, tmp = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     s0, s_mid, s1 = np.empty(4), np.empty(4), np.empty(4)
     t = i0 * h
     t_end_prev = np.nan
-    k = 1
+    row = 1
     for i in range(1, nsteps + 1):
         if t == t_end_prev:
             s0[:] = s1
@@ -190,27 +192,30 @@ def _rk4(which, y0, i0, h, nsteps, stride, mu, mus, sun, sign4, series):
         s_mid[0], s_mid[1], s_mid[2], s_mid[3] = sun_state(t + 0.5 * h, sun)
         t_end_prev = t + h
         s1[0], s1[1], s1[2], s1[3] = sun_state(t_end_prev, sun)
-        _rhs_into(k1, which, y, mu, mus, s0, sign4, series)
-        for j in range(m):
-            tmp[j] = y[j] + 0.5 * h * k1[j]
-        _rhs_into(k2, which, tmp, mu, mus, s_mid, sign4, series)
-        for j in range(m):
-            tmp[j] = y[j] + 0.5 * h * k2[j]
-        _rhs_into(k3, which, tmp, mu, mus, s_mid, sign4, series)
-        for j in range(m):
-            tmp[j] = y[j] + h * k3[j]
-        _rhs_into(k4, which, tmp, mu, mus, s1, sign4, series)
-        c = h / 6.0
-        for j in range(m):
-            y[j] = y[j] + c * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+        for s in range(k_sys):
+            ys = y[s]
+            _rhs_into(k1, which[s], ys, mu, mus, s0, sign4, series)
+            for j in range(m):
+                tmp[j] = ys[j] + 0.5 * h * k1[j]
+            _rhs_into(k2, which[s], tmp, mu, mus, s_mid, sign4, series)
+            for j in range(m):
+                tmp[j] = ys[j] + 0.5 * h * k2[j]
+            _rhs_into(k3, which[s], tmp, mu, mus, s_mid, sign4, series)
+            for j in range(m):
+                tmp[j] = ys[j] + h * k3[j]
+            _rhs_into(k4, which[s], tmp, mu, mus, s1, sign4, series)
+            c = h / 6.0
+            for j in range(m):
+                ys[j] = ys[j] + c * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
         t = (i0 + i) * h
         if i % stride == 0:
-            out[k] = y
-            k += 1
+            out[row] = y
+            row += 1
     return out
 
 
 RK4_CHUNKS = 50  # with a progress callback: the run in this many compiled pieces, the callback between
+KINDS = {"cartesian": 0, "elements": 1}
 
 
 def integrate_rk4(kind: str, y0, duration_days: float, step_days: float, sample_days: float, mu, mus, sun,
@@ -221,16 +226,27 @@ def integrate_rk4(kind: str, y0, duration_days: float, step_days: float, sample_
     about 1/RK4_CHUNKS of the run (it may raise to stop the run); the pieces restart from the
     state and step reached and round exactly as the uncut run, so the result does not depend on
     `progress` (the app's numbers are the command line's)."""
+    t, (states,) = integrate_rk4_together((kind,), (y0,), duration_days, step_days, sample_days, mu, mus, sun,
+                                          printed_sign, euler_series, progress)
+    return t, states
+
+
+def integrate_rk4_together(kinds, y0s, duration_days: float, step_days: float, sample_days: float, mu, mus, sun,
+                           printed_sign: bool = False, euler_series: bool = False, progress=None):
+    """`integrate_rk4` of several systems over the same span and step (e.g. the element equations
+    and the Cartesian reference), side by side: the Sun's place is computed once for all of them,
+    and each system's states are those of its run alone, bit for bit. Returns (t, [states, ...])."""
     stride = max(1, int(round(sample_days / step_days)))
     nsteps = int(math.ceil(duration_days / step_days / stride)) * stride
-    which, sign4, ser = (0 if kind == "cartesian" else 1), (-1.0 if printed_sign else 1.0), (1.0 if euler_series else 0.0)
+    which = np.array([KINDS[k] for k in kinds], np.int64)
+    sign4, ser = (-1.0 if printed_sign else 1.0), (1.0 if euler_series else 0.0)
     sun = np.asarray(sun, float)
-    y = np.asarray(y0, float)
+    y = np.array([np.asarray(v, float) for v in y0s])
     if progress is None:
         out = _rk4(which, y, 0, step_days, nsteps, stride, mu, mus, sun, sign4, ser)
     else:
         per = max(1, nsteps // stride // RK4_CHUNKS) * stride  # steps per piece, whole samples
-        pieces, done = [y[None, :]], 0
+        pieces, done = [y[None]], 0
         while done < nsteps:
             n = min(per, nsteps - done)
             part = _rk4(which, y, done, step_days, n, stride, mu, mus, sun, sign4, ser)
@@ -239,7 +255,8 @@ def integrate_rk4(kind: str, y0, duration_days: float, step_days: float, sample_
             done += n
             progress(done / nsteps)
         out = np.concatenate(pieces)
-    return np.arange(out.shape[0]) * stride * step_days, out
+    # each system's states an array of its own: a run that keeps one does not hold the others
+    return np.arange(out.shape[0]) * stride * step_days, [out[:, s].copy() for s in range(len(which))]
 
 
 # --- conversions --------------------------------------------------------------------------------
