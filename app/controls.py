@@ -95,8 +95,11 @@ class ParamControls:
     def __init__(self, gui, spec, values: dict[str, Any] | None = None,
                  on_change: Callable[[str, bool], None] | None = None,
                  on_error: Callable[[ParameterError], None] | None = None, advanced=None,
-                 order: float | None = None):
+                 order: float | None = None, wrap: Callable | None = None):
         self.spec = spec
+        # wrap(fn) → a viser callback calling fn() (the session's: one browser event at a time)
+        self._wrap = wrap or (lambda fn: (lambda event: fn()))
+        self._removed = False
         self.gui = gui
         self.on_change, self.on_error = on_change, on_error
         self.handles: dict[str, Any] = {}
@@ -138,7 +141,7 @@ class ParamControls:
         if p.kind == "choice":
             h = gui.add_dropdown(p.display(), [p.choice_text(c) for c in p.choices],
                                  initial_value=p.choice_text(value), hint=hint, order=self._next())
-            h.on_update(lambda e, name=name: self._taken(name, self.handles[name].value, False))
+            h.on_update(self._wrap(lambda name=name: self._taken(name, self.handles[name].value, False)))
             self.kinds[name] = "choice"
             self._keep(h)
         elif (rng := slider_range(p, presets)) is not None:
@@ -146,14 +149,14 @@ class ParamControls:
             v = min(max(value, lo), hi)
             h = gui.add_slider(p.display(), min=lo, max=hi, step=step,
                                initial_value=int(v) if p.kind == "int" else float(v), hint=hint, order=self._next())
-            h.on_update(lambda e, name=name: self._taken(name, self.handles[name].value, True))
+            h.on_update(self._wrap(lambda name=name: self._taken(name, self.handles[name].value, True)))
             self.kinds[name] = "slider"
             self._keep(h)
         else:
             form = gui.add_form(None, order=self._next())
             with form:
                 h = gui.add_text(p.display(), format_value(p, value), hint=hint)
-            form.on_submit(lambda e, name=name: self._submitted(name))
+            form.on_submit(self._wrap(lambda name=name: self._submitted(name)))
             self.forms[name] = form
             self.kinds[name] = "text"
             self._keep(form)
@@ -165,7 +168,7 @@ class ParamControls:
 
     # ---- values in -------------------------------------------------------------------------
     def _taken(self, name: str, shown, debounce: bool) -> None:
-        if self._guard:
+        if self._guard or self._removed:  # removed: an event that came for the panel of another scenario
             return
         p = self.spec.param(name)
         self._values[name] = p.choice_of(shown) if p.kind == "choice" else shown
@@ -174,7 +177,7 @@ class ParamControls:
 
     def _submitted(self, name: str) -> None:
         """Enter in a text field, or the field lost focus: parse what it shows."""
-        if self._guard:
+        if self._guard or self._removed:
             return
         p = self.spec.param(name)
         h = self.handles[name]
@@ -231,6 +234,7 @@ class ParamControls:
             self._guard = guard
 
     def remove(self) -> None:
+        self._removed = True
         for c in self._containers:
             try:
                 c.remove()

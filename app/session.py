@@ -64,6 +64,21 @@ PRESENT_PANEL_SCALE = 1.45  # the panel's type in presenter mode (app/browser.py
 PLAY, PAUSE, RESET, BACK, FORWARD = "Play", "Pause", "Reset", "◀ Step", "Step ▶"
 
 
+class _BrowserEvent:
+    client = True  # the slider's last value after a drag: the browser's own event
+
+
+_BROWSER = _BrowserEvent()
+
+
+def _where(e: BaseException) -> str:
+    """file:line where an exception was raised (one log line per kind of failure)."""
+    tb = e.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    return f"{tb.tb_frame.f_code.co_filename}:{tb.tb_lineno}" if tb is not None else "?"
+
+
 def playback_hz(active_sessions: int) -> float:
     """Playback rate of each session when `active_sessions` browsers are playing."""
     return playback.ticker().rate(active_sessions)
@@ -137,6 +152,10 @@ class ClientSession:
         self._guard = False  # set while the code itself moves the scrubber or the checkboxes
         self._pguard = False  # set while the code itself sets the preset or the parameter controls
         self._view_lock = threading.RLock()  # the worker rebuilds while the player animates
+        # a browser's own events, one at a time: viser runs each callback on its thread pool as it
+        # comes, and twenty scene switches sent at once raced each other's panels (controls left
+        # twice, or of another scenario)
+        self._callback_lock = threading.RLock()
         self._closed = False
         self._debounce: threading.Timer | None = None
         self._slider_at = -1e9  # when a slider last moved (perf_counter)
@@ -186,7 +205,7 @@ class ClientSession:
         self._labels = {gallery.label(s): s.name for s in order}
         self.dd = gui.add_dropdown("Scene", list(self._labels), initial_value=gallery.label(self.spec),
                                    hint="Euler's ch. 15, ch. 16, then the three-body papers, in § order")
-        self.dd.on_update(lambda e: self._safe(self._on_scenario))
+        self.dd.on_update(self._on(self._on_scenario))
         self.status = gui.add_markdown("*Computing the scene…*")
         self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
         # the update counter that protocol-level tools (benchmarks/classroom.py) follow; never shown
@@ -201,16 +220,16 @@ class ClientSession:
             self.presets = gui.add_dropdown("Start from", self._preset_options(self.spec),
                                             initial_value=self._preset_options(self.spec)[0],
                                             hint="starting points named after what they show (keys 1–9)")
-            self.presets.on_update(lambda e: self._safe(self._on_preset))
+            self.presets.on_update(self._on(self._on_preset))
             self.playback = gui.add_button_group("Playback", [PAUSE, RESET, BACK, FORWARD],
                                                  hint="keys: space play/pause, ← → step")
-            self.playback.on_click(lambda e: self._safe(self._on_playback, e.target.value))
+            self.playback.on_click(self._on(lambda: self._on_playback(self.playback.value)))
             self.scrub = gui.add_slider("Time (% of the run)", min=0.0, max=100.0, step=0.1, initial_value=0.0)
-            self.scrub.on_update(lambda e: self._safe(self._on_scrub))
+            self.scrub.on_update(self._on(self._on_scrub))
             self.time_md = gui.add_markdown("t = 0")
             self.speed = gui.add_slider("Playback speed", min=0.1, max=10.0, step=0.1, initial_value=1.0,
                                         hint=f"1 = the whole run in {RUN_SECONDS:g} s")
-            self.speed.on_update(lambda e: self._safe(self._send_clock))
+            self.speed.on_update(self._on(self._send_clock))
             self._controls_order = getattr(self.speed, "order", None)
             self.controls = self._make_controls_here()
             self.draw_folder = gui.add_folder("What is drawn", expand_by_default=False)
@@ -219,11 +238,11 @@ class ClientSession:
                 self.toggles = {}
                 for key, (label, _, _) in OVERLAYS.items():
                     cb = gui.add_checkbox(label[:1].upper() + label[1:], initial_value=True)
-                    cb.on_update(lambda e, key=key: self._safe(self._on_toggle, key))
+                    cb.on_update(self._on(self._on_toggle, key))
                     self.toggles[key] = cb
                 self.exag = gui.add_slider("Exaggerate the shape", min=1.0, max=20.0, step=0.5, initial_value=1.0,
                                            hint="multiplies the departures of the semi-axes from their mean")
-                self.exag.on_update(lambda e: self._safe(self._on_exaggerate))
+                self.exag.on_update(self._on(self._on_exaggerate))
             self._option_handles: list = []
             self._options_key = None
             self.plot_folder = gui.add_folder("Over time")
@@ -242,7 +261,7 @@ class ClientSession:
             with gui.add_folder("For the class"):
                 self.present_cb = gui.add_checkbox("Presenter mode", initial_value=self.present,
                                                    hint="large type, controls hidden; keys: space, ← →, 1–9, P")
-                self.present_cb.on_update(lambda e: self._safe(self._on_present_cb))
+                self.present_cb.on_update(self._on(self._on_present_cb))
                 self.class_html = gui.add_html("")
                 self.limits_md = gui.add_markdown(limits_text())
         self._present_hidden = [self.draw_folder, self.speed, self.scrub]
@@ -255,7 +274,7 @@ class ClientSession:
         return self._make_controls_here()
 
     def _make_controls_here(self) -> ParamControls:
-        return ParamControls(self.client.gui, self.spec, on_change=self._on_param,
+        return ParamControls(self.client.gui, self.spec, on_change=self._on_param, wrap=self._on,
                              on_error=lambda e: self._notify_bad(e, " — keeping the last good value"),
                              order=self._controls_order)
 
@@ -270,7 +289,7 @@ class ClientSession:
         for label, key, fn in keys:
             try:
                 cmd = gui.add_command(label, hotkey=key)
-                cmd.on_trigger(lambda e, fn=fn: self._safe(fn))
+                cmd.on_trigger(self._on(fn))
                 self._commands.append(cmd)
             except (AttributeError, TypeError, ValueError):  # a fake client, or a viser without commands
                 return
@@ -344,7 +363,16 @@ class ClientSession:
         are simulated at once."""
         if self._pguard or self.presets.value == gallery.CUSTOM:
             return
-        values = self.spec.preset(self.presets.value)
+        try:
+            values = self.spec.preset(self.presets.value)
+        except ParameterError as e:  # not one of the list's presets (only a hand-made message sends that)
+            self._notify_bad(e)
+            self._pguard = True
+            try:
+                self.presets.value = gallery.CUSTOM
+            finally:
+                self._pguard = False
+            return
         self._pguard = True
         try:
             self.controls.set_values(values)
@@ -375,7 +403,7 @@ class ClientSession:
             # a slider being dragged: its first value ran at once; the values in between are dropped
             # and the last one runs when the drag pauses (the last value wins, nothing queues)
             self._slider_at = now
-            self._debounce = threading.Timer(SLIDER_DEBOUNCE_S, lambda: self._safe(self.request))
+            self._debounce = threading.Timer(SLIDER_DEBOUNCE_S, lambda: self._on(self.request)(_BROWSER))
             self._debounce.daemon = True
             self._debounce.start()
             return
@@ -407,23 +435,60 @@ class ClientSession:
         who, allowed = self._words_for(e, spec)
         self.notify(f"Not allowed: {who}", f"“{show_value(e.value)}”: {allowed}{tail}")
 
+    def _restore_control(self, name: str) -> None:
+        """A refused value leaves its control: it shows the value of the last good run again (or
+        the scenario's default before any), so the next change of another control is not refused
+        for it."""
+        if name not in self.controls.handles:
+            return
+        good = self.good_values if self.good_values is not None and self.drawing_spec == self.spec.name \
+            else self.spec.resolve(None)
+        if name in good:
+            self.controls.set_values({name: good[name]})
+
+    def _on(self, fn, *args):
+        """A callback for viser's on_update / on_click / on_trigger: `fn(*args)` through `_safe`.
+        A browser's own events (the event names its client) run one at a time per session. A value
+        the server sets itself calls the callback at once on the setting thread (no client): not
+        queued behind a browser's event, which may be waiting for the view lock that thread holds."""
+        def callback(event):
+            if getattr(event, "client", None) is None:
+                self._safe(fn, *args)
+                return
+            with self._callback_lock:
+                if not self._closed:
+                    self._safe(fn, *args)
+        return callback
+
     def _safe(self, fn, *args) -> None:
-        """Run a callback (playback giving way meanwhile); no exception reaches viser's loop."""
+        """Run a callback (playback giving way meanwhile); no exception reaches viser's loop, and
+        nothing a browser sends writes more than the rate-limited log's lines to the console."""
         try:
-            with playback.showing():
+            with self._callback_lock, playback.showing():
                 fn(*args)
         except ParameterError as e:
             self._notify_bad(e)
+            self._restore_control(e.name)
         except Exception as e:  # a bug in a scenario or the scene must not kill the server
-            traceback.print_exc()
-            self.notify("Error", f"{type(e).__name__}: {e}")
+            self.worker.pool.logger.line("theoria: error in a browser's callback:\n" + traceback.format_exc(),
+                                         once_key=("callback", type(e).__name__, _where(e)))
+            self.notify("Something went wrong", f"{type(e).__name__}; the scene keeps its last good state")
 
     def _set_title(self) -> None:
         browser.call(self.client, "title", f"theoria — {self.spec.name}")
 
     # ---- scenario ------------------------------------------------------------------------------
     def _on_scenario(self) -> None:
-        name = self._labels[self.dd.value]
+        name = self._labels.get(self.dd.value)
+        if name is None:  # not one of the dropdown's scenes (only a hand-made message sends that)
+            shown = gallery.label(self.spec)
+            self._notify_bad(ParameterError("scenario", self.dd.value, "one of the scenes in the list"))
+            self._guard = True
+            try:
+                self.dd.value = shown
+            finally:
+                self._guard = False
+            return
         if name == self.spec.name:
             return
         self._switch_scenario(name)
@@ -485,9 +550,9 @@ class ClientSession:
         self._sweep_pic = None
         self._sweep_mark: dict | None = None  # the values of the run shown (its pixel is marked)
         self._sweep_want: tuple[str, str] | None = None
-        self.sweep_metric.on_update(lambda e: self._safe(self._on_sweep_metric))
-        self.sweep_view.on_update(lambda e: self._safe(self._on_sweep_view))
-        self.sweep_pixel.on_update(lambda e: self._safe(self._on_sweep_click))
+        self.sweep_metric.on_update(self._on(self._on_sweep_metric))
+        self.sweep_view.on_update(self._on(self._on_sweep_view))
+        self.sweep_pixel.on_update(self._on(self._on_sweep_click))
         self._show_map()
 
     def _on_sweep_metric(self) -> None:
@@ -695,6 +760,8 @@ class ClientSession:
             page.set_loading(self.client, None)
         if isinstance(e, ParameterError):
             self._notify_bad(e, " — keeping the last good state", spec=req.spec)
+            if req.spec.name == self.spec.name:
+                self._restore_control(e.name)
             who, allowed = self._words_for(e, req.spec)
             self._status(f"Not allowed: {who} ({allowed}); the scene shows the last good values.")
         else:
@@ -826,7 +893,7 @@ class ClientSession:
             for k, opt in spec.options.items():
                 label = opt.label[:1].upper() + opt.label[1:]
                 cb = self.client.gui.add_checkbox(label, initial_value=self.view_opts.option(k, spec))
-                cb.on_update(lambda e, k=k, cb=cb: self._safe(self._on_option, k, cb))
+                cb.on_update(self._on(self._on_option, k, cb))
                 self._option_handles.append(cb)
         try:
             self.options_folder.visible = bool(spec.options)

@@ -826,3 +826,100 @@ def test_the_browser_drawn_least_recently_is_drawn_first():
         assert order == ["flooding 1", "other 1", "flooding 2"]
     finally:
         drawing.close()
+
+
+def test_a_refused_slider_value_does_not_stick():
+    """A value refused for one slider (sent by hand: 1e300 for the spin) is refused naming it, and
+    the slider shows the last good value again: the next change of another control runs, instead
+    of being refused again for the first one."""
+    with _server() as (srv, sessions, url, log):
+        async def go():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            try:
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                spin = c.uuid_of("Spin rate")
+                good = c.values[spin]
+                await c.send_gui(spin, 1e300)
+                assert await c.wait_for(lambda: any("Spin rate" in t for t, _ in c.notifications), 30), c.notifications
+                assert await c.wait_for(lambda: c.values.get(spin) == good, 10), (c.values.get(spin), good)
+                before, n_refused = c.update_no, len(c.notifications)
+                await c.send_gui(c.uuid_of("Playback speed"), 2.0)  # not a parameter: no run
+                first, _ = await c.act(spin, float(good) + 0.5)
+                assert first is not None and c.update_no > before
+                assert len(c.notifications) == n_refused, c.notifications[n_refused:]
+            finally:
+                await c.close()
+
+        asyncio.run(go())
+
+
+def test_a_burst_of_scene_switches_leaves_one_panel_of_the_last_scene():
+    """Twenty scene switches sent at once (within the burst a browser may send): the panel that
+    stays is the last scene's, each of its controls once, none of another scene's; no error."""
+    from theoria.app import gallery
+    from theoria.scenarios import get
+
+    with _server() as (srv, sessions, url, log):
+        async def go():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            try:
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                dd, options = c.dropdown("Scene")
+                last = gallery.label(get("free-tumble"))
+                assert last in options
+                others = [o for o in options if o != last][:6]
+                for round_ in range(3):
+                    for k in range(19):
+                        await c.send_raw({"type": "GuiUpdateMessage", "uuid": dd,
+                                          "updates": {"value": others[(k + round_) % len(others)]}})
+                    await c.send_raw({"type": "GuiUpdateMessage", "uuid": dd, "updates": {"value": last}})
+                    await asyncio.sleep(0.5)
+                assert await c.wait_for(lambda: c.scenario == "free-tumble", 120), c.scenario
+                await asyncio.sleep(2.0)
+                return c
+            finally:
+                await c.close()
+
+        c = asyncio.run(go())
+    words = [p.display() for p in get("free-tumble").params]
+    labels = [comp["label"] for comp in c.components.values() if comp["label"]]
+    for w in words:
+        assert labels.count(w) == 1, (w, labels.count(w))
+    foreign = {p.display() for s in ("middle-axis-flip", "cassini", "collinear", "moon", "hyperion")
+               for p in get(s).params} - set(words)
+    assert not foreign & set(labels), foreign & set(labels)
+    assert not [t for t, _ in c.notifications if "wrong" in t.lower() or "error" in t.lower()], c.notifications
+
+
+def test_values_the_lists_do_not_offer_are_refused_in_a_few_lines(capsys):
+    """Hand-made values for the Scene and preset dropdowns, fifty of each: refused to the sender
+    naming the control ("Not allowed: Scene"), the dropdown back on what is shown, and the server's
+    console holds a few lines, not a traceback per message."""
+    with _server() as (srv, sessions, url, log):
+        out = io.StringIO()
+        srv._theoria_pool.logger.stream = out
+
+        async def go():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            try:
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                dd, _ = c.dropdown("Scene")
+                shown = c.values[dd]
+                pre, _ = c.dropdown("Start from")
+                for k in range(50):
+                    await c.send_raw({"type": "GuiUpdateMessage", "uuid": dd, "updates": {"value": f"no such scene {k}"}})
+                    await c.send_raw({"type": "GuiUpdateMessage", "uuid": pre, "updates": {"value": f"no such preset {k}"}})
+                    await asyncio.sleep(0.05)
+                assert await c.wait_for(lambda: sum(t == "Not allowed: Scene" for t, _ in c.notifications) >= 10, 60)
+                assert await c.wait_for(lambda: c.values.get(dd) == shown, 10)
+                return c
+            finally:
+                await c.close()
+
+        c = asyncio.run(go())
+    assert any(t == "Not allowed: Preset" for t, _ in c.notifications), c.notifications
+    lines = (out.getvalue() + log.getvalue() + capsys.readouterr().err).splitlines()
+    assert len(lines) <= 10 and not any("Traceback" in x for x in lines), lines[:20]
