@@ -44,11 +44,16 @@ BACKSTOP_S = 0.5
 
 def _unsafe(frame) -> bool:
     """Is `frame`, or any frame that called it, code from which an exception cannot propagate:
-    numba building a compiled function's result, or a finaliser. (The whole chain: a signal
-    handled inside another handler, itself inside numba's code, is as unsafe.)"""
+    numba building a compiled function's result, a finaliser, llvmlite's Python called back by
+    LLVM through ctypes while numba compiles or loads compiled code (its object cache: an
+    exception raised there is printed as "Exception ignored on calling ctypes callback function"
+    and lost, and the command ran on to the end and exited 0), or a descriptor's `__set_name__`
+    (Python 3.11 turns its exception into a RuntimeError). (The whole chain: a signal handled
+    inside another handler, itself inside numba's code, is as unsafe.)"""
     while frame is not None:
         code = frame.f_code
-        if code.co_name == "__del__" or (code.co_name == "_numba_unpickle" and "numba" in code.co_filename):
+        if (code.co_name in ("__del__", "__set_name__") or "llvmlite" in code.co_filename
+                or (code.co_name == "_numba_unpickle" and "numba" in code.co_filename)):
             return True
         frame = frame.f_back
     return False
