@@ -30,6 +30,7 @@ import os
 import re
 import shutil
 import signal
+import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -688,18 +689,29 @@ def _client(cluster, workers):
 
     if cluster is None:
         n = int(workers or _cores())
-        # a terminal's Ctrl-C goes to the whole process group: the workers are started with SIGINT
-        # ignored (inherited), so that only this process sees it and stops the sweep cleanly
+        # A terminal's Ctrl-C goes to the whole process group: the workers start with SIGINT ignored
+        # (`_workers_ignore_ctrl_c`), so that only this process sees it and stops the sweep cleanly.
+        # This process keeps it: a Ctrl-C while the cluster starts is noted and raised once it has
+        # started (ignored here too, as before, it was lost and the sweep ran to its end, exit 0).
         main = threading.current_thread() is threading.main_thread()
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+        noted: list[int] = []
+        old = signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum)) if main else None
+        lc = None
         try:
-            lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                              dashboard_address="127.0.0.1:0", worker_dashboard_address="127.0.0.1:0",
-                              silence_logs=logging.CRITICAL)
+            with _workers_ignore_ctrl_c():
+                lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address="127.0.0.1:0", worker_dashboard_address="127.0.0.1:0",
+                                  silence_logs=logging.CRITICAL)
+            if noted:
+                raise KeyboardInterrupt
+            return Client(lc), lc, f"local cluster, {n} workers", True
+        except BaseException:
+            if lc is not None:
+                lc.close()
+            raise
         finally:
             if main:
                 signal.signal(signal.SIGINT, old)
-        return Client(lc), lc, f"local cluster, {n} workers", True
     if isinstance(cluster, str):
         if not re.match(r"^(tcp|tls|inproc|ws|wss)://", cluster):
             raise ParameterError("--cluster", cluster, "a scheduler address such as tcp://127.0.0.1:8786")
@@ -709,6 +721,33 @@ def _client(cluster, workers):
             raise ParameterError("--cluster", cluster, f"no Dask scheduler answers there ({type(e).__name__})") from None
         return c, None, f"scheduler {cluster}", True
     return cluster, None, "the given client", False  # the caller's: left open
+
+
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c():
+    """Processes multiprocessing spawns meanwhile (the local cluster's nannies, and through them
+    its workers) start with SIGINT ignored: they are started through a launcher that ignores it
+    and runs this Python (an ignored signal stays ignored across exec, and Python then installs
+    no handler of its own). Where there is no POSIX shell, nothing is changed."""
+    import multiprocessing.spawn as mp_spawn
+    import shlex
+    import tempfile
+
+    if os.name != "posix" or not os.path.exists("/bin/sh"):
+        yield
+        return
+    where = tempfile.mkdtemp(prefix="theoria-workers-")
+    launcher = os.path.join(where, "python")
+    with open(launcher, "w") as f:
+        f.write(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(sys.executable)} \"$@\"\n")
+    os.chmod(launcher, 0o755)
+    before = mp_spawn.get_executable()
+    mp_spawn.set_executable(launcher)
+    try:
+        yield
+    finally:
+        mp_spawn.set_executable(before)
+        shutil.rmtree(where, ignore_errors=True)
 
 
 def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, resume=False, metrics=None,

@@ -130,6 +130,27 @@ def _finished_chunks(path):
 
 
 @pytest.mark.slow
+def test_ctrl_c_while_the_local_cluster_starts_stops_the_sweep(tmp_path):
+    """The first seconds of a sweep start its local cluster; a terminal's Ctrl-C (to the whole
+    process group) in that time used to be ignored and the sweep ran to its end, exit 0. Sent at
+    several moments: exit 130 each time, and no worker process left behind."""
+    import psutil
+
+    for delay in (0.8, 1.2, 1.6, 2.2):
+        out = tmp_path / f"s{delay}.parquet"
+        p = subprocess.Popen([*THEORIA, "sweep", "free-tumble", "--grid", "step=0.001:0.002:20", "--set", "duration=1000",
+                              "--out", str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             cwd=ROOT, start_new_session=True)
+        time.sleep(delay)
+        kids = psutil.Process(p.pid).children(recursive=True)
+        os.killpg(p.pid, signal.SIGINT)
+        _, err = p.communicate(timeout=120)
+        assert p.returncode == 130 and "Traceback" not in err, (delay, p.returncode, err[-500:])
+        gone, alive = psutil.wait_procs(kids, timeout=30)
+        assert not alive, (delay, [q.pid for q in alive])
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, "ctrl-c"])
 def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_path, sig):
     """SIGINT or SIGTERM to the sweep, or SIGINT to its whole process group as a terminal's Ctrl-C
