@@ -35,6 +35,12 @@ def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = 
     if not raw or raw.endswith(os.sep) or (os.altsep and raw.endswith(os.altsep)):
         raise ParameterError(what, str(path), "a file name, not a directory")
     p = Path(raw).expanduser()
+    try:
+        p.lstat()
+    except FileNotFoundError:
+        pass
+    except OSError as e:  # a name too long for the file system, a loop of links
+        raise ParameterError(what, str(path), f"a path this system takes ({e.strerror or type(e).__name__})") from None
     if p.is_dir():
         raise ParameterError(what, str(path), "a file, not a directory")
     if p.suffix.lower() not in suffixes:

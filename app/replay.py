@@ -23,6 +23,7 @@ import re
 import shutil
 import signal
 import socket
+import stat
 import subprocess
 import sys
 import warnings
@@ -31,6 +32,9 @@ from urllib.parse import quote
 
 APPLICATION_ID = "theoria"  # app/record.py: rr.RecordingStream("theoria", ...)
 REQUIRED_ENTITIES = ("/world", "/text")
+# an export inlines viser's client (~1 MB) and a run's frames: tens of MB at most; a bigger .html
+# is not one (read whole to be checked, a link to /dev/zero would never end)
+MAX_HTML_BYTES = 512e6
 HTML_MARKER_RE = re.compile(r'<meta name="generator" content="theoria export_html" data-theoria-scenario="([^"]*)"')
 
 
@@ -79,6 +83,9 @@ def check_rrd(path: str) -> dict:
 def check_html(path: str) -> dict:
     """The scenario of a theoria HTML export, or ReplayError."""
     try:
+        if os.path.getsize(path) > MAX_HTML_BYTES:
+            raise ReplayError(f"{path}: larger than any theoria export ({os.path.getsize(path) / 1e6:.0f} MB; "
+                              f"at most {MAX_HTML_BYTES / 1e6:.0f} MB)")
         data = Path(path).read_bytes()
     except OSError as e:
         raise ReplayError(f"{path}: cannot read ({e.strerror or type(e).__name__})") from None
@@ -99,10 +106,16 @@ def check_html(path: str) -> dict:
 
 def check(path: str) -> dict:
     p = Path(path)
-    if not p.exists():
-        raise ReplayError(f"{path}: no such file")
-    if p.is_dir():
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        raise ReplayError(f"{path}: no such file") from None
+    except OSError as e:  # a name too long for the file system, a loop of links
+        raise ReplayError(f"{path}: cannot read ({e.strerror or type(e).__name__})") from None
+    if stat.S_ISDIR(st.st_mode):
         raise ReplayError(f"{path}: a directory, not a file")
+    if not stat.S_ISREG(st.st_mode):  # a pipe would block the reader for ever, /dev/zero never end
+        raise ReplayError(f"{path}: not a regular file (a device, a pipe or a socket)")
     suffix = p.suffix.lower()
     if suffix == ".rrd":
         return check_rrd(path)

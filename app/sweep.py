@@ -38,7 +38,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..physics.errors import ParameterError
+from ..physics.errors import ParameterError, show_value
 
 class SweepError(RuntimeError):
     """A sweep that cannot go on (a chunk's task failed as a whole): one line, exit status 1."""
@@ -145,8 +145,8 @@ def _match_param(sc, name: str, flag: str, spec: str):
     if len(hits) == 1:
         return sc.param(hits[0])
     known = ", ".join(names)
-    what = (f"more than one parameter begins with {name!r} ({', '.join(hits)})" if len(hits) > 1
-            else f"unknown parameter {name!r}")
+    what = (f"more than one parameter begins with '{show_value(name)}' ({', '.join(hits)})" if len(hits) > 1
+            else f"unknown parameter '{show_value(name)}'")
     raise ParameterError(flag, spec, f"{what}; parameters of {sc.name}: {known}")  # the flag, the whole spec
 
 
@@ -763,6 +763,14 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     parent = os.path.dirname(os.path.abspath(out)) or "."
     if not os.path.isdir(parent) or not os.access(parent, os.W_OK):
         raise ParameterError("--out", out, f"its folder {parent} must exist and be writable")
+    try:
+        os.stat(out)
+    except FileNotFoundError:
+        pass
+    except OSError as e:  # a name too long for the file system, a loop of links
+        raise ParameterError("--out", out, f"a path this system takes ({e.strerror or type(e).__name__})") from None
+    if kind == "parquet" and os.path.isdir(out):
+        raise ParameterError("--out", out, "a file name: this is a directory")
     nworkers = int(workers) if workers else (_cores() if cluster is None else 1)
     if workers is not None and (int(workers) < 1 or int(workers) > 256):
         raise ParameterError("--workers", workers, "from 1 to 256")
@@ -771,8 +779,8 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if earlier and not (resume or force):  # hours of runs are not replaced by a command repeated by mistake
         raise ParameterError("--out", out, "a new path: it holds a sweep; add --resume to complete it or "
                              "--force to replace it")
-    if kind == "parquet" and not resume and os.path.exists(out):
-        os.remove(out) if os.path.isfile(out) else None
+    # an older table at `out` stays as it is until the new one replaces it whole (`finish`): an
+    # interrupted sweep leaves it, and its own finished chunks in OUT.parts/ for --resume
     writer = ZarrWriter(out, plan, resume) if kind == "zarr" else ParquetWriter(out, plan, resume)
     regions = plan.chunk_regions()
     done = writer.done_regions(regions) if resume else set()

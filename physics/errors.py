@@ -22,7 +22,7 @@ class ParameterError(ValueError):
         self.name = name
         self.value = value
         self.allowed = allowed
-        super().__init__(f"{name}={show_value(value)}: {allowed}")
+        super().__init__(f"{show_value(name)}={show_value(value)}: {allowed}")  # a name typed by hand is cut too
 
 
 class Diverged(ParameterError):

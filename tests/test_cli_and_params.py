@@ -62,12 +62,37 @@ def test_param_parse_errors():
     (["run", "gravity-start", "--set", "inertia=1,1,1"], "inertia=1,1,1: moments not all equal"),
     (["run", "gravity-start", "--set", "direction=0,1,0"], "direction=0,1,0: a direction off this body's principal axes"),
     (["run", "gravity-start", "--set", "inertia=2,2,4", "--set", "direction=0.6,0.8,0"], "direction=0.6,0.8,0: a direction off"),
+    # a name longer than the file system takes: the parameter message, not an OSError's traceback
+    (["run", "free-tumble", "--out", "a" * 300 + ".csv"], "a path this system takes (File name too long)"),
+    (["record", "free-tumble", "--out", "a" * 300 + ".rrd"], "a path this system takes (File name too long)"),
+    (["export", "free-tumble", "--out", "a" * 300 + ".html"], "a path this system takes (File name too long)"),
+    (["replay", "a" * 300 + ".rrd", "--check"], "cannot read (File name too long)"),
+    # a parameter name typed by hand is cut like a value (a 3,000-character name was echoed whole)
+    (["run", "free-tumble", "--set", "é" * 3000 + "=1"], "éééé…=1: unknown parameter"),
 ])
 def test_bad_set_exits_2_with_one_line(args, needle, cli):
     code, _, err = cli(*args)
     assert code == 2
     err = err.strip()
     assert len(err.splitlines()) == 1 and needle in err, err
+
+
+def test_a_long_name_is_not_echoed_whole(cli):
+    code, _, err = cli("run", "free-tumble", "--set", "é" * 3000 + "=1")
+    assert code == 2 and len(err) < 600, len(err)
+
+
+def test_replay_refuses_what_is_not_a_regular_file(cli, tmp_path):
+    """A named pipe blocked the reader for ever (only SIGKILL stopped it); a link to /dev/zero was
+    read until memory ran out."""
+    import os
+
+    fifo = tmp_path / "f.rrd"
+    os.mkfifo(fifo)
+    (tmp_path / "z.html").symlink_to("/dev/zero")
+    for path in (fifo, tmp_path / "z.html"):
+        code, _, err = cli("replay", path, "--check")
+        assert code == 2 and err.strip().endswith("not a regular file (a device, a pipe or a socket)"), err
 
 
 def test_the_same_value_given_twice_is_taken(cli):

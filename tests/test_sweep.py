@@ -359,3 +359,43 @@ def test_run_out_writes_the_samples_as_parquet_and_csv(tmp_path):
         assert np.allclose(df["zeta_rad"], ref["zeta_rad"], rtol=1e-15, atol=1e-15)
     r = cli("run", "libration-circular", "--out", str(tmp_path / "r.txt"), timeout=120)
     assert r.returncode == 2 and "--out" in r.stderr and ".parquet or .csv" in r.stderr
+
+
+@pytest.mark.slow
+def test_an_interrupted_sweep_with_force_leaves_the_older_table_as_it_was(tmp_path):
+    """--force replaces an older table only once the new one is whole: interrupted half-way, the
+    older table is byte for byte as it was (it used to be deleted at the start); --resume then
+    completes the new sweep and replaces it."""
+    out = tmp_path / "a.parquet"
+    r = cli("sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    old = out.read_bytes()
+    args = ["sweep", "free-tumble", "--grid", "step=0.001:0.002:40", "--set", "duration=600", "--chunk", "1",
+            "--workers", "2", "--out", str(out), "--quiet"]
+    p = subprocess.Popen([*THEORIA, *args, "--force"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         cwd=ROOT)
+    parts = tmp_path / "a.parquet.parts"
+    t_end = time.monotonic() + 300
+    while time.monotonic() < t_end and p.poll() is None:
+        if parts.is_dir() and len(list(parts.glob("part-*.parquet"))) >= 2:
+            break
+        time.sleep(0.1)
+    assert p.poll() is None, "finished before it could be interrupted: " + p.stderr.read()
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err
+    assert out.read_bytes() == old
+    r = cli(*args, "--resume")
+    assert r.returncode == 0, r.stderr
+    import pandas as pd
+
+    assert len(pd.read_parquet(out)) == 40 and not parts.exists()
+
+
+@pytest.mark.parametrize("out,why", [("d.parquet", "a file name: this is a directory"),
+                                     ("a" * 300 + ".zarr", "a path this system takes (File name too long)")])
+def test_an_out_path_the_sweep_cannot_write_is_refused_before_it_runs(tmp_path, out, why):
+    (tmp_path / "d.parquet").mkdir()
+    r = cli("sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--out", str(tmp_path / out), "--force")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and why in r.stderr, r.stderr
+    assert sorted(q.name for q in tmp_path.iterdir()) == ["d.parquet"] and not any((tmp_path / "d.parquet").iterdir())
