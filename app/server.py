@@ -30,11 +30,13 @@ from __future__ import annotations
 import contextlib
 import io
 import logging
+import math
 import os
 import signal
 import threading
 import time
 import traceback
+import warnings
 from dataclasses import dataclass
 
 import viser
@@ -161,6 +163,12 @@ class Gate:
             self.door.loop.call_later(wait, self._pump)
 
     def _camera(self, client_id, message) -> None:
+        why = _bad_camera(message)
+        if why:
+            self.dropped += 1
+            self.door.log.line(f"theoria: dropped a camera message from {self.address}: {why}",
+                               once_key=("camera", self.address, why))
+            return
         now = time.monotonic()
         if not self.registered or now - self.camera_t >= 1.0 / CAMERA_RATE:
             self.registered = True
@@ -177,6 +185,26 @@ class Gate:
                     self._dispatch(client_id, m)
 
             self.door.loop.call_later(1.0 / CAMERA_RATE - (now - self.camera_t), flush)
+
+
+_CAMERA_VECTORS = {"wxyz": 4, "position": 3, "look_at": 3, "up_direction": 3}
+_CAMERA_NUMBERS = ("fov", "near", "far", "image_height", "image_width")
+
+
+def _number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _bad_camera(message) -> str | None:
+    """Why a ViewerCameraMessage is refused (None: a camera pose of finite numbers)."""
+    for name, n in _CAMERA_VECTORS.items():
+        v = getattr(message, name, None)
+        if not isinstance(v, (list, tuple)) or len(v) != n or not all(_number(x) for x in v):
+            return f"{name} is not {n} finite numbers"
+    for name in _CAMERA_NUMBERS:
+        if not _number(getattr(message, name, None)):
+            return f"{name} is not a finite number"
+    return None
 
 
 def _bad_update(message) -> str | None:
@@ -283,6 +311,31 @@ def _quiet_libraries(log: RateLimitedLog) -> None:
         lg = logging.getLogger(name)
         if not any(isinstance(f, Through) for f in lg.filters):
             lg.addFilter(Through())
+    # viser prints a refused connection's version string (the client's own text) with rich, once
+    # per connection: two hundred connections wrote 2,900 lines. Through the log, cut, once per kind.
+    import rich
+
+    if not isinstance(rich.print, _RichThroughLog):
+        rich.print = _RichThroughLog(rich.print, log)
+    # a message field of the wrong type is warned about with the whole value (a camera message of
+    # 100,000 numbers wrote 11 MB): the gate refuses such messages itself, with one line
+    warnings.filterwarnings("ignore", message=r"\[viser\] .* does not match annotation")
+
+
+class _RichThroughLog:
+    """`rich.print` (viser's) with a connection refused for its version sent through the
+    rate-limited log (its first 200 characters); anything else prints as before."""
+
+    def __init__(self, print_, log: RateLimitedLog):
+        self._print, self._log = print_, log
+
+    def __call__(self, *args, **kwargs):
+        text = " ".join(str(a) for a in args)
+        if "Version mismatch" in text:
+            self._log.line(("theoria: refused a connection: " + text.split("Version mismatch", 1)[1])[:200],
+                           once_key=("version",))
+            return
+        self._print(*args, **kwargs)
 
 
 def _read_with_backpressure() -> None:

@@ -923,3 +923,43 @@ def test_values_the_lists_do_not_offer_are_refused_in_a_few_lines(capsys):
     assert any(t == "Not allowed: Preset" for t, _ in c.notifications), c.notifications
     lines = (out.getvalue() + log.getvalue() + capsys.readouterr().err).splitlines()
     assert len(lines) <= 10 and not any("Traceback" in x for x in lines), lines[:20]
+
+
+def test_what_a_connection_sends_is_never_echoed_whole_to_the_console(capsys):
+    """Two hundred connections with a version string of their own (viser printed each, wrapped,
+    ~15 lines apiece), and camera messages of 100,000 numbers (viser warned with the whole value:
+    11 MB for twenty): a few lines in all, and the honest client is still served."""
+    import msgspec
+    import websockets
+
+    with _server() as (srv, sessions, url, log):
+        out = io.StringIO()
+        srv._theoria_pool.logger.stream = out
+
+        async def go():
+            for k in range(200):
+                try:
+                    ws = await websockets.connect(url, subprotocols=[f"viser-v{'9' * 150}-{k}"], open_timeout=10)
+                    await ws.close()
+                except Exception:  # noqa: BLE001 — refused: what the test wants
+                    pass
+            c = ViserProtocolClient(url)
+            await c.connect()
+            try:
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                for k in range(20):
+                    await c.ws.send(msgspec.msgpack.encode({
+                        "type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [float(k)] * 100000,
+                        "fov": 1.3, "near": 0.01, "far": 1000.0, "image_height": 800, "image_width": 1280,
+                        "look_at": [0.0, 0.0, 0.0], "up_direction": [0.0, 0.0, 1.0]}))
+                await asyncio.sleep(1.0)
+                spin = c.uuid_of("Spin rate")
+                first, _ = await c.act(spin, float(c.values[spin]) + 0.5)
+                assert first is not None  # still served
+            finally:
+                await c.close()
+
+        asyncio.run(go())
+    captured = capsys.readouterr()
+    text = captured.out + captured.err + out.getvalue() + log.getvalue()
+    assert len(text) < 5000 and text.count("\n") < 20, (len(text), text[:1500])
