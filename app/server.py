@@ -27,6 +27,8 @@ start, `app.worker.RunStore`). A class switching among the same presets computes
 """
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import contextlib
 import io
 import logging
@@ -456,20 +458,45 @@ def make_server(port: int = 8080, host: str = "127.0.0.1", scenario: str | None 
     server._theoria_sweep = sweep
     sessions: dict[int, ClientSession] = {}
 
-    @server.on_client_connect
-    def _(client: viser.ClientHandle) -> None:
+    # A session starts by asking the page for its address (up to 10 s for a page that never
+    # answers): on threads of its own, one per connection the door lets in, not on viser's pool of
+    # 32 callback threads, which forty silent sockets from four addresses held for 10 s at a time
+    # (every new student waited that long for a first scene).
+    starts = concurrent.futures.ThreadPoolExecutor(max_workers=door.limits.max_connections + 8,
+                                                   thread_name_prefix="theoria-session-start")
+    gone: set[int] = set()  # clients that left while their session was starting
+    lock = threading.Lock()
+
+    def start(client: viser.ClientHandle) -> None:
         try:
-            sessions[client.client_id] = ClientSession(server, client, scenario, run=run, sweep=sweep)
+            session = ClientSession(server, client, scenario, run=run, sweep=sweep)
         except Exception as e:
             log.line("theoria: a browser's session could not start:\n" + traceback.format_exc())
             try:
                 client.add_notification("Error", f"{type(e).__name__}: {e}", color="red")
             except Exception:
                 pass
+            with lock:
+                gone.discard(client.client_id)
+            return
+        with lock:
+            left = client.client_id in gone
+            gone.discard(client.client_id)
+            if not left:
+                sessions[client.client_id] = session
+        if left:
+            session.close()
+
+    @server.on_client_connect
+    async def _(client: viser.ClientHandle) -> None:
+        await asyncio.get_running_loop().run_in_executor(starts, start, client)
 
     @server.on_client_disconnect
     def _(client: viser.ClientHandle) -> None:
-        s = sessions.pop(client.client_id, None)
+        with lock:
+            s = sessions.pop(client.client_id, None)
+            if s is None:
+                gone.add(client.client_id)
         if s is not None:
             s.close()
 

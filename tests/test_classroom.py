@@ -963,3 +963,40 @@ def test_what_a_connection_sends_is_never_echoed_whole_to_the_console(capsys):
     captured = capsys.readouterr()
     text = captured.out + captured.err + out.getvalue() + log.getvalue()
     assert len(text) < 5000 and text.count("\n") < 20, (len(text), text[:1500])
+
+
+def test_sockets_that_never_answer_do_not_hold_up_a_new_student():
+    """Forty sockets open the app (the camera handshake) and never answer the page's address
+    probe: each session start waits up to 10 s for it. A student who arrives meanwhile gets a
+    first scene while all forty are still waiting (they held viser's 32 callback threads, and a
+    new student waited the 10 s)."""
+    import msgspec
+    import viser
+    import websockets
+
+    camera = msgspec.msgpack.encode({
+        "type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [3.0, 2.0, 2.0],
+        "fov": 1.3, "near": 0.01, "far": 1000.0, "image_height": 800, "image_width": 1280,
+        "look_at": [0.0, 0.0, 0.0], "up_direction": [0.0, 0.0, 1.0]})
+    with _server(limits=Limits(max_per_address=100)) as (srv, sessions, url, log):
+        async def go():
+            silent = []
+            for _ in range(40):
+                ws = await websockets.connect(url, subprotocols=[f"viser-v{viser.__version__}"], max_size=None,
+                                              compression=None, open_timeout=60)
+                await ws.send(camera)
+                silent.append(ws)
+            await asyncio.sleep(0.5)
+            made_before = len(sessions)
+            c = ViserProtocolClient(url)
+            await c.connect()
+            try:
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                return made_before, len(sessions)
+            finally:
+                await c.close()
+                for ws in silent:
+                    await ws.close()
+
+        made_before, made = asyncio.run(go())
+    assert made_before == 0 and made == 1, (made_before, made)
