@@ -76,13 +76,15 @@ KILL_GRACE_S = 5.0  # beyond the run limit, a child that never calls progress is
 NOJIT_SECONDS_LIMIT = 20.0
 COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes to a compiling one
 # A run expected to take longer is slow: the quick children (kept for quick runs and previews) do
-# not take it, and its scenario's quick preview is shown first. A third of a second: a hundred
-# browsers moving sliders ask for several runs a second, and a slow one in the quick child made
-# every other browser wait for it.
-SLOW_JOB_S = 0.3
-# A run expected to take longer is shown first from its scenario's preview. Not lower: at 0.1 s (a
-# Cassini, Moon or Hyperion slider previewed first) a hundred browsers' p95 went from 0.6 to 1.2 s
-# (one run each), every such action drawn twice by the server's one interpreter.
+# not take it, and its scenario's quick preview is shown first. A hundred browsers moving sliders
+# ask for several runs a second, and a slow one in a quick child makes every other browser wait for
+# it. 0.15 s of CPU: once the Moon's, Cassini's and precession's runs had become cheaper (0.13-0.26 s)
+# they fell under the former 0.3 s, ran unpreviewed in the quick children, and a hundred browsers'
+# p95 went from 0.49-0.53 s to 0.69-1.13 s; at 0.15 s it was 0.30 s (150-s soaks, benchmarks/classroom.py).
+SLOW_JOB_S = 0.15
+# A run expected to take longer is shown first from its scenario's preview. At 0.1 s, when the
+# previews cost as much as the runs (a Moon preview 0.26 s), p95 went from 0.6 to 1.2 s, every such
+# action drawn twice by the server's one interpreter; the previews now cost 0.01-0.04 s.
 PREVIEW_AFTER_S = SLOW_JOB_S
 # A run expected to take at most this much CPU is tiny (a slider on the rigid-body scenes: 3-20 ms).
 # One child of the server's pool takes tiny runs only: with a hundred browsers, the three quick

@@ -1000,3 +1000,41 @@ def test_sockets_that_never_answer_do_not_hold_up_a_new_student():
 
         made_before, made = asyncio.run(go())
     assert made_before == 0 and made == 1, (made_before, made)
+
+
+def test_a_browser_that_reads_nothing_is_closed_before_it_fills_the_memory():
+    """A socket opens the app, then stops reading and asks for scene after scene: every scene
+    waited in the server's memory for it (ten such sockets took the server from 0.5 to 1.4 GB in
+    40 s). Past MAX_BACKLOG messages waiting, the server closes it, and serves the next student."""
+    from theoria.app import server as server_mod
+
+    with _server() as (srv, sessions, url, log):
+        async def go():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            assert await c.wait_for(lambda: c.update_no >= 1, 120)
+            dd, options = c.dropdown("Scene")
+            c._reader.cancel()  # reads nothing from now on
+            door = srv._theoria_door
+            sent = 0
+            t_end = time.monotonic() + 120
+            while time.monotonic() < t_end and not door.refused.get("not reading"):
+                try:
+                    await c.send_raw({"type": "GuiUpdateMessage", "uuid": dd,
+                                      "updates": {"value": options[sent % len(options)]}})
+                except Exception:  # noqa: BLE001 — closed by the server
+                    break
+                sent += 1
+                await asyncio.sleep(0.1)
+            closed = door.refused.get("not reading", 0)
+            honest = ViserProtocolClient(url)
+            await honest.connect()
+            try:
+                served = await honest.wait_for(lambda: honest.update_no >= 1, 120)
+            finally:
+                await honest.close()
+            return closed, sent, served
+
+        closed, sent, served = asyncio.run(go())
+    assert closed == 1 and served, (closed, sent)
+    assert sent * 300 > server_mod.MAX_BACKLOG  # it was closed for what it left unread, not at once
