@@ -64,13 +64,6 @@ PRESENT_PANEL_SCALE = 1.45  # the panel's type in presenter mode (app/browser.py
 PLAY, PAUSE, RESET, BACK, FORWARD = "Play", "Pause", "Reset", "◀ Step", "Step ▶"
 
 
-class _BrowserEvent:
-    client = True  # the slider's last value after a drag: the browser's own event
-
-
-_BROWSER = _BrowserEvent()
-
-
 def _where(e: BaseException) -> str:
     """file:line where an exception was raised (one log line per kind of failure)."""
     tb = e.__traceback__
@@ -403,7 +396,7 @@ class ClientSession:
             # a slider being dragged: its first value ran at once; the values in between are dropped
             # and the last one runs when the drag pauses (the last value wins, nothing queues)
             self._slider_at = now
-            self._debounce = threading.Timer(SLIDER_DEBOUNCE_S, lambda: self._on(self.request)(_BROWSER))
+            self._debounce = threading.Timer(SLIDER_DEBOUNCE_S, lambda: self._browser_event(self.request))
             self._debounce.daemon = True
             self._debounce.start()
             return
@@ -454,11 +447,15 @@ class ClientSession:
         def callback(event):
             if getattr(event, "client", None) is None:
                 self._safe(fn, *args)
-                return
-            with self._callback_lock:
-                if not self._closed:
-                    self._safe(fn, *args)
+            else:
+                self._browser_event(fn, *args)
         return callback
+
+    def _browser_event(self, fn, *args) -> None:
+        """`fn(*args)` for something the browser did, after its earlier events are handled."""
+        with self._callback_lock:
+            if not self._closed:
+                self._safe(fn, *args)
 
     def _safe(self, fn, *args) -> None:
         """Run a callback (playback giving way meanwhile); no exception reaches viser's loop, and
