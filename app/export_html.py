@@ -22,12 +22,14 @@ import numpy as np
 import viser
 
 from .files import write_whole
+from .replay import HTML_DIGEST_BLANK, html_digest
 from .scene import SceneView
 
 FRAMES = 240  # frames in the replay
 FPS = 30.0
 # identifies theoria's own export (checked by `theoria replay FILE.html`, app/replay.py)
-MARKER = '<meta name="generator" content="theoria export_html" data-theoria-scenario="{name}" />'
+MARKER = ('<meta name="generator" content="theoria export_html" data-theoria-scenario="{name}" '
+          'data-sha256="{digest}" />')
 
 
 def _free_port() -> int:
@@ -89,10 +91,13 @@ def render_html(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
     finally:
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
-    page = page.replace("<head>", "<head>\n    " + MARKER.format(name=html_lib.escape(run.scenario)) +
+    marker = MARKER.format(name=html_lib.escape(run.scenario), digest=HTML_DIGEST_BLANK)
+    page = page.replace("<head>", "<head>\n    " + marker +
                         f"\n    <title>theoria — {html_lib.escape(drawing.title)}</title>", 1)
-    return page.replace("<body>", "<body>\n" + text_panel(drawing, run), 1) if "<body>" in page else \
+    page = page.replace("<body>", "<body>\n" + text_panel(drawing, run), 1) if "<body>" in page else \
         page.replace("</body>", text_panel(drawing, run) + "</body>", 1)
+    # the digest of the whole page goes into its marker: `theoria replay` finds a damaged copy
+    return page.replace(f'data-sha256="{HTML_DIGEST_BLANK}"', f'data-sha256="{html_digest(page)}"', 1)
 
 
 def export_run(run, out, frames: int = FRAMES, fps: float = FPS, view=None) -> dict:

@@ -10,8 +10,9 @@ else with one clear line (exit 2).
   a child that stops with this command: Ctrl-C or SIGTERM stop it, and the kernel stops it if
   this process dies (PR_SET_PDEATHSIG); it sends no analytics.
 - ``.html`` (from `theoria export`): must carry the marker `app.export_html.MARKER`, the embedded
-  viser scene, and end with ``</html>`` (a truncated file does not). Then its ``file://`` URL is
-  printed (the file plays in any browser with no server).
+  viser scene, end with ``</html>`` (a truncated file does not) and match the sha256 digest the
+  export wrote into its marker (a piece cut out of the middle, or a changed byte, does not). Then
+  its ``file://`` URL is printed (the file plays in any browser with no server).
 
 ``--check`` validates only (tests, scripts) and prints what was found.
 """
@@ -35,6 +36,10 @@ REQUIRED_ENTITIES = ("/world", "/text")
 # an export inlines viser's client (~1 MB) and a run's frames: tens of MB at most; a bigger .html
 # is not one (read whole to be checked, a link to /dev/zero would never end)
 MAX_HTML_BYTES = 512e6
+# the export's own digest (sha256 of the page with these 64 characters as zeros): a page with a
+# piece of its scene cut out, or bytes changed, still ends with </html> but no longer matches it
+HTML_DIGEST_RE = re.compile(r'data-sha256="([0-9a-f]{64})"')
+HTML_DIGEST_BLANK = "0" * 64
 HTML_MARKER_RE = re.compile(r'<meta name="generator" content="theoria export_html" data-theoria-scenario="([^"]*)"')
 
 
@@ -80,6 +85,14 @@ def check_rrd(path: str) -> dict:
             "entities": len(entities), "rows": rows}
 
 
+def html_digest(text: str) -> str:
+    """sha256 of an export's page with its digest field blank (the value written into that field)."""
+    import hashlib
+
+    blank = HTML_DIGEST_RE.sub(f'data-sha256="{HTML_DIGEST_BLANK}"', text, count=1)
+    return hashlib.sha256(blank.encode("utf-8")).hexdigest()
+
+
 def check_html(path: str) -> dict:
     """The scenario of a theoria HTML export, or ReplayError."""
     try:
@@ -100,6 +113,10 @@ def check_html(path: str) -> dict:
         raise ReplayError(f"{path}: theoria HTML export without its embedded scene")
     if not text.rstrip().endswith("</html>"):
         raise ReplayError(f"{path}: theoria HTML export is truncated (no closing </html>)")
+    d = HTML_DIGEST_RE.search(text[:4096])
+    if d is not None and html_digest(text) != d.group(1):  # an export written before the digest has none
+        raise ReplayError(f"{path}: theoria HTML export is damaged (its content does not match the digest "
+                          "written when it was exported)")
     return {"kind": "html", "path": str(path), "scenario": m.group(1),
             "url": Path(os.path.abspath(path)).as_uri(), "bytes": len(data)}
 

@@ -48,6 +48,11 @@ def _bad_cases(d, rrd, html):
         "text.rrd": b"hello, not a recording\n",
         "bitflip.rrd": data_rrd[:200] + bytes(b ^ 0xFF for b in data_rrd[200:400]) + data_rrd[400:],
         "truncated.html": data_html[: len(data_html) // 2],
+        # whole in form (marker, scene, closing tag) but damaged: a piece of the middle cut out, one
+        # byte changed; each passed the check before the export wrote its digest
+        "cut.html": data_html[: len(data_html) // 3] + data_html[len(data_html) // 3 + 199_000:],
+        "changed.html": data_html[:len(data_html) // 2] + bytes([data_html[len(data_html) // 2] ^ 1]) +
+        data_html[len(data_html) // 2 + 1:],
         "foreign.html": b"<!doctype html><html><head><title>x</title></head><body>hi</body></html>\n",
         "binary.html": bytes(range(256)) * 10,
         "empty.html": b"",
