@@ -22,6 +22,7 @@ import numpy as np
 import viser
 
 from .files import write_whole
+from .page import SOFTWARE_GL_JS
 from .replay import HTML_DIGEST_BLANK, html_digest
 from .scene import SceneView
 
@@ -92,8 +93,11 @@ def render_html(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
         with contextlib.redirect_stdout(io.StringIO()):
             server.stop()
     marker = MARKER.format(name=html_lib.escape(run.scenario), digest=HTML_DIGEST_BLANK)
+    # the live page's own start: no "Software WebGL rendering detected" notice over the replay,
+    # and no multisampling where WebGL runs in software (app/page.py)
     page = page.replace("<head>", "<head>\n    " + marker +
-                        f"\n    <title>theoria — {html_lib.escape(drawing.title)}</title>", 1)
+                        f"\n    <title>theoria — {html_lib.escape(drawing.title)}</title>"
+                        f"\n    <script>{SOFTWARE_GL_JS}</script>", 1)
     page = page.replace("<body>", "<body>\n" + text_panel(drawing, run), 1) if "<body>" in page else \
         page.replace("</body>", text_panel(drawing, run) + "</body>", 1)
     # the digest of the whole page goes into its marker: `theoria replay` finds a damaged copy
