@@ -225,13 +225,13 @@ def make_plan(sc, grid=None, random=None, samples=None, fixed=None, preset=None,
         try:
             samples = int(samples)
         except (TypeError, ValueError):
-            raise ParameterError("--samples", samples, "a whole number ≥ 1") from None
+            raise ParameterError("--samples", samples, "a whole number from 1 to 10,000,000") from None
         if samples < 1 or samples > 10_000_000:
             raise ParameterError("--samples", samples, "a whole number from 1 to 10,000,000")
         if not random:
             raise ParameterError("--samples", samples, "only with --random name=lo:hi")
     if not grid and not random:
-        raise ParameterError("--grid", None, "at least one --grid name=start:stop:count (or --random name=lo:hi)")
+        raise ParameterError("--grid", "(none given)", "at least one --grid name=start:stop:count (or --random name=lo:hi)")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ParameterError("--seed", seed, "a whole number ≥ 0")
     axes = [parse_grid(sc, g) for g in grid]

@@ -67,6 +67,10 @@ def test_param_parse_errors():
     (["record", "free-tumble", "--out", "a" * 300 + ".rrd"], "a path this system takes (File name too long)"),
     (["export", "free-tumble", "--out", "a" * 300 + ".html"], "a path this system takes (File name too long)"),
     (["replay", "a" * 300 + ".rrd", "--check"], "cannot read (File name too long)"),
+    # a sweep's counts: the range it takes, and no "None" for a flag not given
+    (["sweep", "free-tumble", "--random", "step=0.001:0.002", "--samples", "1e12", "--out", "x.parquet"],
+     "--samples=1e12: a whole number from 1 to 10,000,000"),
+    (["sweep", "free-tumble", "--out", "x.parquet"], "--grid=(none given): at least one --grid"),
     # a parameter name typed by hand is cut like a value (a 3,000-character name was echoed whole)
     (["run", "free-tumble", "--set", "é" * 3000 + "=1"], "éééé…=1: unknown parameter"),
 ])
