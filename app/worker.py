@@ -84,7 +84,8 @@ COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes
 SLOW_JOB_S = 0.15
 # A run expected to take longer is shown first from its scenario's preview. At 0.1 s, when the
 # previews cost as much as the runs (a Moon preview 0.26 s), p95 went from 0.6 to 1.2 s, every such
-# action drawn twice by the server's one interpreter; the previews now cost 0.01-0.04 s.
+# action drawn twice by the server's one interpreter; most previews now cost 0.01-0.04 s (precession's
+# 0.13 s when flattening or obliquity moves: its resonance table is made again).
 PREVIEW_AFTER_S = SLOW_JOB_S
 # A run expected to take at most this much CPU is tiny (a slider on the rigid-body scenes: 3-20 ms).
 # One child of the server's pool takes tiny runs only: with a hundred browsers, the three quick
