@@ -550,24 +550,23 @@ def spin_orbit_section_scipy(theta0, thetadot0, e, omega0, n_orbits, rtol=1e-10,
 
 
 def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256, iters=60):
-    """A fixed point of the periapse map (θ mod π, θ̇): Newton on one orbit's map with finite
+    """A fixed point of the periapse map (θ mod π, θ̇): Newton on one orbit's map with central
     differences. Returns (θ, θ̇) or raises ParameterError if Newton does not converge."""
     y = np.array([theta_guess, dot_guess], float)
-
-    def F(y):
-        t, w = spin_orbit_section(np.array([y[0]]), np.array([y[1]]), e, omega0, 1, steps_per_orbit)
-        dt = t[0, 0] - y[0]
-        return np.array([dt - np.pi * np.round(dt / np.pi), w[0, 0] - y[1]])
+    d = 1e-6
+    shifts = np.array([[0, 0], [d, 0], [-d, 0], [0, d], [0, -d]], float)
 
     for _ in range(iters):
-        r = F(y)
+        # the point and its four neighbours as one ensemble of five starts: one compiled call
+        # where five cost five calls' overhead (a Hyperion preview spent 0.06 s of its 0.09 s here)
+        pts = y + shifts
+        t, w = spin_orbit_section(pts[:, 0], pts[:, 1], e, omega0, 1, steps_per_orbit)
+        dt = t[:, 0] - pts[:, 0]
+        F = np.stack([dt - np.pi * np.round(dt / np.pi), w[:, 0] - pts[:, 1]], axis=1)
+        r = F[0]
         if np.max(np.abs(r)) < 1e-10:
             return float(np.remainder(y[0] + 0.5 * np.pi, np.pi) - 0.5 * np.pi), float(y[1])
-        J = np.empty((2, 2))
-        for j in range(2):
-            d = np.zeros(2)
-            d[j] = 1e-6
-            J[:, j] = (F(y + d) - F(y - d)) / 2e-6
+        J = np.column_stack([(F[1] - F[2]) / (2 * d), (F[3] - F[4]) / (2 * d)])
         dy = np.linalg.solve(J, r)
         y = y - dy * min(1.0, 0.05 / max(abs(dy[1]), 1e-300), 0.2 / max(abs(dy[0]), 1e-300))  # damped: stay local
     raise ParameterError("omega0", omega0, "no periodic spin state found near this start")
@@ -576,14 +575,9 @@ def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256,
 def periapse_map_trace(theta, thetadot, e, omega0, steps_per_orbit=128, d=1e-6):
     """Trace of the Jacobian of the periapse map at (θ, θ̇) (determinant 1: area preserving).
     |trace| < 2: elliptic (an island centre); > 2: hyperbolic."""
-    J = np.empty((2, 2))
-    for j in range(2):
-        dv = np.zeros(2)
-        dv[j] = d
-        tp, wp = spin_orbit_section([theta + dv[0]], [thetadot + dv[1]], e, omega0, 1, steps_per_orbit)
-        tm, wm = spin_orbit_section([theta - dv[0]], [thetadot - dv[1]], e, omega0, 1, steps_per_orbit)
-        J[:, j] = [(tp[0, 0] - tm[0, 0]) / (2 * d), (wp[0, 0] - wm[0, 0]) / (2 * d)]
-    return float(np.trace(J))
+    pts = np.array([theta, thetadot], float) + np.array([[d, 0], [-d, 0], [0, d], [0, -d]], float)
+    t, w = spin_orbit_section(pts[:, 0], pts[:, 1], e, omega0, 1, steps_per_orbit)
+    return float((t[0, 0] - t[1, 0]) / (2 * d) + (w[2, 0] - w[3, 0]) / (2 * d))
 
 
 @kept(64)  # moving a slider other than e or ω₀ reuses it
