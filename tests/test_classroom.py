@@ -1037,3 +1037,35 @@ def test_a_browser_that_reads_nothing_is_closed_before_it_fills_the_memory():
         closed, sent, served = asyncio.run(go())
     assert closed == 1 and served, (closed, sent)
     assert sent * 300 > server_mod.MAX_BACKLOG  # it was closed for what it left unread, not at once
+
+
+def test_a_short_run_asked_later_goes_before_a_long_run_asked_earlier():
+    """On the slow children's queue a run of a fifth of a second asked now goes before a run of
+    forty seconds asked 45 seconds earlier (by when each would end if started when asked, the long
+    one went first, and a hundred browsers' previews of slow scenes waited ~23 s for the class's
+    long runs); the long run's turn still comes once it has waited long enough, and a quick run
+    always goes before both."""
+    from theoria.scenarios import get
+
+    spec = get("cassini")
+    pool = worker_mod.SimPool(slots=2, store=False, use_processes=False)
+    try:
+        values = spec.resolve({})
+        steps = worker_mod._steps(spec, values)
+        pool._seconds[(spec.name, False)] = (0.4, steps, True)  # the default run: 0.4 s, slow
+
+        def job(given, asked):
+            j = worker_mod.Job(f"k{given}{asked}", spec, spec.resolve(given))
+            j.created = asked
+            return j
+
+        long_run, short_run = {"step_days": values["step_days"] / 100}, {"years": values["years"] / 2}
+        long_early, short_late = job(long_run, 100.0), job(short_run, 145.0)
+        assert pool._slow(long_early) and pool._slow(short_late)
+        assert pool.expected_seconds(spec, long_early.values) == pytest.approx(40.0, rel=0.02)
+        assert pool._turn(short_late) < pool._turn(long_early)
+        assert pool._turn(job(short_run, 100.0 + 10 * 40.0 + 10)) > pool._turn(long_early)  # waited enough
+        quick = job({"years": 0.5}, 200.0)
+        assert not pool._slow(quick) and pool._turn(quick) < pool._turn(short_late)
+    finally:
+        pool.close()
