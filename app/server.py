@@ -70,6 +70,12 @@ MAX_BACKLOG = 5000
 READ_RATE = 200.0
 READ_BURST = 400.0
 MAX_LIST = 16  # numbers in a vector value
+# The largest message a browser may send (bytes). The app's page sends a camera, a control's value
+# or a typed number, each well under a kilobyte; viser lets messages of 50 MB in, and a client's
+# 40-MB text frames were read and decoded whole before being dropped (eight such sockets raised the
+# server by 1.2 GB). Past this size a frame is refused from its header, before its payload is read,
+# and its socket closed (1009: message too big).
+MAX_MESSAGE_BYTES = 1 << 20
 
 # what a browser may send: the page's camera (which also opens the session), a control's value, and
 # what the panel's forms (a typed value taken on Enter or blur), keys (viser's commands) and the
@@ -369,7 +375,8 @@ def _read_with_backpressure() -> None:
     decode, hand over) as fast as messages come. The same loop, with a token bucket per socket:
     past READ_BURST messages at READ_RATE a second it waits before the next read. The websocket
     library then holds at most its small queue and stops reading the socket, and the flooding
-    client's own writes stall. Guarded: a viser whose loop looks different is left as it is."""
+    client's own writes stall. A message over MAX_MESSAGE_BYTES closes the socket unread. Guarded:
+    a viser whose loop looks different is left as it is."""
     import asyncio
     import inspect
 
@@ -386,6 +393,9 @@ def _read_with_backpressure() -> None:
         return
 
     async def consumer(websocket, handle_message, message_class) -> None:
+        protocol = getattr(websocket, "protocol", None)
+        if hasattr(protocol, "max_message_size"):  # websockets ≥ 13; checked against each frame's header
+            protocol.max_message_size = MAX_MESSAGE_BYTES
         tokens, last = READ_BURST, time.monotonic()
         while True:
             raw = await websocket.recv()

@@ -1069,3 +1069,38 @@ def test_a_short_run_asked_later_goes_before_a_long_run_asked_earlier():
         assert not pool._slow(quick) and pool._turn(quick) < pool._turn(short_late)
     finally:
         pool.close()
+
+
+@pytest.mark.parametrize("frame", ["text", "binary"])
+def test_a_message_of_megabytes_closes_its_socket_unread(frame):
+    """A page sends messages of well under a kilobyte; viser let 50 MB in, and 40-MB frames were
+    read and decoded whole before being dropped (eight sockets: +1.2 GB). A frame over
+    MAX_MESSAGE_BYTES is refused from its header: its socket is closed with 1009 (message too
+    big) while most of it is still unsent, and the next student is served."""
+    from theoria.app import server as server_mod
+
+    size = 40 * server_mod.MAX_MESSAGE_BYTES
+
+    with _server() as (srv, sessions, url, log):
+        async def go():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            assert await c.wait_for(lambda: c.update_no >= 1, 120)
+            payload = "x" * size if frame == "text" else b"\x00" * size
+            try:
+                await asyncio.wait_for(c.ws.send(payload), 60)
+            except Exception:  # noqa: BLE001 — closed by the server while sending
+                pass
+            closed = await c.wait_for(lambda: c.closed_code is not None, 30)
+            honest = ViserProtocolClient(url)
+            await honest.connect()
+            try:
+                served = await honest.wait_for(lambda: honest.update_no >= 1, 120)
+            finally:
+                await honest.close()
+            await c.close()
+            return closed, c.closed_code, served
+
+        closed, code, served = asyncio.run(go())
+    assert closed and code == 1009 and served, (closed, code, served)
+    assert len(log.getvalue().splitlines()) < 10
