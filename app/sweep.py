@@ -391,15 +391,21 @@ def run_chunk(task: dict) -> dict:
 # ------------------------------------------------------------------------------------- writers
 
 class ZarrWriter:
+    """The sweep as a Zarr store at OUT, each chunk's status written last. A sweep that replaces an
+    older one (--force) is written beside it, in OUT.new/, and takes its place only once whole
+    (`finish`): interrupted, it leaves the older store as it was and its own chunks for --resume."""
+
     def __init__(self, path: str, plan: Plan, resume: bool):
         import xarray as xr
         import zarr
 
         self.path, self.plan = path, plan
         self._xr, self._zarr = xr, zarr
+        staging = path.rstrip("/" + os.sep) + ".new"
         spec = plan.spec()
-        if resume and os.path.exists(path):
-            g = zarr.open_group(path, mode="r+")
+        if resume and (os.path.exists(staging) or os.path.exists(path)):
+            self.store = staging if os.path.exists(staging) else path  # a replacing sweep first
+            g = zarr.open_group(self.store, mode="r+")
             old = dict(g.attrs).get("theoria_sweep")
             if old is None:
                 raise ParameterError("--resume", path, "is not a theoria sweep (no theoria_sweep attribute)")
@@ -412,14 +418,16 @@ class ZarrWriter:
                                      + ", ".join(diff) + "); give another --out or drop --resume")
             self.group = g
         else:
-            if os.path.exists(path):
-                if not resume and not _is_sweep_store(path):
-                    raise ParameterError("--out", path, "exists and is not a theoria sweep: choose a new name")
-                shutil.rmtree(path)
+            if os.path.exists(path) and not _is_sweep_store(path):
+                raise ParameterError("--out", path, "exists and is not a theoria sweep: choose a new name")
+            self.store = staging if os.path.exists(path) else path
+            if os.path.exists(staging):  # an earlier replacing sweep, not resumed
+                shutil.rmtree(staging)
             self._create(spec)
-            self.group = zarr.open_group(path, mode="r+")
+            self.group = zarr.open_group(self.store, mode="r+")
         self.metric_names = [k for k in self.group.array_keys() if k not in ("status",) and k not in
                              (set(plan.dims) | {a.name for a in plan.random})]
+        self.kept = self.store
 
     def _create(self, spec):
         xr, plan = self._xr, self.plan
@@ -447,7 +455,7 @@ class ZarrWriter:
             "theoria_sweep": spec, "messages": {}, "sessions": [],
             "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         })
-        ds.to_zarr(self.path, mode="w", consolidated=False)
+        ds.to_zarr(self.store, mode="w", consolidated=False)
 
     def done_regions(self, regions) -> set[int]:
         st = self.group["status"]
@@ -471,8 +479,8 @@ class ZarrWriter:
         for n in new:
             ds[n].attrs["units"] = _unit_of_metric(plan.scenario, n)
         ds.attrs = dict(self.group.attrs)  # appending variables rewrites the group's attributes
-        ds.to_zarr(self.path, mode="a", compute=False, consolidated=False)
-        self.group = self._zarr.open_group(self.path, mode="r+")
+        ds.to_zarr(self.store, mode="a", compute=False, consolidated=False)
+        self.group = self._zarr.open_group(self.store, mode="r+")
         self.metric_names += new
 
     def write(self, index, region, result):
@@ -501,14 +509,23 @@ class ZarrWriter:
         self.group.attrs["sessions"] = sessions
 
     def finish(self):
-        return None
+        """A replacing sweep, whole, takes the older store's place (which is then removed)."""
+        if self.store == self.path:
+            return
+        older = self.path.rstrip("/" + os.sep) + ".old"
+        shutil.rmtree(older, ignore_errors=True)
+        os.rename(self.path, older)
+        os.rename(self.store, self.path)
+        shutil.rmtree(older, ignore_errors=True)
+        self.store = self.kept = self.path
+        self.group = self._zarr.open_group(self.store, mode="r+")
 
     def discard(self):
         """A new sweep refused after it began (a --metrics name no run reports): nothing of it stays."""
-        shutil.rmtree(self.path, ignore_errors=True)
+        shutil.rmtree(self.store, ignore_errors=True)
 
     def open(self):
-        return self._xr.open_zarr(self.path, consolidated=False)
+        return self._xr.open_zarr(self.store, consolidated=False)
 
 
 class ParquetWriter:
@@ -536,6 +553,7 @@ class ParquetWriter:
             with open(specfile, "w") as f:
                 json.dump(spec, f)
         self.sessions_file = os.path.join(self.parts, "_sessions.json")
+        self.kept = self.parts
 
     def _part(self, i):
         return os.path.join(self.parts, f"part-{i:07d}.parquet")
@@ -775,12 +793,13 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if workers is not None and (int(workers) < 1 or int(workers) > 256):
         raise ParameterError("--workers", workers, "from 1 to 256")
     plan = make_plan(sc, grid, random, samples, fixed, preset, metrics, seed, chunk, nworkers)
-    earlier = os.path.exists(out) or (kind == "parquet" and os.path.exists(out + ".parts"))
+    earlier = os.path.exists(out) or os.path.exists(out + ".parts" if kind == "parquet" else out.rstrip("/") + ".new")
     if earlier and not (resume or force):  # hours of runs are not replaced by a command repeated by mistake
         raise ParameterError("--out", out, "a new path: it holds a sweep; add --resume to complete it or "
                              "--force to replace it")
-    # an older table at `out` stays as it is until the new one replaces it whole (`finish`): an
-    # interrupted sweep leaves it, and its own finished chunks in OUT.parts/ for --resume
+    # an older table or store at `out` stays as it is until the new one replaces it whole
+    # (`finish`): an interrupted sweep leaves it, and its own finished chunks (OUT.parts/, OUT.new/)
+    # for --resume
     writer = ZarrWriter(out, plan, resume) if kind == "zarr" else ParquetWriter(out, plan, resume)
     regions = plan.chunk_regions()
     done = writer.done_regions(regions) if resume else set()
@@ -823,8 +842,7 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
                     "where": summary.cluster})
     if interrupted:
         return summary, None
-    if kind == "parquet":
-        writer.finish()
+    writer.finish()
     return summary, writer.open()
 
 
@@ -888,7 +906,7 @@ def _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, thre
                 res = fut.result()
             except Exception as e:  # noqa: BLE001 — a task that failed as a whole (a worker died, an import failed)
                 raise SweepError(f"chunk {i} failed on a worker ({type(e).__name__}: {e}); the finished chunks "
-                                 f"are kept in {writer.path}, --resume continues") from None
+                                 f"are kept in {writer.kept}, --resume continues") from None
             if not checked_metrics:
                 seen = set(res["metrics"]) | set(res.get("reported", ()))
                 known = set(getattr(getattr(sc, "batch", None), "metrics", ()) or ())

@@ -361,35 +361,57 @@ def test_run_out_writes_the_samples_as_parquet_and_csv(tmp_path):
     assert r.returncode == 2 and "--out" in r.stderr and ".parquet or .csv" in r.stderr
 
 
+def _tree(path):
+    """A file's bytes, or a folder's files' bytes by relative path."""
+    if path.is_file():
+        return path.read_bytes()
+    return {str(f.relative_to(path)): f.read_bytes() for f in sorted(path.rglob("*")) if f.is_file()}
+
+
 @pytest.mark.slow
-def test_an_interrupted_sweep_with_force_leaves_the_older_table_as_it_was(tmp_path):
-    """--force replaces an older table only once the new one is whole: interrupted half-way, the
-    older table is byte for byte as it was (it used to be deleted at the start); --resume then
-    completes the new sweep and replaces it."""
-    out = tmp_path / "a.parquet"
+@pytest.mark.parametrize("kind", ["parquet", "zarr"])
+def test_an_interrupted_sweep_with_force_leaves_the_older_result_as_it_was(tmp_path, kind):
+    """--force replaces an older table or store only once the new one is whole: interrupted
+    half-way, the older one is byte for byte as it was (it used to be deleted at the start); --resume
+    then completes the new sweep and replaces it."""
+    out = tmp_path / f"a.{kind}"
     r = cli("sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--out", str(out), "--quiet")
     assert r.returncode == 0, r.stderr
-    old = out.read_bytes()
+    old = _tree(out)
     args = ["sweep", "free-tumble", "--grid", "step=0.001:0.002:40", "--set", "duration=600", "--chunk", "1",
             "--workers", "2", "--out", str(out), "--quiet"]
     p = subprocess.Popen([*THEORIA, *args, "--force"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          cwd=ROOT)
-    parts = tmp_path / "a.parquet.parts"
+    # where the new sweep's finished chunks go meanwhile
+    kept = tmp_path / ("a.parquet.parts" if kind == "parquet" else "a.zarr.new")
+
+    def chunks_done():
+        if kind == "parquet":
+            return len(list(kept.glob("part-*.parquet")))
+        return len([f for f in (kept / "status").rglob("*") if f.is_file() and f.name != "zarr.json"])
+
     t_end = time.monotonic() + 300
     while time.monotonic() < t_end and p.poll() is None:
-        if parts.is_dir() and len(list(parts.glob("part-*.parquet"))) >= 2:
+        if kept.is_dir() and chunks_done() >= 2:
             break
         time.sleep(0.1)
     assert p.poll() is None, "finished before it could be interrupted: " + p.stderr.read()
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=120)
     assert p.returncode == 130, err
-    assert out.read_bytes() == old
+    assert _tree(out) == old
     r = cli(*args, "--resume")
     assert r.returncode == 0, r.stderr
-    import pandas as pd
+    if kind == "parquet":
+        import pandas as pd
 
-    assert len(pd.read_parquet(out)) == 40 and not parts.exists()
+        assert len(pd.read_parquet(out)) == 40
+    else:
+        import xarray as xr
+
+        with xr.open_zarr(out, consolidated=False) as ds:
+            assert ds.sizes["step"] == 40 and bool((ds["status"] != 0).all())
+    assert not kept.exists() and sorted(q.name for q in tmp_path.iterdir()) == [out.name]
 
 
 @pytest.mark.parametrize("out,why", [("d.parquet", "a file name: this is a directory"),
