@@ -127,7 +127,9 @@ def _parse_sets(items: list[str] | None, spec=None) -> dict[str, str]:
     return out
 
 
-def _scenario_values(name: str, sets: list[str] | None, duration: float | None, preset: str | None = None):
+def _scenario_values(name: str, sets: list[str] | None, duration: str | None, preset: str | None = None):
+    """The scenario and its values from --preset, --set and --duration (text, parsed as a --set
+    value is: an error shows what was typed, not what a float made of it)."""
     from theoria.scenarios import get
 
     sc = get(name)
@@ -142,8 +144,8 @@ def _scenario_values(name: str, sets: list[str] | None, duration: float | None, 
     if duration is not None:
         if not any(p.name == "duration" for p in sc.params):
             raise ParameterError("--duration", duration, f"not a parameter of {name}")
-        if "duration" in sets and sc.param("duration").parse(sets["duration"]) != duration:
-            raise ParameterError("--duration", f"{duration:g}", f"the same as --set duration={sets['duration']}, "
+        if "duration" in sets and sc.param("duration").parse(sets["duration"]) != sc.param("duration").parse(duration):
+            raise ParameterError("--duration", duration, f"the same as --set duration={sets['duration']}, "
                                  "or one of the two")
         given["duration"] = duration
     return sc, sc.resolve(given)
@@ -445,7 +447,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("name", help="the scenario (`theoria list` shows them)")
         s.add_argument("--set", action="append", metavar="KEY=VALUE",
                        help="a parameter's value, e.g. --set spin=2 --set inertia=1,2,3 (repeat for more)")
-        s.add_argument("--duration", type=float, default=None, help="the run's length (its `duration`, where it has one)")
+        s.add_argument("--duration", default=None, help="the run's length (its `duration`, where it has one)")
         s.add_argument("--preset", default=None, metavar="NAME",
                        help="start from a preset (its name or a unique part of it; `theoria list` shows them)")
         s.add_argument("--max-steps", default=None, metavar="N",

@@ -46,6 +46,9 @@ def test_param_parse_errors():
     (["run", "free-tumble", "--set", "duration=3", "--set", "duration=4"],
      "--set=duration=4: each parameter once (duration is also given as duration=3)"),
     (["run", "free-tumble", "--set", "duration=3", "--duration", "5"], "--duration=5: the same as --set duration=3"),
+    # --duration as typed, not as a float made it (400 nines were reported as inf)
+    (["run", "free-tumble", "--duration", "9" * 400], "duration=" + "9" * 20),
+    (["run", "free-tumble", "--duration", "abc"], "duration=abc: a number, allowed range (0, 1e+06] s"),
     (["run", "no-such-scenario"], "scenario=no-such-scenario"),
     (["run", "middle-axis-flip", "--set", "inertia=1,1,2"], "three different moments"),
     (["run", "initial-axis", "--set", "torque=0,0,0"], "torque=0,0,0"),
