@@ -1104,3 +1104,38 @@ def test_a_message_of_megabytes_closes_its_socket_unread(frame):
         closed, code, served = asyncio.run(go())
     assert closed and code == 1009 and served, (closed, code, served)
     assert len(log.getvalue().splitlines()) < 10
+
+
+def test_a_childs_run_comes_with_its_drawing_and_the_server_does_not_draw_it_again(monkeypatch):
+    """The default view's drawing of a run is made in the simulation child and sent with the run
+    (1-46 ms a run that the server's one interpreter no longer spends while every browser's answer
+    waits for it): the server shows it without drawing, and it is the drawing the server made."""
+    from theoria.scenarios import get
+    from theoria.scenarios.base import Scenario
+
+    spec = get("libration-eccentric")
+    pool = worker_mod.SimPool(slots=1, store=False)
+    got = {}
+    ev = threading.Event()
+    w = worker_mod.SimulationWorker("t", lambda req, r, sec: (got.setdefault("run", r), ev.set()),
+                                    lambda req, e: (got.setdefault("error", e), ev.set()), lambda *a: None, pool=pool)
+    try:
+        w.submit(spec, {"orbits": 3.0})
+        assert ev.wait(300) and "run" in got, got
+    finally:
+        pool.close()
+    run = got["run"]
+    assert len(run.__dict__.get("_theoria_drawings", {})) == 1
+    mine = spec.drawing(run)
+
+    def refuse(*a, **k):
+        raise AssertionError("drawn again by the server")
+
+    monkeypatch.setattr(Scenario, "drawing", refuse)
+    sent = worker_mod.drawing_of(spec, run)
+    from theoria.scenarios.drawing import Path as DrawnPath
+    paths = [it for it in sent.items if isinstance(it, DrawnPath)]
+    assert paths and all("_theoria_chunks" in it.__dict__ for it in paths)  # its paths cut into chunks too
+    assert [type(it).__name__ for it in sent.items] == [type(it).__name__ for it in mine.items]
+    assert np.array_equal(sent.frames, mine.frames) and np.array_equal(sent.times, mine.times)
+    assert [getattr(it, "name", None) for it in sent.items] == [getattr(it, "name", None) for it in mine.items]
