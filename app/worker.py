@@ -1569,8 +1569,8 @@ def _draw_ahead(spec, run) -> None:
     """In a simulation child: the default view's drawing of `run` and its paths' chunks, kept in
     the run and sent with it (`drawing_of`, `scene.path_chunks`), instead of made under the server's
     one interpreter lock, which every browser's answer waits for: 1-15 ms a drawing (the Moon's
-    46 ms) and up to 17 ms a path, against 0.3-2 ms to unpickle them. A 100-browser soak: the
-    server's CPU 0.44 → 0.39 cores, the rigid-body sliders answered in over 200 ms 34 → 21 times."""
+    46 ms) and up to 17 ms a path, against 0.3-2 ms to unpickle them (in 100-browser soaks the
+    server's own CPU went from 0.43-0.46 to 0.39-0.40 cores)."""
     from theoria.scenarios.drawing import Path as DrawnPath
 
     from .scene import path_chunks
