@@ -1566,19 +1566,15 @@ def limits_text() -> str:
 
 
 def _draw_ahead(spec, run) -> None:
-    """In a simulation child: the default view's drawing of `run` and its paths' chunks, kept in
-    the run and sent with it (`drawing_of`, `scene.path_chunks`), instead of made under the server's
-    one interpreter lock, which every browser's answer waits for: 1-15 ms a drawing (the Moon's
-    46 ms) and up to 17 ms a path, against 0.3-2 ms to unpickle them (in 100-browser soaks the
-    server's own CPU went from 0.43-0.46 to 0.39-0.40 cores)."""
-    from theoria.scenarios.drawing import Path as DrawnPath
-
-    from .scene import path_chunks
-
+    """In a simulation child: the default view's drawing of `run`, kept in the run and sent with it
+    (`drawing_of`), instead of made under the server's one interpreter lock, which every browser's
+    answer waits for: 1-15 ms a drawing (the Moon's 46 ms) against 0.3-2 ms to unpickle it (in
+    100-browser soaks the server's own CPU went from 0.43-0.46 to 0.39 cores). Its paths are still
+    cut into chunks by the server (`scene.path_chunks`): done here too, they doubled the flip's
+    runs in the child kept for tiny runs (8 → 17 ms of CPU), whose queue at p95 went from 0.02 to
+    0.14 s, and the server's CPU did not fall further."""
     try:
-        for it in drawing_of(spec, run).items:
-            if isinstance(it, DrawnPath):
-                path_chunks(it)
+        drawing_of(spec, run)
     except Exception:  # noqa: BLE001 — drawn by the server, which reports what is wrong
         run.__dict__.pop("_theoria_drawings", None)
 
