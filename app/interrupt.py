@@ -27,6 +27,7 @@ import os
 import signal
 import sys
 import threading
+import time
 import _thread
 
 EXIT_INTERRUPTED = 128 + signal.SIGINT  # 130
@@ -38,7 +39,7 @@ class Terminated(BaseException):
     `except Exception` swallows it)."""
 
 
-_state = {"active": 0, "pending": None, "previous_trace": None, "traced": []}
+_state = {"active": 0, "pending": None, "previous_trace": None, "traced": [], "backstop": None}
 BACKSTOP_S = 0.5
 
 
@@ -87,7 +88,12 @@ def _trace_call(frame, event, arg):
 
 
 def _backstop(signum: int) -> None:
+    """A deferred signal still pending after BACKSTOP_S (no Python line ran where it could be
+    raised): delivered to the main thread again. The trace may raise it meanwhile: `_handler` then
+    drops this copy (delivered too, the one Ctrl-C was raised twice: the command printed
+    "interrupted", then died by SIGINT on its way out)."""
     if _state["pending"] == signum and _state["active"]:
+        _state["backstop"] = time.monotonic()
         _thread.interrupt_main(signum)
 
 
@@ -109,6 +115,9 @@ def _defer(signum: int, frame) -> None:
 
 
 def _handler(signum, frame):
+    sent, _state["backstop"] = _state["backstop"], None
+    if sent is not None and _state["pending"] is None and time.monotonic() - sent < 1.0:
+        return  # the backstop's copy of a signal already raised (a later Ctrl-C is raised)
     if _unsafe(frame):
         _defer(signum, frame)
         return

@@ -373,6 +373,52 @@ def test_a_signal_inside_a_callback_from_c_is_raised_once_it_returns():
     assert got == ["returned"]
 
 
+def test_a_deferred_signal_is_raised_once_when_its_backstop_fires_too(monkeypatch):
+    """A Ctrl-C deferred in code it could not leave is raised by the first line after it, or,
+    when no line runs for BACKSTOP_S, delivered again to the main thread by a timer. When the timer
+    found it pending just before the line raised it, the one Ctrl-C was raised twice: a sweep
+    stopped ("interrupted", exit 130 under way), then died by SIGINT on its way out (exit -2; seen
+    in CI under load, Ctrl-C at 1.2 s into a sweep). That interleaving, made certain here."""
+    import _thread
+    import threading
+    import time
+
+    from theoria.app import interrupt
+
+    found_pending, deliver = threading.Event(), threading.Event()
+
+    class HeldBack:  # the timer's delivery, held until the line after the callback has raised
+        @staticmethod
+        def interrupt_main(signum):
+            found_pending.set()
+            deliver.wait(10)
+            _thread.interrupt_main(signum)
+
+    monkeypatch.setattr(interrupt, "_thread", HeldBack)
+    ns = {}
+    exec(compile("def _raw_object_cache_notify(handle):\n    handle()\n    return 'returned'\n",
+                 "/venv/site-packages/llvmlite/binding/executionengine.py", "exec"), ns)
+    raised = []
+    with interrupt.cli_signals():
+        try:
+            def in_callback():
+                interrupt._handler(signal.SIGINT, sys._getframe())  # deferred: llvmlite's frame
+                threading.Thread(target=interrupt._backstop, args=(signal.SIGINT,), daemon=True).start()
+                assert found_pending.wait(10)  # the timer has seen it pending
+            ns["_raw_object_cache_notify"](in_callback)
+            raised.append("not raised")
+        except KeyboardInterrupt:
+            raised.append("raised")
+        deliver.set()
+        try:
+            t_end = time.monotonic() + 1.0
+            while time.monotonic() < t_end:  # the way out: nothing more may be raised
+                time.sleep(0.01)
+        except KeyboardInterrupt:
+            raised.append("raised again")
+    assert raised == ["raised"] and interrupt._state["pending"] is None
+
+
 def test_a_signal_inside_set_name_is_not_turned_into_a_runtime_error():
     """Python (3.11) wraps an exception raised in `__set_name__` (run while a class is made, e.g.
     on importing a module) in a RuntimeError: a Ctrl-C there ended a command with a traceback and
