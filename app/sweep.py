@@ -656,13 +656,17 @@ class Summary:
     interrupted: bool = False
     signal: str = ""
     cluster: str = ""
+    kept: str = ""  # where an interrupted sweep's finished chunks are (OUT itself, OUT.parts/, OUT.new/)
 
     def line(self) -> str:
         st = ", ".join(f"{v} {k}" for k, v in self.statuses.items() if v)
+        where = self.kept or self.out
         return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); computed {self.chunks_computed} chunks "
                 f"now, {self.chunks_done_before} were done before; {self.seconds:.1f} s"
-                + (f"; {st}" if st else "") + (" — interrupted, finished chunks kept" if self.interrupted else "")
-                + f" → {self.out}")
+                + (f"; {st}" if st else "")
+                + (f" — interrupted, finished chunks kept in {where} (--resume continues)" + (
+                    f"; {self.out} is as it was" if where != self.out and os.path.exists(self.out) else "")
+                   if self.interrupted else f" → {self.out}"))
 
 
 class _Stop:
@@ -836,6 +840,7 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     summary.seconds = time.perf_counter() - t0
     summary.statuses = counts
     summary.interrupted = interrupted
+    summary.kept = writer.kept
     writer.session({"started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                     "chunks_computed": summary.chunks_computed, "chunks_done_before": summary.chunks_done_before,
                     "path": summary.path, "seconds": round(summary.seconds, 3), "interrupted": interrupted,
