@@ -39,6 +39,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..physics.errors import ParameterError, show_value
+from .files import WriteError
 
 class SweepError(RuntimeError):
     """A sweep that cannot go on (a chunk's task failed as a whole): one line, exit status 1."""
@@ -405,17 +406,22 @@ class ZarrWriter:
         spec = plan.spec()
         if resume and (os.path.exists(staging) or os.path.exists(path)):
             self.store = staging if os.path.exists(staging) else path  # a replacing sweep first
-            g = zarr.open_group(self.store, mode="r+")
-            old = dict(g.attrs).get("theoria_sweep")
+            shown = os.path.basename(self.store.rstrip("/" + os.sep))
+            try:
+                g = zarr.open_group(self.store, mode="r+")
+                old = dict(g.attrs).get("theoria_sweep")
+                chunks = tuple(g["status"].chunks) if old is not None else None
+            except Exception:  # noqa: BLE001 — not a store this writes (stores are made whole: `_create`)
+                old = None
             if old is None:
-                raise ParameterError("--resume", path, "is not a theoria sweep (no theoria_sweep attribute)")
+                raise ParameterError("--resume", shown, "is not a theoria sweep (no theoria_sweep attribute)")
             # the chunking of the file decides; everything else must match
-            plan.chunks = tuple(g["status"].chunks)
+            plan.chunks = chunks
             spec = plan.spec()
             diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
             if diff:
-                raise ParameterError("--resume", path, "was written by a different sweep (it differs in: "
-                                     + ", ".join(diff) + "); give another --out or drop --resume")
+                raise ParameterError("--resume", shown, "was written by a different sweep (it differs in: "
+                                     + ", ".join(diff) + "); give another --out, or --force to replace it")
             self.group = g
         else:
             if os.path.exists(path) and not _is_sweep_store(path):
@@ -455,7 +461,15 @@ class ZarrWriter:
             "theoria_sweep": spec, "messages": {}, "sessions": [],
             "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         })
-        ds.to_zarr(self.store, mode="w", consolidated=False)
+        # made whole beside its place, then renamed there: a store cut short while being created
+        # (coordinates missing) is never taken for one to resume
+        making = self.store.rstrip("/" + os.sep) + f".making-{os.getpid()}"
+        shutil.rmtree(making, ignore_errors=True)
+        try:
+            ds.to_zarr(making, mode="w", consolidated=False)
+            os.rename(making, self.store)
+        finally:
+            shutil.rmtree(making, ignore_errors=True)
 
     def done_regions(self, regions) -> set[int]:
         st = self.group["status"]
@@ -512,11 +526,22 @@ class ZarrWriter:
         """A replacing sweep, whole, takes the older store's place (which is then removed)."""
         if self.store == self.path:
             return
-        older = self.path.rstrip("/" + os.sep) + ".old"
-        shutil.rmtree(older, ignore_errors=True)
-        os.rename(self.path, older)
-        os.rename(self.store, self.path)
-        shutil.rmtree(older, ignore_errors=True)
+        older = None
+        try:
+            if os.path.lexists(self.path):
+                older = self.path.rstrip("/" + os.sep) + f".old-{os.getpid()}"  # a name nobody else uses
+                os.rename(self.path, older)
+            os.rename(self.store, self.path)
+        except OSError as e:
+            if older is not None and not os.path.lexists(self.path):
+                os.rename(older, self.path)  # the older store back in its place
+            raise WriteError(f"cannot put the finished sweep in place of {self.path} ({e.strerror or e}); it is "
+                             f"whole in {self.store}") from None
+        if older is not None:
+            if os.path.islink(older) or not os.path.isdir(older):
+                os.remove(older)
+            else:
+                shutil.rmtree(older, ignore_errors=True)
         self.store = self.kept = self.path
         self.group = self._zarr.open_group(self.store, mode="r+")
 
@@ -544,8 +569,21 @@ class ParquetWriter:
             spec = plan.spec()
             diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
             if diff:
+                raise ParameterError("--resume", os.path.basename(self.parts), "was written by a different sweep "
+                                     "(it differs in: " + ", ".join(diff) + "); give another --out, or --force to "
+                                     "replace it")
+        elif resume and os.path.exists(path):  # a finished table: the same sweep is done, another refused
+            try:
+                import pyarrow.parquet as pq
+
+                old = json.loads(pq.read_schema(path).metadata[b"theoria_sweep"])
+            except Exception:  # noqa: BLE001 — not a table this writes
+                raise ParameterError("--resume", path, "is not a theoria sweep (no theoria_sweep in its metadata)") from None
+            diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
+            if diff:
                 raise ParameterError("--resume", path, "was written by a different sweep (it differs in: "
-                                     + ", ".join(diff) + "); give another --out or drop --resume")
+                                     + ", ".join(diff) + "); give another --out, or --force to replace it")
+            self.complete = True
         else:
             if os.path.exists(self.parts):
                 shutil.rmtree(self.parts)
@@ -555,10 +593,14 @@ class ParquetWriter:
         self.sessions_file = os.path.join(self.parts, "_sessions.json")
         self.kept = self.parts
 
+    complete = False  # resumed over its own finished table: nothing to run, nothing to write
+
     def _part(self, i):
         return os.path.join(self.parts, f"part-{i:07d}.parquet")
 
     def done_regions(self, regions):
+        if self.complete:
+            return set(range(len(regions)))
         return {i for i in range(len(regions)) if os.path.exists(self._part(i))}
 
     def write(self, index, region, result):
@@ -583,6 +625,8 @@ class ParquetWriter:
         os.replace(tmp, self._part(index))
 
     def session(self, info):
+        if self.complete:
+            return
         sessions = []
         if os.path.exists(self.sessions_file):
             with open(self.sessions_file) as f:
@@ -594,9 +638,12 @@ class ParquetWriter:
 
     def discard(self):
         """A new sweep refused after it began (a --metrics name no run reports): nothing of it stays."""
-        shutil.rmtree(self.parts, ignore_errors=True)
+        if not self.complete:
+            shutil.rmtree(self.parts, ignore_errors=True)
 
     def finish(self):
+        if self.complete:
+            return
         import pyarrow as pa
         import pyarrow.parquet as pq
         from .. import __version__

@@ -421,3 +421,56 @@ def test_an_out_path_the_sweep_cannot_write_is_refused_before_it_runs(tmp_path, 
     r = cli("sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--out", str(tmp_path / out), "--force")
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and why in r.stderr, r.stderr
     assert sorted(q.name for q in tmp_path.iterdir()) == ["d.parquet"] and not any((tmp_path / "d.parquet").iterdir())
+
+
+@pytest.mark.slow  # sweeps, each with its local cluster
+def test_resume_and_force_keep_every_finished_result(tmp_path):
+    """Found by probing --resume and --force: a Parquet table was replaced by another sweep's
+    with --resume (no --force); a Zarr sweep finished in OUT.new/ while OUT was gone crashed
+    (FileNotFoundError) on every --resume; a user's own OUT.old was deleted by --force."""
+    small = ["sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--quiet"]
+    other = ["sweep", "free-tumble", "--grid", "step=0.05:0.07:3", "--quiet"]
+    p = tmp_path / "p.parquet"
+    assert cli(*small, "--out", str(p)).returncode == 0
+    table = p.read_bytes()
+    r = cli(*other, "--out", str(p), "--resume")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "a different sweep" in r.stderr, r.stderr
+    r = cli(*small, "--out", str(p), "--resume")  # the same sweep: done, nothing run, nothing written
+    assert r.returncode == 0 and "computed 0 chunks now, 2 were done before" in r.stderr, r.stdout + r.stderr
+    assert p.read_bytes() == table
+    z = tmp_path / "a.zarr"
+    backup = tmp_path / "a.zarr.old"
+    backup.mkdir()
+    (backup / "mine.txt").write_text("a user's own copy")
+    assert cli(*small, "--out", str(z)).returncode == 0
+    assert cli(*other, "--out", str(z), "--force").returncode == 0
+    assert (backup / "mine.txt").read_text() == "a user's own copy"
+    z.rename(tmp_path / "a.zarr.new")  # a finished replacing sweep whose OUT is gone
+    r = cli(*other, "--out", str(z), "--resume")
+    assert r.returncode == 0, r.stderr
+    import xarray as xr
+
+    with xr.open_zarr(z, consolidated=False) as ds:
+        assert ds.sizes["step"] == 3 and bool((ds["status"] != 0).all())
+    assert sorted(q.name for q in tmp_path.iterdir()) == ["a.zarr", "a.zarr.old", "p.parquet"]
+
+
+def test_a_zarr_store_cut_short_while_created_is_left_nowhere(tmp_path, monkeypatch):
+    """A sweep interrupted while its store was being created left a store without its
+    coordinates, which --resume took for one to complete, and swapped in place of a finished sweep
+    (its step coordinate all NaN). The store is now made beside its place and renamed there whole."""
+    import xarray as xr
+
+    plan = sw.make_plan(th.scenario("free-tumble"), grid=["step=0.01:0.02:2"])
+    made = xr.Dataset.to_zarr
+
+    def cut_short(self, store, *a, **k):
+        if k.get("mode") == "w":
+            made(self[["status"]].drop_vars(list(self.coords)), store, *a, **k)  # the status only, then a Ctrl-C
+            raise KeyboardInterrupt
+        return made(self, store, *a, **k)
+
+    monkeypatch.setattr(xr.Dataset, "to_zarr", cut_short)
+    with pytest.raises(KeyboardInterrupt):
+        sw.ZarrWriter(str(tmp_path / "a.zarr"), plan, resume=False)
+    assert list(tmp_path.iterdir()) == []
