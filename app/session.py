@@ -928,7 +928,10 @@ class ClientSession:
         if self.drawing is None:
             return 0
         t = self.drawing.times  # called for every playback tick of every browser: no numpy wrappers
-        target = t[0] + self.clock * (t[-1] - t[0])
+        span = t[-1] - t[0]
+        # the first frame at the clock's time, rounding forgiven: a link's t = 3.77 came back as
+        # 3.7700000000000005 through the clock's fraction and showed the frame of 3.78
+        target = t[0] + self.clock * span - 1e-9 * span
         return min(max(int(t.searchsorted(target)), 0), len(t) - 1)
 
     def _show_clock(self, force: bool = False) -> None:
