@@ -560,6 +560,7 @@ class ParquetWriter:
     def __init__(self, path: str, plan: Plan, resume: bool):
         self.path, self.plan = path, plan
         self.parts = path + ".parts"
+        self.complete = False  # resumed over its own finished table: nothing to run, nothing to write
         spec = plan.spec()
         specfile = os.path.join(self.parts, "_sweep.json")
         if resume and os.path.exists(specfile):
@@ -592,8 +593,6 @@ class ParquetWriter:
                 json.dump(spec, f)
         self.sessions_file = os.path.join(self.parts, "_sessions.json")
         self.kept = self.parts
-
-    complete = False  # resumed over its own finished table: nothing to run, nothing to write
 
     def _part(self, i):
         return os.path.join(self.parts, f"part-{i:07d}.parquet")

@@ -1570,9 +1570,9 @@ def _draw_ahead(spec, run) -> None:
     (`drawing_of`), instead of made under the server's one interpreter lock, which every browser's
     answer waits for: 1-15 ms a drawing (the Moon's 46 ms) against 0.3-2 ms to unpickle it (in
     100-browser soaks the server's own CPU went from 0.43-0.46 to 0.39 cores). Its paths are still
-    cut into chunks by the server (`scene.path_chunks`): done here too, they doubled the flip's
-    runs in the child kept for tiny runs (8 → 17 ms of CPU), whose queue at p95 went from 0.02 to
-    0.14 s, and the server's CPU did not fall further."""
+    cut into chunks by the server (`scene.path_chunks`): done here too, they made the flip's runs
+    in the child kept for tiny runs 10 → 17 ms of CPU (8 ms without the drawing), its queue at p95
+    went from 0.02 to 0.14 s, and the server's CPU did not fall further."""
     try:
         drawing_of(spec, run)
     except Exception:  # noqa: BLE001 — drawn by the server, which reports what is wrong

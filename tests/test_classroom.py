@@ -63,6 +63,16 @@ def _server(scenario="middle-axis-flip", **kw):
             srv.stop()
 
 
+async def _a_new_student_is_served(url: str) -> bool:
+    """A browser that connects now gets its first scene (within two minutes)."""
+    student = ViserProtocolClient(url)
+    await student.connect()
+    try:
+        return await student.wait_for(lambda: student.update_no >= 1, 120)
+    finally:
+        await student.close()
+
+
 def _children_cpu(pool) -> float:
     """CPU seconds used so far by the pool's simulation processes."""
     total = 0.0
@@ -1026,12 +1036,7 @@ def test_a_browser_that_reads_nothing_is_closed_before_it_fills_the_memory():
                 sent += 1
                 await asyncio.sleep(0.1)
             closed = door.refused.get("not reading", 0)
-            honest = ViserProtocolClient(url)
-            await honest.connect()
-            try:
-                served = await honest.wait_for(lambda: honest.update_no >= 1, 120)
-            finally:
-                await honest.close()
+            served = await _a_new_student_is_served(url)
             return closed, sent, served
 
         closed, sent, served = asyncio.run(go())
@@ -1092,12 +1097,7 @@ def test_a_message_of_megabytes_closes_its_socket_unread(frame):
             except Exception:  # noqa: BLE001 — closed by the server while sending
                 pass
             closed = await c.wait_for(lambda: c.closed_code is not None, 30)
-            honest = ViserProtocolClient(url)
-            await honest.connect()
-            try:
-                served = await honest.wait_for(lambda: honest.update_no >= 1, 120)
-            finally:
-                await honest.close()
+            served = await _a_new_student_is_served(url)
             await c.close()
             return closed, c.closed_code, served
 
