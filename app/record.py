@@ -17,6 +17,13 @@ Differences that rerun imposes: paths are drawn whole (rerun has no "appear at f
 of one strip), lights are not recorded (rerun lights the scene itself), and a camera that follows
 the run (the Moon seen from the Earth) is recorded as the starting view only.
 
+The file carries a digest of its own bytes: the static entity "/theoria/digest" holds a fixed
+16-byte marker and the 32-byte blake2b of the whole file with those 32 bytes as zeros (as the HTML
+export carries its sha256). rerun copies short runs of random bytes into its (LZ4) chunks as they
+are, so the field is logged with random bytes, found in the encoded stream and overwritten there:
+the file stays a plain rerun recording (rerun's viewer and reader open it), and `theoria replay
+--check` recomputes the digest, so that one byte changed anywhere in the file is seen.
+
 The file is whole or absent: rerun encodes the recording into memory (a binary stream, footer
 included) and `app.files.write_whole` writes it beside the target and renames it over the target
 only when every byte is on disk. A recording interrupted (Ctrl-C, SIGTERM) or refused by the disk
@@ -28,6 +35,8 @@ Replay: `rerun FILE.rrd`, or `theoria replay FILE.rrd --web-viewer`.
 """
 from __future__ import annotations
 
+import hashlib
+import os
 import uuid
 
 import numpy as np
@@ -45,6 +54,38 @@ _YEAR_S = JULIAN_YEAR_DAYS * SECONDS_PER_DAY
 SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0, "day": SECONDS_PER_DAY, "days": SECONDS_PER_DAY, "d": SECONDS_PER_DAY,
            "yr": _YEAR_S, "year": _YEAR_S, "years": _YEAR_S}  # seconds in each time unit a run may carry
 APPLICATION_ID = "theoria"
+DIGEST_ENTITY = "/theoria/digest"
+DIGEST_MARKER = bytes.fromhex("dc04f4d982420f87075d28b0c7f814b5")  # random: in no other chunk of any file
+DIGEST_SIZE = 32  # blake2b-256
+
+
+def file_digest(data, at: int) -> bytes:
+    """blake2b-256 of the recording `data` (bytes, a memoryview, an mmap) with its DIGEST_SIZE bytes
+    at `at` read as zeros: the value written there."""
+    view = memoryview(data)
+    h = hashlib.blake2b(digest_size=DIGEST_SIZE)
+    h.update(view[:at])
+    h.update(bytes(DIGEST_SIZE))
+    h.update(view[at + DIGEST_SIZE:])
+    return h.digest()
+
+
+def _log_digest_field(rec) -> bytes:
+    """Log the digest's field, holding random bytes for now; returns the field as logged."""
+    field = DIGEST_MARKER + os.urandom(DIGEST_SIZE)
+    rec.log(DIGEST_ENTITY, rr.AnyValues(blake2b=np.frombuffer(field, np.uint8)), static=True)
+    return field
+
+
+def seal(data: bytes, field: bytes) -> bytearray:
+    """The encoded recording with its digest written into the field logged by `_log_digest_field`."""
+    at = data.find(field)
+    if at < 0 or data.find(field, at + 1) >= 0:  # rerun stored the field otherwise than as it was logged
+        raise RuntimeError("the recording's digest field was not found once in the encoded stream")
+    at += len(DIGEST_MARKER)
+    out = bytearray(data)
+    out[at:at + DIGEST_SIZE] = file_digest(out, at)
+    return out
 
 
 def blueprint(drawing) -> rrb.Blueprint:
@@ -233,6 +274,7 @@ def record_run(run, out, view=None, application_id: str = APPLICATION_ID) -> dic
     data = None
     try:
         record_drawing(rec, drawing, run)
+        field = _log_digest_field(rec)
         data = stream.read(flush=True)  # every chunk and the footer
     finally:
         rec.disconnect()
@@ -241,7 +283,7 @@ def record_run(run, out, view=None, application_id: str = APPLICATION_ID) -> dic
                 stream.read(flush=False)
             except Exception:  # noqa: BLE001 — nothing is written either way
                 pass
-    nbytes = write_whole(out, data)
+    nbytes = write_whole(out, seal(data, field))
     return {"path": str(out), "steps": len(run.trajectory.t), "frames": drawing.n_frames, "bytes": nbytes}
 
 

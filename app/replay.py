@@ -4,7 +4,10 @@ else with one clear line (exit 2).
 - ``.rrd`` (from `theoria record`): rerun's own reader (`rerun.chunk.RrdReader`) must read the
   whole file with its footer (a file cut short has none: rerun then warns "no footer", taken here
   as an error), hold a recording whose application id is "theoria", and hold theoria's entities
-  (`/world` and the `/text` document with the Euler table). Then the rerun viewer opens it:
+  (`/world` and the `/text` document with the Euler table); its bytes must match the blake2b
+  digest it carries (app/record.py: one byte changed inside a chunk reads without complaint).
+  A recording written before theoria wrote digests carries none: it is opened, and ``--check``
+  says so and exits 3 (EXIT_NO_DIGEST). Then the rerun viewer opens it:
   the native viewer, or with ``--web-viewer`` rerun's web viewer served on 127.0.0.1 (``--host``
   to change it), its URL printed and a browser opened only with ``--open``. The viewer runs as
   a child that stops with this command: Ctrl-C or SIGTERM stop it, and the kernel stops it if
@@ -43,6 +46,11 @@ HTML_DIGEST_BLANK = "0" * 64
 HTML_MARKER_RE = re.compile(r'<meta name="generator" content="theoria export_html" data-theoria-scenario="([^"]*)"')
 
 
+# `--check` of a recording that carries no digest (written before theoria recorded one): it reads
+# whole, but a changed byte inside a chunk could not be seen; neither ok (0) nor refused (2)
+EXIT_NO_DIGEST = 3
+
+
 class ReplayError(Exception):
     """The file is not a complete theoria recording / export. Message: one line."""
 
@@ -70,6 +78,7 @@ def check_rrd(path: str) -> dict:
     if not ours:
         apps = ", ".join(sorted({r.application_id for r in recs})) or "none"
         raise ReplayError(f"{path}: a rerun recording, but not theoria's (application id: {apps})")
+    digest = check_rrd_digest(path)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
@@ -80,9 +89,38 @@ def check_rrd(path: str) -> dict:
     missing = [e for e in REQUIRED_ENTITIES if e not in entities]
     if missing:
         raise ReplayError(f"{path}: not a theoria recording (no {', '.join(missing)} entity)")
+    from .record import DIGEST_ENTITY
+
+    if digest is None and DIGEST_ENTITY in entities:  # the field is there, its marker is not: changed
+        raise ReplayError(f"{path}: theoria recording is damaged (its digest field was changed)")
     rows = sum(c.num_rows for c in chunks)
     return {"kind": "rrd", "path": str(path), "recording_id": ours[0].recording_id,
-            "entities": len(entities), "rows": rows}
+            "entities": len(entities), "rows": rows, "digest": digest}
+
+
+def check_rrd_digest(path: str) -> str | None:
+    """The hex blake2b the recording carries, checked against its bytes (app/record.py: the
+    digest's field); None for a recording written before theoria wrote one. ReplayError when the
+    bytes do not match it."""
+    import mmap
+
+    from .record import DIGEST_MARKER, DIGEST_SIZE, file_digest
+
+    try:
+        with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as m:
+            at = m.find(DIGEST_MARKER)
+            if at < 0:
+                return None
+            if m.find(DIGEST_MARKER, at + 1) >= 0:
+                raise ReplayError(f"{path}: theoria recording is damaged (its digest field appears twice)")
+            at += len(DIGEST_MARKER)
+            stored = m[at:at + DIGEST_SIZE]
+            if len(stored) != DIGEST_SIZE or file_digest(m, at) != stored:
+                raise ReplayError(f"{path}: theoria recording is damaged (its bytes do not match the blake2b "
+                                  "digest written with it)")
+            return stored.hex()
+    except (OSError, ValueError) as e:  # ValueError: an empty file cannot be mapped (refused before this)
+        raise ReplayError(f"{path}: cannot read ({getattr(e, 'strerror', None) or _one_line(e)})") from None
 
 
 def html_digest(text: str) -> str:
@@ -149,7 +187,12 @@ def replay(path: str, check_only: bool = False, web_viewer: bool = False, open_b
         print(f"theoria export of {info['scenario']}: open {info['url']}")
         return 0
     if check_only:
-        print(f"theoria recording {info['recording_id']}: {info['entities']} entities, {info['rows']} rows — ok")
+        head = f"theoria recording {info['recording_id']}: {info['entities']} entities, {info['rows']} rows"
+        if info["digest"] is None:
+            print(f"{head} — no digest (recorded before theoria wrote one): read whole, but its bytes cannot be "
+                  "verified; record it again to get one")
+            return EXIT_NO_DIGEST
+        print(f"{head}, blake2b {info['digest'][:16]}… — ok")
         return 0
     cmd, url = viewer_command(path, web_viewer, open_browser, host)
     if url is not None:

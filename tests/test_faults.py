@@ -102,6 +102,88 @@ def test_replay_cli_subprocess_exit_code(files, cli_process):
     assert code == 2 and out == "" and err.count("\n") == 1 and "half.rrd" in err
 
 
+def _flipped(data: bytes, at: int) -> bytes:
+    return data[:at] + bytes([data[at] ^ 0x10]) + data[at + 1:]
+
+
+def _last_chunk(data: bytes) -> tuple[int, int]:
+    """Where the last data message's payload lies in an .rrd: rerun's stream is a 12-byte header,
+    then messages, each a 16-byte header (kind, length: little-endian u64) and its payload; kind 2
+    is a chunk, kind 0 the end, whose payload is the footer (under rerun's CRC)."""
+    import struct
+
+    at, last = 12, None
+    while at + 16 <= len(data):
+        kind, n = struct.unpack_from("<QQ", data, at)
+        if kind == 0:
+            return last
+        if kind == 2:
+            last = (at + 16, at + 16 + n)
+        at += 16 + n
+    raise AssertionError("no end message")
+
+
+def test_one_changed_byte_anywhere_in_a_recording_is_seen(tmp_path, cli_process):
+    """A recording made by `theoria record`, then one byte changed on disk: in the middle and in
+    the last chunk (inside chunks, which rerun's reader reads without complaint: `--check` passed
+    them) and near the end of the file (rerun's footer, under its own CRC). `theoria replay --check`
+    (a child process, as a user runs it) refuses each copy in one line naming it, exit 2; the
+    untouched file passes, and rerun's own reader streams it whole."""
+    rec = tmp_path / "tumble.rrd"
+    code, out, err = cli_process("record", "free-tumble", "--duration", "2", "--out", rec)
+    assert code == 0, err
+    data = rec.read_bytes()
+    code, out, err = cli_process("replay", rec, "--check")
+    assert code == 0 and err == "" and out.strip().endswith("— ok"), (out, err)
+    start, stop = _last_chunk(data)
+    for name, at in (("middle", len(data) // 2), ("last-chunk", (start + stop) // 2), ("end", len(data) - 200)):
+        bad = tmp_path / f"{name}.rrd"
+        bad.write_bytes(_flipped(data, at))
+        code, out, err = cli_process("replay", bad, "--check")
+        assert code == 2 and out == "" and err.count("\n") == 1, (name, code, out, err)
+        assert err.startswith(f"theoria: error: {bad}: "), (name, err)
+        if name != "end":
+            assert "damaged (its bytes do not match the blake2b digest" in err, (name, err)
+    # every part of the file, one byte at a time (in this process: the same check)
+    for at in range(0, len(data), max(1, len(data) // 97)):
+        bad = tmp_path / "flip.rrd"
+        bad.write_bytes(_flipped(data, at))
+        with pytest.raises(ReplayError):
+            check(str(bad))
+    # rerun's own reader: every chunk, with the "no footer" warning taken as an error
+    import warnings
+
+    from rerun.chunk import RrdReader
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        chunks = RrdReader(str(rec)).stream().to_chunks()
+    assert {"/world", "/text", "/theoria/digest"} <= {str(c.entity_path) for c in chunks}
+    # and rerun's own command: "can be loaded and correctly interpreted"
+    import subprocess
+
+    from theoria.app.replay import rerun_binary, viewer_env
+
+    r = subprocess.run([rerun_binary(), "rrd", "verify", str(rec)], capture_output=True, text=True, timeout=120,
+                       env=viewer_env())
+    assert r.returncode == 0 and "1 file verified without error" in r.stdout + r.stderr, r.stdout + r.stderr
+
+
+def test_a_recording_without_a_digest_is_read_and_said_to_have_none(tmp_path, cli_process):
+    """A theoria recording as theoria wrote them before it carried a digest (its entities, no
+    digest): `--check` reads it whole, says in one line that it has no digest, exit 3."""
+    import rerun as rr
+
+    old = tmp_path / "old.rrd"
+    rec = rr.RecordingStream("theoria", recording_id="older")
+    rec.save(str(old))
+    rec.log("/world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    rec.log("/text", rr.TextDocument("# an older recording"), static=True)
+    rec.disconnect()
+    code, out, err = cli_process("replay", old, "--check")
+    assert code == 3 and err == "" and out.count("\n") == 1 and "no digest" in out, (code, out, err)
+
+
 # ---- divergence ------------------------------------------------------------------------------------
 
 def _blowup_scenario(nan_at: float | None = 3.0, kind: str = "rotation"):
