@@ -171,3 +171,28 @@ def sigterm_raises():
         if not _state["active"]:
             _take_pending()
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+@contextlib.contextmanager
+def signals_held():
+    """Ctrl-C and SIGTERM wait for the end of the block, then take effect as they would have (the
+    handlers in place before the block get them). For work that another thread does on this one's
+    behalf: zarr writes a store from its own event-loop thread while this one waits, and stopped
+    in the middle, this thread would leave that one writing, and the interpreter's exit would cut
+    it off with tracebacks of its own. Main thread only (elsewhere signals are not delivered)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held: list[int] = []
+    old = {}
+    for s in (signal.SIGINT, signal.SIGTERM):
+        previous = signal.getsignal(s)
+        if previous is not None:  # a handler installed from C cannot be put back: left as it is
+            old[s] = signal.signal(s, lambda signum, frame: held.append(signum))
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        for s in dict.fromkeys(held):  # each signal once, in the order it came
+            signal.raise_signal(s)

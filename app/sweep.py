@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime
+import functools
 import json
 import os
 import re
@@ -40,6 +41,7 @@ import numpy as np
 
 from ..physics.errors import ParameterError, show_value
 from .files import WriteError
+from .interrupt import signals_held
 
 class SweepError(RuntimeError):
     """A sweep that cannot go on (a chunk's task failed as a whole): one line, exit status 1."""
@@ -391,6 +393,16 @@ def run_chunk(task: dict) -> dict:
 
 # ------------------------------------------------------------------------------------- writers
 
+def _held(method):
+    """The method's zarr reads and writes run to their end before a Ctrl-C or SIGTERM is taken
+    (`signals_held`): zarr does them on its own thread, which an exit would cut off mid-write."""
+    @functools.wraps(method)
+    def run(*args, **kw):
+        with signals_held():
+            return method(*args, **kw)
+    return run
+
+
 class ZarrWriter:
     """The sweep as a Zarr store at OUT, each chunk's status written last. A sweep that replaces an
     older one (--force) is written beside it, in OUT.new/, and takes its place only once whole
@@ -408,9 +420,10 @@ class ZarrWriter:
             self.store = staging if os.path.exists(staging) else path  # a replacing sweep first
             shown = os.path.basename(self.store.rstrip("/" + os.sep))
             try:
-                g = zarr.open_group(self.store, mode="r+")
-                old = dict(g.attrs).get("theoria_sweep")
-                chunks = tuple(g["status"].chunks) if old is not None else None
+                with signals_held():
+                    g = zarr.open_group(self.store, mode="r+")
+                    old = dict(g.attrs).get("theoria_sweep")
+                    chunks = tuple(g["status"].chunks) if old is not None else None
             except Exception:  # noqa: BLE001 — not a store this writes (stores are made whole: `_create`)
                 old = None
             if old is None:
@@ -430,7 +443,8 @@ class ZarrWriter:
             if os.path.exists(staging):  # an earlier replacing sweep, not resumed
                 shutil.rmtree(staging)
             self._create(spec)
-            self.group = zarr.open_group(self.store, mode="r+")
+            with signals_held():
+                self.group = zarr.open_group(self.store, mode="r+")
         self.metric_names = [k for k in self.group.array_keys() if k not in ("status",) and k not in
                              (set(plan.dims) | {a.name for a in plan.random})]
         self.kept = self.store
@@ -466,11 +480,13 @@ class ZarrWriter:
         making = self.store.rstrip("/" + os.sep) + f".making-{os.getpid()}"
         shutil.rmtree(making, ignore_errors=True)
         try:
-            ds.to_zarr(making, mode="w", consolidated=False)
+            with signals_held():  # zarr's own thread writes it: Ctrl-C is taken once it is written
+                ds.to_zarr(making, mode="w", consolidated=False)
             os.rename(making, self.store)
         finally:
             shutil.rmtree(making, ignore_errors=True)
 
+    @_held
     def done_regions(self, regions) -> set[int]:
         st = self.group["status"]
         done = set()
@@ -482,6 +498,7 @@ class ZarrWriter:
                 pass
         return done
 
+    @_held
     def add_metrics(self, names):
         import dask.array as da
 
@@ -497,6 +514,7 @@ class ZarrWriter:
         self.group = self._zarr.open_group(self.store, mode="r+")
         self.metric_names += new
 
+    @_held
     def write(self, index, region, result):
         shape = tuple(s.stop - s.start for s in region)
         self.add_metrics(list(result["metrics"]))
@@ -517,11 +535,13 @@ class ZarrWriter:
             self.group.attrs["messages"] = msgs
         self.group["status"][region] = result["status"].reshape(shape)  # last: the chunk is finished
 
+    @_held
     def session(self, info):
         sessions = list(dict(self.group.attrs).get("sessions", []))
         sessions.append(info)
         self.group.attrs["sessions"] = sessions
 
+    @_held
     def finish(self):
         """A replacing sweep, whole, takes the older store's place (which is then removed)."""
         if self.store == self.path:
@@ -549,6 +569,7 @@ class ZarrWriter:
         """A new sweep refused after it began (a --metrics name no run reports): nothing of it stays."""
         shutil.rmtree(self.store, ignore_errors=True)
 
+    @_held
     def open(self):
         return self._xr.open_zarr(self.store, consolidated=False)
 

@@ -419,6 +419,23 @@ def test_a_deferred_signal_is_raised_once_when_its_backstop_fires_too(monkeypatc
     assert raised == ["raised"] and interrupt._state["pending"] is None
 
 
+def test_a_signal_held_is_raised_once_the_block_ends():
+    """`signals_held`: Ctrl-C pressed twice during the block lets it run to its end, then the
+    handler in place before it gets it once: KeyboardInterrupt under the command line's."""
+    from theoria.app import interrupt
+
+    reached = []
+    with interrupt.cli_signals():
+        with pytest.raises(KeyboardInterrupt):
+            with interrupt.signals_held():
+                os.kill(os.getpid(), signal.SIGINT)
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+                reached.append("end of block")
+        assert signal.getsignal(signal.SIGINT) is interrupt._handler
+    assert reached == ["end of block"]
+
+
 def test_a_signal_inside_set_name_is_not_turned_into_a_runtime_error():
     """Python (3.11) wraps an exception raised in `__set_name__` (run while a class is made, e.g.
     on importing a module) in a RuntimeError: a Ctrl-C there ended a command with a traceback and

@@ -474,3 +474,36 @@ def test_a_zarr_store_cut_short_while_created_is_left_nowhere(tmp_path, monkeypa
     with pytest.raises(KeyboardInterrupt):
         sw.ZarrWriter(str(tmp_path / "a.zarr"), plan, resume=False)
     assert list(tmp_path.iterdir()) == []
+
+
+def _wait_for(cond, timeout, p=None):
+    t_end = time.monotonic() + timeout
+    while time.monotonic() < t_end:
+        if cond():
+            return True
+        if p is not None and p.poll() is not None:
+            return False
+        time.sleep(0.05)
+    return False
+
+
+@pytest.mark.slow  # a theoria process per moment
+def test_ctrl_c_while_the_store_is_created_is_one_line(tmp_path):
+    """Ctrl-C while a Zarr sweep writes its new store (zarr writes it from a thread of its own): the
+    command printed thousands of lines of zarr's and asyncio's RuntimeError tracebacks after
+    'theoria: interrupted'. A grid of 5000 one-run chunks makes the store's creation last about a
+    second; Ctrl-C (to the process group, as a terminal sends it) at several moments from the
+    moment the store appears on disk: exit 130, the one line, and no half-made store left."""
+    for k, delay in enumerate((0.0, 0.1, 0.2, 0.4, 0.6)):
+        out = tmp_path / f"s{k}.zarr"
+        p = subprocess.Popen([*THEORIA, "sweep", "free-tumble", "--grid", "step=0.001:0.002:5000", "--chunk", "1",
+                              "--set", "duration=100", "--out", str(out), "--quiet"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, cwd=ROOT, start_new_session=True)
+        assert _wait_for(lambda: any(tmp_path.glob(f"s{k}.zarr*")), 120, p), p.communicate()[1]
+        time.sleep(delay)
+        os.killpg(p.pid, signal.SIGINT)
+        _, err = p.communicate(timeout=120)
+        assert p.returncode == 130, (delay, p.returncode, err[-2000:])
+        assert "Traceback" not in err and "RuntimeError" not in err, (delay, err[-2000:])
+        assert err == "theoria: interrupted\n", (delay, err[-2000:])
+        assert not [q.name for q in tmp_path.iterdir() if ".making-" in q.name], delay
