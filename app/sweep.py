@@ -47,6 +47,17 @@ class SweepError(RuntimeError):
     """A sweep that cannot go on (a chunk's task failed as a whole): one line, exit status 1."""
 
 
+class SweepBusy(ParameterError):
+    """Another sweep is writing this --out (exit status 2, like any --out refused)."""
+
+    def __init__(self, out: str, pid: int | None):
+        super().__init__("--out", out, "a result no other sweep is writing")
+        self.pid = pid
+        holder = f"another sweep (PID {pid})" if pid is not None else "another sweep"
+        shown = out if out.isprintable() else repr(out)[1:-1]  # whole (the path is the point), on one line
+        self.args = (f"{holder} is writing {shown}; wait for it to end, or give another --out",)
+
+
 # flagged: the run finished but its status names what it found (e.g. "tumbles": no libration at all)
 STATUS = {"not run": 0, "ok": 1, "diverged": 2, "refused": 3, "failed": 4, "flagged": 5}
 SAMPLE = "sample"
@@ -864,6 +875,65 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if workers is not None and (int(workers) < 1 or int(workers) > 256):
         raise ParameterError("--workers", workers, "from 1 to 256")
     plan = make_plan(sc, grid, random, samples, fixed, preset, metrics, seed, chunk, nworkers)
+    with _one_sweep_writes(out):
+        return _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, on_chunk)
+
+
+def _lock_path(out: str) -> str:
+    """The lock file beside OUT: `.NAME.lock` in OUT's folder."""
+    out = os.path.abspath(out.rstrip("/" + os.sep))
+    return os.path.join(os.path.dirname(out), "." + os.path.basename(out) + ".lock")
+
+
+@contextlib.contextmanager
+def _one_sweep_writes(out: str):
+    """While the block runs, no other sweep writes OUT (or its OUT.new/, OUT.parts/): an exclusive
+    `flock` on `.NAME.lock` beside it, with this process's PID in it. A second sweep on the same OUT
+    (plain, --force or --resume) is refused at once, naming the PID that holds it. The kernel
+    releases the lock when its process ends however it ends, so a sweep killed outright leaves at
+    most the file, never a lock; the file is removed when the sweep ends."""
+    import fcntl
+
+    path = _lock_path(out)
+    while True:
+        fd = -1
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            try:
+                pid = os.read(fd, 32).decode("ascii", "replace").strip()
+            finally:
+                os.close(fd)
+            raise SweepBusy(out, int(pid) if pid.isdigit() else None) from None
+        except OSError as e:  # a name too long once `.lock` is added, a file system without locks
+            if fd >= 0:
+                os.close(fd)
+            raise ParameterError("--out", out, f"a place where {os.path.basename(path)} can be made and locked "
+                                 f"({e.strerror or type(e).__name__})") from None
+        # the sweep that held it may have removed the file between our open and our lock: then
+        # this lock is on a file nobody else sees, and the one now at `path` is taken again
+        try:
+            st, now = os.fstat(fd), os.stat(path)
+            if (st.st_dev, st.st_ino) == (now.st_dev, now.st_ino):
+                break
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        yield
+    finally:
+        try:
+            os.unlink(path)  # before the lock is let go: a sweep that opened it meanwhile makes a new one
+        except OSError:
+            pass
+        os.close(fd)
+
+
+def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, on_chunk):
+    """`run_sweep` once OUT is this sweep's alone."""
     earlier = os.path.exists(out) or os.path.exists(out + ".parts" if kind == "parquet" else out.rstrip("/") + ".new")
     if earlier and not (resume or force):  # hours of runs are not replaced by a command repeated by mistake
         raise ParameterError("--out", out, "a new path: it holds a sweep; add --resume to complete it or "

@@ -487,6 +487,55 @@ def _wait_for(cond, timeout, p=None):
     return False
 
 
+@pytest.mark.slow  # five theoria processes and a local cluster
+def test_a_second_sweep_on_the_same_out_is_refused_while_the_first_writes(tmp_path):
+    """Two sweeps on one OUT at once: a second --force removed the first's OUT.new/ under it and
+    wrote its own. While the first runs, a second one — --force, --resume or plain — is refused at
+    once, exit 2, one line naming the first's PID and OUT; the first goes on untouched (here until
+    Ctrl-C: exit 130, its finished chunks kept for --resume, its lock file gone)."""
+    out = tmp_path / "a.zarr"
+    assert cli("sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--out", str(out), "--quiet").returncode == 0
+    first = subprocess.Popen([*THEORIA, "sweep", "free-tumble", "--grid", "step=0.001:0.002:40", "--set",
+                              "duration=600", "--chunk", "1", "--workers", "1", "--out", str(out), "--force",
+                              "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    staging = tmp_path / "a.zarr.new"
+    try:
+        assert _wait_for(staging.is_dir, 120, first), first.communicate()[1]
+        made = staging.stat().st_ino
+        for how in (["--force"], ["--resume"], []):
+            r = cli("sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--out", str(out), "--quiet", *how)
+            assert r.returncode == 2 and r.stderr.count("\n") == 1, (how, r.returncode, r.stderr)
+            assert r.stderr.startswith(f"theoria: error: another sweep (PID {first.pid}) is writing {out}; "), r.stderr
+            assert staging.stat().st_ino == made and first.poll() is None, how  # the first's store, the first running
+    finally:
+        first.send_signal(signal.SIGINT)
+        _, err = first.communicate(timeout=120)
+    assert first.returncode == 130 and "Traceback" not in err, err
+    assert (staging / "status").is_dir()  # its own store, for its --resume
+    assert sorted(q.name for q in tmp_path.iterdir()) == ["a.zarr", "a.zarr.new"]  # no lock file left
+
+
+@pytest.mark.slow  # two sweeps, each with its local cluster
+def test_a_sweep_killed_outright_leaves_no_lock(tmp_path):
+    """SIGKILL to a sweep and its workers (nothing of it runs its clean-up): the kernel lets its lock
+    go, so the next sweep on that OUT runs; the lock file it left is taken over and removed."""
+    out = tmp_path / "a.parquet"
+    first = subprocess.Popen([*THEORIA, "sweep", "free-tumble", "--grid", "step=0.001:0.002:40", "--set",
+                              "duration=600", "--chunk", "1", "--workers", "1", "--out", str(out), "--quiet"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+                             start_new_session=True)
+    lock = Path(sw._lock_path(str(out)))
+    try:
+        assert _wait_for(lambda: lock.exists() and lock.read_text().strip() == str(first.pid), 120, first)
+    finally:
+        os.killpg(first.pid, signal.SIGKILL)
+        first.wait(timeout=60)
+    assert lock.exists()  # left by the killed sweep: a file, no longer a lock
+    r = cli("sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--out", str(out), "--force", "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert sorted(q.name for q in tmp_path.iterdir()) == [out.name]
+
+
 @pytest.mark.slow  # a theoria process per moment
 def test_ctrl_c_while_the_store_is_created_is_one_line(tmp_path):
     """Ctrl-C while a Zarr sweep writes its new store (zarr writes it from a thread of its own): the
