@@ -49,6 +49,7 @@ from theoria.scenarios.drawing import Arrows, Frame, Label, Light, Mesh, Path, P
 
 from .files import write_whole
 from .format import comparison_rows
+from .interrupt import signals_held
 
 _YEAR_S = JULIAN_YEAR_DAYS * SECONDS_PER_DAY
 SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0, "day": SECONDS_PER_DAY, "days": SECONDS_PER_DAY, "d": SECONDS_PER_DAY,
@@ -268,23 +269,37 @@ def _safe(name: str) -> str:
 def record_run(run, out, view=None, application_id: str = APPLICATION_ID) -> dict:
     """Write the rerun recording of `run` (its drawing, camera and text) to the .rrd file `out`."""
     drawing = run._spec().drawing(run, view)
+    layout = blueprint(drawing)
     rec = rr.RecordingStream(application_id, recording_id=str(uuid.uuid4()))
-    stream = rec.binary_stream()  # in memory: the file is written whole by write_whole below
-    rec.send_blueprint(blueprint(drawing), make_active=False, make_default=True)
-    data = None
-    try:
+    stream = data = None
+    try:  # from the stream's first byte: a Ctrl-C anywhere leaves nothing of it unread
+        with signals_held():  # made and in hand, or not made (a storage dropped unread makes rerun warn)
+            stream = rec.binary_stream()  # in memory: the file is written whole by write_whole below
+        rec.send_blueprint(layout, make_active=False, make_default=True)
         record_drawing(rec, drawing, run)
         field = _log_digest_field(rec)
         data = stream.read(flush=True)  # every chunk and the footer
     finally:
         rec.disconnect()
-        if data is None:  # interrupted: drop what was encoded (rerun warns about unread bytes otherwise)
-            try:
-                stream.read(flush=False)
-            except Exception:  # noqa: BLE001 — nothing is written either way
-                pass
+        if data is None and stream is not None:  # interrupted: what rerun encodes still is read and dropped
+            _drain(stream)
     nbytes = write_whole(out, seal(data, field))
     return {"path": str(out), "steps": len(run.trajectory.t), "frames": drawing.n_frames, "bytes": nbytes}
+
+
+DRAIN_S = 30.0  # a bound on the wait for rerun to encode what was logged before a Ctrl-C
+
+
+def _drain(stream) -> None:
+    """Read and drop everything the recording stream holds or rerun still encodes for it (on
+    threads of its own): a stream dropped with bytes unread makes rerun print a coloured WARN
+    ("Dropping data in BinaryStreamStorage") at exit, after 'theoria: interrupted'. Ctrl-C and
+    SIGTERM wait for the end of this (they stop the command just after)."""
+    with signals_held():
+        try:
+            stream.read(flush=True, flush_timeout_sec=DRAIN_S)
+        except Exception:  # noqa: BLE001 — nothing is written either way
+            pass
 
 
 def record(name: str, out: str, values: dict | None = None) -> dict:

@@ -170,6 +170,34 @@ def test_signal_mid_write_leaves_the_old_target(tmp_path, sig, code, word, phase
     assert [f.name for f in tmp_path.iterdir()] == [target.name]  # no temporary file left
 
 
+@pytest.mark.slow  # some twenty recordings
+def test_ctrl_c_anywhere_in_a_recording_is_one_line(tmp_path):
+    """Ctrl-C while rerun builds and encodes the recording (the layout, the chunks, the flush): it
+    used to be followed by rerun's coloured "WARN re_sdk::binary_stream_sink: Dropping data in
+    BinaryStreamStorage" line (an encoded stream dropped unread). The command is timed once
+    whole, then stopped at moments spread over the second half of that time: each time exit 130
+    and exactly 'theoria: interrupted', or, stopped once its work was done, the file written and
+    nothing on stderr."""
+    out = tmp_path / "r.rrd"
+    args = [sys.executable, "-m", "theoria.app.cli", "record", "free-tumble", "--duration", "2000", "--out", str(out),
+            "--force"]
+    t0 = time.monotonic()
+    subprocess.run(args, check=True, capture_output=True, env=ENV, cwd=ROOT, timeout=WAIT_S)
+    whole = time.monotonic() - t0
+    for k in range(20):
+        out.unlink(missing_ok=True)
+        p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=ENV, cwd=ROOT,
+                             preexec_fn=_terminal_like)
+        time.sleep(whole * (0.5 + 0.025 * k))
+        p.send_signal(signal.SIGINT)
+        stdout, err = (x.decode() for x in p.communicate(timeout=WAIT_S))
+        if "theoria: wrote" in stdout:  # done before the Ctrl-C (130 once its last line was printed)
+            assert out.is_file() and err in ("", "theoria: interrupted\n"), (k, p.returncode, err)
+            continue
+        assert p.returncode == 130 and err == "theoria: interrupted\n", (k, p.returncode, err)
+        assert not out.exists() and [f.name for f in tmp_path.iterdir()] == [], k
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("sig,code,word", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
 def test_serve_stopped_by_a_signal_exits_as_every_command_and_leaves_nothing_running(tmp_path, sig, code, word):
