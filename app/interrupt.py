@@ -173,26 +173,51 @@ def sigterm_raises():
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+class _Stopped(BaseException):
+    """Leaves a `signals_held` block early (`Held.check`)."""
+
+
+class Held:
+    """The signals held by a `signals_held` block so far."""
+
+    def __init__(self):
+        self.signals: list[int] = []
+
+    def check(self) -> None:
+        """Leave the block here if a signal is held (a point the block chooses, between two calls
+        that must not be cut): the signal then takes effect as at the block's end."""
+        if self.signals:
+            raise _Stopped
+
+
 @contextlib.contextmanager
 def signals_held():
-    """Ctrl-C and SIGTERM wait for the end of the block, then take effect as they would have (the
-    handlers in place before the block get them). For work that another thread does on this one's
-    behalf: zarr writes a store from its own event-loop thread while this one waits, and stopped
-    in the middle, this thread would leave that one writing, and the interpreter's exit would cut
-    it off with tracebacks of its own. Main thread only (elsewhere signals are not delivered)."""
+    """Ctrl-C and SIGTERM wait for the end of the block (or its next `Held.check`), then take
+    effect as they would have: the handlers in place before the block get them. For work that must
+    not be cut in the middle: zarr writes a store from its own event-loop thread while this one
+    waits, and stopped in the middle, this thread would leave that one writing, and the
+    interpreter's exit would cut it off with tracebacks of its own; rerun's calls convert their
+    arguments with pyarrow, which could turn a KeyboardInterrupt into an error that rerun only
+    warns about (the Ctrl-C lost, the recording without an entity). Main thread only (elsewhere
+    signals are not delivered); an ignored signal stays ignored."""
+    held = Held()
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield held
         return
-    held: list[int] = []
     old = {}
-    for s in (signal.SIGINT, signal.SIGTERM):
-        previous = signal.getsignal(s)
-        if previous is not None:  # a handler installed from C cannot be put back: left as it is
-            old[s] = signal.signal(s, lambda signum, frame: held.append(signum))
+    stopped = False
     try:
-        yield
+        for s in (signal.SIGINT, signal.SIGTERM):
+            previous = signal.getsignal(s)
+            if previous is not None and previous is not signal.SIG_IGN:  # one installed from C cannot be put back
+                old[s] = signal.signal(s, lambda signum, frame: held.signals.append(signum))
+        yield held
+    except _Stopped:
+        stopped = True
     finally:
         for s, h in old.items():
             signal.signal(s, h)
-        for s in dict.fromkeys(held):  # each signal once, in the order it came
+        for s in dict.fromkeys(held.signals):  # each signal once, in the order it came
             signal.raise_signal(s)
+    if stopped:  # the handler only took note (a sweep's, between two chunks): the block is not done
+        raise KeyboardInterrupt

@@ -231,13 +231,15 @@ def _log_item(rec, it, path, tcols, n_frames) -> None:
             rec.log(path, rr.Points3D([pos], labels=[str(it.text)], radii=[0.004], show_labels=True), static=True)
 
 
-def record_drawing(rec, drawing, run) -> None:
-    """Log `drawing` of `run` into the open recording stream `rec`."""
+def record_drawing(rec, drawing, run, check=lambda: None) -> None:
+    """Log `drawing` of `run` into the open recording stream `rec`; `check()` between two items
+    (where the logging may stop)."""
     F = drawing.n_frames
     tcols = _time_columns(drawing.times, drawing.time_unit, "frame", np.arange(F))
     rec.log("/world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     rec.log("/text", rr.TextDocument(text_of(drawing, run), media_type=rr.MediaType.MARKDOWN), static=True)
     for it in drawing.items:
+        check()
         _log_item(rec, it, f"/world/{it.name}", tcols, F)
     # the run's series on its own samples: the energy and |L| of a rotation, the scenario's plot
     tr = run.trajectory
@@ -248,11 +250,13 @@ def record_drawing(rec, drawing, run) -> None:
         series.update({"energy": tr.energy, "momentum_norm": tr.momentum_norm})
     series.update({f"plot/{k}": v for k, v in drawing.plot.items()})
     for name, v in series.items():
+        check()
         v = np.asarray(v, float)
         if v.shape == (n,):
             rec.send_columns(f"/series/{_safe(name)}", indexes=scols, columns=rr.Scalars.columns(scalars=v))
     ends = [0, n - 1]
     mcols = _time_columns(np.asarray(tr.t)[ends], tr.time_unit, "step", ends)
+    check()
     for name, v in run.metrics.items():
         try:
             v = float(v)
@@ -269,19 +273,22 @@ def _safe(name: str) -> str:
 def record_run(run, out, view=None, application_id: str = APPLICATION_ID) -> dict:
     """Write the rerun recording of `run` (its drawing, camera and text) to the .rrd file `out`."""
     drawing = run._spec().drawing(run, view)
-    layout = blueprint(drawing)
-    rec = rr.RecordingStream(application_id, recording_id=str(uuid.uuid4()))
-    stream = data = None
-    try:  # from the stream's first byte: a Ctrl-C anywhere leaves nothing of it unread
-        with signals_held():  # made and in hand, or not made (a storage dropped unread makes rerun warn)
+    rec = stream = data = None
+    try:
+        # rerun's calls are not cut in the middle (`signals_held`): Ctrl-C or SIGTERM is taken
+        # between two items of the drawing, or once the whole stream is read
+        with signals_held() as held:
+            layout = blueprint(drawing)
+            rec = rr.RecordingStream(application_id, recording_id=str(uuid.uuid4()))
             stream = rec.binary_stream()  # in memory: the file is written whole by write_whole below
-        rec.send_blueprint(layout, make_active=False, make_default=True)
-        record_drawing(rec, drawing, run)
-        field = _log_digest_field(rec)
-        data = stream.read(flush=True)  # every chunk and the footer
+            rec.send_blueprint(layout, make_active=False, make_default=True)
+            record_drawing(rec, drawing, run, held.check)
+            field = _log_digest_field(rec)
+            data = stream.read(flush=True)  # every chunk and the footer
     finally:
-        rec.disconnect()
-        if data is None and stream is not None:  # interrupted: what rerun encodes still is read and dropped
+        if rec is not None:
+            rec.disconnect()
+        if data is None and stream is not None:  # stopped: what rerun encodes still is read and dropped
             _drain(stream)
     nbytes = write_whole(out, seal(data, field))
     return {"path": str(out), "steps": len(run.trajectory.t), "frames": drawing.n_frames, "bytes": nbytes}
@@ -293,8 +300,8 @@ DRAIN_S = 30.0  # a bound on the wait for rerun to encode what was logged before
 def _drain(stream) -> None:
     """Read and drop everything the recording stream holds or rerun still encodes for it (on
     threads of its own): a stream dropped with bytes unread makes rerun print a coloured WARN
-    ("Dropping data in BinaryStreamStorage") at exit, after 'theoria: interrupted'. Ctrl-C and
-    SIGTERM wait for the end of this (they stop the command just after)."""
+    ("Dropping data in BinaryStreamStorage") at exit, after 'theoria: interrupted'. A second
+    Ctrl-C or SIGTERM waits for the end of this (the command stops just after)."""
     with signals_held():
         try:
             stream.read(flush=True, flush_timeout_sec=DRAIN_S)
