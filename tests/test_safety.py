@@ -453,8 +453,9 @@ def test_a_deferred_signal_is_raised_once_when_its_backstop_fires_too(monkeypatc
 
 
 def test_a_signal_held_is_raised_once_the_block_ends():
-    """`signals_held`: Ctrl-C pressed twice during the block lets it run to its end, then the
-    handler in place before it gets it once: KeyboardInterrupt under the command line's."""
+    """`signals_held`: Ctrl-C pressed twice during the block lets it run to its end (or to its next
+    check), then the handler in place before it gets it once: KeyboardInterrupt under the command
+    line's."""
     from theoria.app import interrupt
 
     reached = []
@@ -466,6 +467,14 @@ def test_a_signal_held_is_raised_once_the_block_ends():
                 time.sleep(0.05)
                 reached.append("end of block")
         assert signal.getsignal(signal.SIGINT) is interrupt._handler
+        # or at a check the block makes, once: what follows it does not run
+        with pytest.raises(KeyboardInterrupt):
+            with interrupt.signals_held() as held:
+                held.check()
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+                held.check()
+                reached.append("after the check")
     assert reached == ["end of block"]
 
 
