@@ -198,19 +198,32 @@ def signals_held():
     waits, and stopped in the middle, this thread would leave that one writing, and the
     interpreter's exit would cut it off with tracebacks of its own; rerun's calls convert their
     arguments with pyarrow, which could turn a KeyboardInterrupt into an error that rerun only
-    warns about (the Ctrl-C lost, the recording without an entity). Main thread only (elsewhere
-    signals are not delivered); an ignored signal stays ignored."""
+    warns about (the Ctrl-C lost, the recording without an entity). The same signal a second time
+    is not held (a block that hangs can still be stopped). Main thread only (elsewhere signals are
+    not delivered); an ignored signal stays ignored."""
     held = Held()
     if threading.current_thread() is not threading.main_thread():
         yield held
         return
     old = {}
     stopped = False
+
+    def note(signum, frame):
+        if signum not in held.signals:
+            held.signals.append(signum)
+            return
+        held.signals.remove(signum)  # the second: delivered now, and not again at the block's end
+        if callable(old[signum]):  # to the handler it would have gone to
+            old[signum](signum, frame)
+        else:  # the default action (SIGTERM outside the command line: the process ends)
+            signal.signal(signum, old[signum])
+            signal.raise_signal(signum)
+
     try:
         for s in (signal.SIGINT, signal.SIGTERM):
             previous = signal.getsignal(s)
             if previous is not None and previous is not signal.SIG_IGN:  # one installed from C cannot be put back
-                old[s] = signal.signal(s, lambda signum, frame: held.signals.append(signum))
+                old[s] = signal.signal(s, note)
         yield held
     except _Stopped:
         stopped = True
