@@ -78,11 +78,13 @@ def _log_digest_field(rec) -> bytes:
     return field
 
 
-def seal(data: bytes, field: bytes) -> bytearray:
-    """The encoded recording with its digest written into the field logged by `_log_digest_field`."""
+def seal(data: bytes, field: bytes) -> bytearray | None:
+    """The encoded recording with its digest written into the field logged by `_log_digest_field`;
+    None when the field is not in the stream once as logged (LZ4 met 4 of its random bytes earlier
+    in the same chunk and stored a reference to them instead: rare, the chunk holds little else)."""
     at = data.find(field)
-    if at < 0 or data.find(field, at + 1) >= 0:  # rerun stored the field otherwise than as it was logged
-        raise RuntimeError("the recording's digest field was not found once in the encoded stream")
+    if at < 0 or data.find(field, at + 1) >= 0:
+        return None
     at += len(DIGEST_MARKER)
     out = bytearray(data)
     out[at:at + DIGEST_SIZE] = file_digest(out, at)
@@ -273,6 +275,18 @@ def _safe(name: str) -> str:
 def record_run(run, out, view=None, application_id: str = APPLICATION_ID) -> dict:
     """Write the rerun recording of `run` (its drawing, camera and text) to the .rrd file `out`."""
     drawing = run._spec().drawing(run, view)
+    for _ in range(3):  # a field rerun did not store as it was logged: encoded again, with other random bytes
+        sealed = seal(*_encode(run, drawing, application_id))
+        if sealed is not None:
+            break
+    else:
+        raise RuntimeError("rerun did not store the recording's digest field as it was logged")
+    nbytes = write_whole(out, sealed)
+    return {"path": str(out), "steps": len(run.trajectory.t), "frames": drawing.n_frames, "bytes": nbytes}
+
+
+def _encode(run, drawing, application_id) -> tuple[bytes, bytes]:
+    """The whole rerun stream of `drawing` (every chunk and the footer) and its digest's field."""
     rec = stream = data = None
     try:
         # rerun's calls are not cut in the middle (`signals_held`): Ctrl-C or SIGTERM is taken
@@ -290,8 +304,7 @@ def record_run(run, out, view=None, application_id: str = APPLICATION_ID) -> dic
             rec.disconnect()
         if data is None and stream is not None:  # stopped: what rerun encodes still is read and dropped
             _drain(stream)
-    nbytes = write_whole(out, seal(data, field))
-    return {"path": str(out), "steps": len(run.trajectory.t), "frames": drawing.n_frames, "bytes": nbytes}
+    return data, field
 
 
 DRAIN_S = 30.0  # a bound on the wait for rerun to encode what was logged before a Ctrl-C
