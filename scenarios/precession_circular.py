@@ -219,10 +219,11 @@ def _precession_circular(values, progress=None):
         notes.append(f"the pole of rotation went {np.degrees(m['alpha_max_rad']):.3g}° from the figure axis: "
                      "Euler's small-α hypothesis (§845) no longer holds.")
     notes += ["Text: " + t_ for t_ in TYPOS_844_849]
-    rows = resonance_sweep(values["flattening"], n)
-    notes.append("Nutation in obliquity toward the resonance (30 revolutions each, same flattening): "
-                 + "; ".join(f"ε/δ = {r_:g}: simulated {a:.3g}, Euler {e:.3g}, corrected {c:.3g} rad"
-                             for r_, a, e, c in rows))
+    if values["resonance_table"] == "on":
+        rows = resonance_sweep(values["flattening"], n)
+        notes.append("Nutation in obliquity toward the resonance (30 revolutions each, same flattening): "
+                     + "; ".join(f"ε/δ = {r_:g}: simulated {a:.3g}, Euler {e:.3g}, corrected {c:.3g} rad"
+                                 for r_, a, e, c in rows))
     pe, le = eul.pole(t, np.pi / 2, h)
     p, lam = pole_angles(traj.figure_axis)
     sec = eul.precession_rate * t
@@ -252,11 +253,12 @@ SWEEP_STEPS = 6 * 30 * 100  # resonance_sweep: six ratios, 30 revolutions at 100
 
 
 def _cost(values):
-    """orbits × steps_per_orbit steps (yoshida4), the sweep toward the resonance, the centre's
-    position and six series of the pole per sample."""
+    """orbits × steps_per_orbit steps (yoshida4), the sweep toward the resonance when its table is
+    on, the centre's position and six series of the pole per sample."""
     n = float(np.ceil(values["orbits"] * values["steps_per_orbit"]))
     samples = samples_kept(n, max(1, int(np.ceil(n / MAX_SAMPLES))))
-    return Cost(n + SWEEP_STEPS, samples, trajectory_bytes(samples, bodies=1, series=6))
+    sweep = SWEEP_STEPS if values["resonance_table"] == "on" else 0
+    return Cost(n + sweep, samples, trajectory_bytes(samples, bodies=1, series=6))
 
 
 register(Scenario(
@@ -283,9 +285,14 @@ register(Scenario(
               exclusive_min=True, label="Length of the run"),
         Param("steps_per_orbit", 100, 8, 1e5, "1", "integrator steps per revolution (yoshida4)", kind="int",
               label="Integrator steps per revolution", advanced=True),
+        # six more runs of 30 revolutions (18,000 steps, most of a run's CPU at the defaults): the
+        # quick preview leaves them out, and so can a sweep that does not read the note
+        Param("resonance_table", "on", kind="choice", choices=("on", "off"),
+              help="the note's table of the nutation at six ε/δ toward the resonance (six runs of 30 revolutions)",
+              label="Table toward the resonance", choice_labels=("on", "off"), advanced=True),
     ),
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
-    preview={'orbits': 20.0},
+    preview={'orbits': 20.0, 'resonance_table': 'off'},
     simulate_fn=_precession_circular,
     draw=_draw,
     options={"cone": Option("precession cone (figure axis on the celestial sphere)"),
