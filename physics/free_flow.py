@@ -84,10 +84,8 @@ def _ellipj_core(u, m, m1):
         b = t
         twon *= 2.0
     phi = twon * a[i] * u
-    bb = phi
     while i > 0:
         t = c[i] * math.sin(phi) / a[i]
-        bb = phi
         phi = 0.5 * (math.asin(t) + phi)
         i -= 1
     sn = math.sin(phi)
@@ -389,7 +387,7 @@ def drift(L, q, I, h, ip, c, tab):
         Wn[0], Wn[1], Wn[2] = W1, W2, W3
         dqp = _axis_angle_quat(W1, W2, W3, math.sqrt(W1 * W1 + W2 * W2 + W3 * W3) * h)
     else:
-        a1, a2, a3, lam, m, p, r, m1 = c[3], c[4], c[5], c[6], c[7], c[9], c[10], c[11]
+        a1, a2, a3, m, p, r, m1 = c[3], c[4], c[5], c[7], c[9], c[10], c[11]
         s3 = 1.0 if W3 >= 0.0 else -1.0
         sg2 = s3 if J3 > J1 else -s3
         # phase u₀ of the current state, put back on sn² + cn² = 1, dn² + m sn² = 1

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.special import ellipk, ellipkm1
+from scipy.special import ellipkm1
 
 from . import hansen
 from .kept import kept

@@ -48,7 +48,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ParameterError
 
 
 def hut_omega(e):

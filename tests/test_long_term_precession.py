@@ -10,7 +10,7 @@ import pytest
 
 from theoria.physics import constants as C
 from theoria.physics import long_term_precession as LT
-from theoria.physics.constants import ARCSEC_RAD, JULIAN_YEAR_DAYS
+from theoria.physics.constants import JULIAN_YEAR_DAYS
 from theoria.physics.precession import precession_rate_orbit
 
 YR = JULIAN_YEAR_DAYS
