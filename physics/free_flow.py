@@ -66,6 +66,14 @@ def _ellipj_core(u, m, m1):
         cn = phi - ai * (twon - u)
         dn = phi + ai * (twon + u)
         return sn, cn, dn
+    a, c, top, twon = _landen(m, m1)
+    return _landen_sn_cn_dn(u, m, m1, a, c, top, twon)
+
+
+@nb.njit(cache=True, nogil=True)
+def _landen(m, m1):
+    """The arithmetic–geometric mean's sequence for parameter m (it does not depend on u): the
+    a's and c's, the last index and 2^index. Made once, it serves every argument of one m."""
     a = np.empty(16)
     c = np.empty(16)
     a[0] = 1.0
@@ -83,6 +91,13 @@ def _ellipj_core(u, m, m1):
         a[i] = 0.5 * (ai + b)
         b = t
         twon *= 2.0
+    return a, c, i, twon
+
+
+@nb.njit(cache=True, nogil=True)
+def _landen_sn_cn_dn(u, m, m1, a, c, top, twon):
+    """sn, cn, dn of u from the sequence `_landen(m, m1)` (descending Landen transformation)."""
+    i = top
     phi = twon * a[i] * u
     while i > 0:
         t = c[i] * math.sin(phi) / a[i]
@@ -226,6 +241,22 @@ def _nutation_frame(l1, l2, l3):
 
 
 @nb.njit(cache=True, nogil=True)
+def _turned(P0, cz, sz, P1):
+    """P0ᵀ · Rz · P1, Rz the turn by ψ about z (cos, sin given), written out: a 3×3 product
+    through BLAS cost more than the rest of the attitude's update."""
+    A = np.empty((3, 3))
+    for j in range(3):
+        A[0, j] = cz * P1[0, j] - sz * P1[1, j]
+        A[1, j] = sz * P1[0, j] + cz * P1[1, j]
+        A[2, j] = P1[2, j]
+    M = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            M[i, j] = P0[0, i] * A[0, j] + P0[1, i] * A[1, j] + P0[2, i] * A[2, j]
+    return M
+
+
+@nb.njit(cache=True, nogil=True)
 def _axis_angle_quat(x, y, z, angle):
     n = math.sqrt(x * x + y * y + z * z)
     q = np.empty(4)
@@ -258,8 +289,13 @@ def prepare(L, I, h):
     ip = np.zeros(7, np.int64)
     c = np.zeros(12)
     G = L[0] * L[0] + L[1] * L[1] + L[2] * L[2]
-    order = np.argsort(I)
-    lo, mid, hi = order[0], order[1], order[2]
+    lo, mid, hi = 0, 1, 2  # the axes by increasing moment (three comparisons, no array)
+    if I[mid] < I[lo]:
+        lo, mid = mid, lo
+    if I[hi] < I[mid]:
+        mid, hi = hi, mid
+        if I[mid] < I[lo]:
+            lo, mid = mid, lo
     if G == 0.0 or I[hi] - I[lo] <= 1e-15 * I[hi]:
         ip[4] = SPHERE
         return ip, c, np.zeros((1, 3))
@@ -316,8 +352,16 @@ def prepare(L, I, h):
     ip[6] = rule
     n = GL_N[rule]
     tab = np.empty((1 + nsub * n, 3))
-    tab[0, 0], tab[0, 1], tab[0, 2] = ellipj(v, m, m1)
     dv = v / nsub
+    if m >= 1e-9 and m1 >= 1e-3:  # `ellipj`'s Landen path, its sequence made once for all the nodes
+        la, lc, top, twon = _landen(m, m1)
+        tab[0, 0], tab[0, 1], tab[0, 2] = _landen_sn_cn_dn(v, m, m1, la, lc, top, twon)
+        for j in range(nsub):
+            for k in range(n):
+                tab[1 + j * n + k, 0], tab[1 + j * n + k, 1], tab[1 + j * n + k, 2] = _landen_sn_cn_dn(
+                    (j + GL_X[rule, k]) * dv, m, m1, la, lc, top, twon)
+        return ip, c, tab
+    tab[0, 0], tab[0, 1], tab[0, 2] = ellipj(v, m, m1)
     for j in range(nsub):
         for k in range(n):
             tab[1 + j * n + k, 0], tab[1 + j * n + k, 1], tab[1 + j * n + k, 2] = ellipj((j + GL_X[rule, k]) * dv, m, m1)
@@ -423,14 +467,7 @@ def drift(L, q, I, h, ip, c, tab):
         dpsi = Lnorm * acc * h / nsub
         P0 = _nutation_frame(J1 * W1 / Lnorm, J2 * W2 / Lnorm, J3 * W3 / Lnorm)
         P1 = _nutation_frame(J1 * Wn[0] / Lnorm, J2 * Wn[1] / Lnorm, J3 * Wn[2] / Lnorm)
-        cz, sz = math.cos(dpsi), math.sin(dpsi)
-        Rz = np.zeros((3, 3))
-        Rz[0, 0] = cz
-        Rz[0, 1] = -sz
-        Rz[1, 0] = sz
-        Rz[1, 1] = cz
-        Rz[2, 2] = 1.0
-        dqp = quat_from_matrix(P0.T @ (Rz @ P1))
+        dqp = quat_from_matrix(_turned(P0, math.cos(dpsi), math.sin(dpsi), P1))
     # back to body coordinates: Δ = Πᵀ Δ' Π with Π's rows e_i1, e_i2, sig·e_i3; as a
     # quaternion that is the vector part permuted back
     dq = np.empty(4)

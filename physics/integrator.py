@@ -65,8 +65,9 @@ class Degree3Field:
 
 
 @nb.njit(cache=True, nogil=True)
-def _torque(L, q, I, tq, pos, gm, c3, k3):
-    t = tq.copy()
+def _torque_into(t, q, I, tq, pos, gm, c3, k3):
+    """The body-frame torque at attitude q, written into t (no array made per kick)."""
+    t[0], t[1], t[2] = tq[0], tq[1], tq[2]
     for p in range(gm.shape[0]):
         s = rotate_inverse(q, pos[p])
         r2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2]
@@ -77,7 +78,6 @@ def _torque(L, q, I, tq, pos, gm, c3, k3):
         t[2] += f * (s[0] * Is1 - s[1] * Is0)
         if k3 != 0.0:
             degree3_torque_into(t, s, c3, gm[p] * k3)
-    return t
 
 
 @nb.njit(cache=True, nogil=True)
@@ -95,13 +95,16 @@ def _run(L, q, I, h, n_steps, stride, kick, drift_c, tq, has_tq, pos, gm, c3, k3
     out_L[0] = L
     out_q[0] = q
     free = (not has_tq) and gm.shape[0] == 0
+    tau = np.empty(3)
     row = 1
     for k in range(n_steps):
         if free:
             L, q = drift(L, q, I, h, ip, c, tab)
         else:
             for j in range(kick.shape[0]):
-                L = L + (kick[j] * h) * _torque(L, q, I, tq, pos[k, j], gm, c3, k3)
+                _torque_into(tau, q, I, tq, pos[k, j], gm, c3, k3)
+                dt = kick[j] * h
+                L = np.array((L[0] + dt * tau[0], L[1] + dt * tau[1], L[2] + dt * tau[2]))
                 if drift_c[j] != 0.0:
                     ipj, cj, tabj = prepare(L, I, drift_c[j] * h)
                     L, q = drift(L, q, I, drift_c[j] * h, ipj, cj, tabj)

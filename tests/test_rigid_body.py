@@ -204,6 +204,24 @@ def test_psi_quadrature_rules_against_mpmath():
     assert worst < 1e-15, worst
 
 
+def test_the_step_table_holds_ellipj_values_bit_for_bit():
+    """`prepare` makes the Landen sequence once for all the nodes of a step: each sn, cn, dn of its
+    table is the one `ellipj` (checked against mpmath and scipy above) gives at that argument."""
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        I = np.sort(rng.uniform(0.1, 3.0, 3))
+        L = rng.normal(size=3) * rng.uniform(0.1, 5.0)
+        h = 10 ** rng.uniform(-3, 0.5)
+        ip, c, tab = prepare(L, I, h)
+        if ip[4] != ff.GENERAL:
+            continue
+        m, m1, v = c[7], c[11], c[6] * h
+        nsub, n = ip[5], ff.GL_N[ip[6]]
+        dv = v / nsub
+        args = [v] + [(j + x) * dv for j in range(nsub) for x in ff.GL_X[ip[6], :n]]
+        assert np.array_equal(tab, np.array([ellipj(u, m, m1) for u in args])), (m, m1)
+
+
 def test_polhode_period_and_flip_interval_from_dop853():
     """The flip interval 2K/λ against sign changes of ω₂ found in an independent DOP853 run."""
     I, w0 = np.array([1.0, 2.0, 3.0]), np.array([0.06, 6.0, 0.06])
