@@ -40,12 +40,12 @@ from scipy.optimize import brentq
 
 def peale_residual(I, inclination, node_rate, k_earth, k_sun, moments):
     """The Cassini-state equation above, left minus right side (rad/day): zero at the equilibrium
-    obliquity I (rad, state 2). node_rate g (rad/day, < 0 for a regressing node), k_earth =
-    (3/2)GM⊕⟨r⁻³⟩/ω and k_sun = (3/2)GM☉⟨r⁻³⟩/ω (rad/day), moments (A, B, C)."""
+    obliquity I (rad, state 2; a number or an array). node_rate g (rad/day, < 0 for a regressing
+    node), k_earth = (3/2)GM⊕⟨r⁻³⟩/ω and k_sun = (3/2)GM☉⟨r⁻³⟩/ω (rad/day), moments (A, B, C)."""
     A, B, C = moments
     th = inclination + I
-    lhs = (abs(node_rate) - k_sun * (C - 0.5 * (A + B)) / C * math.cos(I)) * math.sin(I)
-    rhs = k_earth * ((C - A) / C * math.cos(th) + (B - A) / C * (1 - math.cos(th)) / 4) * math.sin(th)
+    lhs = (abs(node_rate) - k_sun * (C - 0.5 * (A + B)) / C * np.cos(I)) * np.sin(I)
+    rhs = k_earth * ((C - A) / C * np.cos(th) + (B - A) / C * (1 - np.cos(th)) / 4) * np.sin(th)
     return lhs - rhs
 
 
@@ -55,7 +55,7 @@ def peale_obliquity(inclination, node_rate, k_earth, k_sun, moments) -> float | 
     for its node's regression: the spin cannot keep up with the orbit plane)."""
     f = lambda I: peale_residual(I, inclination, node_rate, k_earth, k_sun, moments)  # noqa: E731
     grid = np.linspace(1e-12, math.pi - inclination - 1e-9, 2001)
-    values = np.array([f(I) for I in grid])
+    values = f(grid)  # the residual takes arrays: the whole grid at once
     change = np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) <= 0)
     if len(change) == 0:
         return None
