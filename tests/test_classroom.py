@@ -492,7 +492,9 @@ def test_app_reports_divergence_and_survives_a_raising_scenario():
                     c = ViserProtocolClient(url)
                     await c.connect()
                     if name == "test-blowup":
-                        ok = await c.wait_for(lambda: any("diverged at t=3" in v for v in c.markdown.values()), 300)
+                        # the note and the drawn scene (its "(update #k)" line) may arrive in either order
+                        ok = await c.wait_for(lambda: any("diverged at t=3" in v for v in c.markdown.values())
+                                              and c.update_no >= 1, 300)
                         shown = c.update_no
                     else:
                         ok = await c.wait_for(lambda: any("deliberate failure" in b for _, b in c.notifications), 300)
