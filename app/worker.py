@@ -84,9 +84,10 @@ COLD_WAIT_S = 3.0  # a job waiting this long for the busy pure-Python child goes
 SLOW_JOB_S = 0.15
 # A run expected to take longer is shown first from its scenario's preview. At 0.1 s, when the
 # previews cost as much as the runs (a Moon preview 0.26 s), p95 went from 0.6 to 1.2 s, every such
-# action drawn twice by the server's one interpreter; most previews now cost 0.01-0.04 s (precession's
-# 0.13 s when flattening or obliquity moves: its resonance table is made again).
-PREVIEW_AFTER_S = SLOW_JOB_S
+# action drawn twice by the server's one interpreter. Previews now cost 0.01-0.07 s; at 0.15 s, once
+# Cassini's, Hyperion's, libration-eccentric's and precession's runs had become cheaper (0.12-0.14 s)
+# they ran unpreviewed in the quick children and took 0.3-0.4 s on the loaded cores.
+PREVIEW_AFTER_S = 0.08
 # A run expected to take at most this much CPU is tiny (a slider on the rigid-body scenes: 3-20 ms).
 # One child of the server's pool takes tiny runs only: with a hundred browsers, the three quick
 # children are mostly busy with previews and runs of 50-300 ms, and a 6-ms run that waited for one
