@@ -41,6 +41,10 @@ class Terminated(BaseException):
 
 _state = {"active": 0, "pending": None, "previous_trace": None, "traced": [], "backstop": None}
 BACKSTOP_S = 0.5
+# the backstop's look at the pending signal and its delivery, against the main thread taking it:
+# between the two, the main thread could raise the signal, print "interrupted" and put Python's
+# handlers back, and the copy then ended the process by SIGINT (exit -2) on its way out
+_lock = threading.RLock()
 
 
 def _unsafe(frame) -> bool:
@@ -66,10 +70,11 @@ def _raise(signum: int):
 
 def _take_pending() -> int | None:
     """The deferred signal, if any, with the trace function removed."""
-    signum = _state["pending"]
+    with _lock:
+        signum = _state["pending"]
+        _state["pending"] = None
     if signum is None:
         return None
-    _state["pending"] = None
     sys.settrace(_state["previous_trace"])
     for f in _state["traced"]:
         f.f_trace = None
@@ -92,9 +97,10 @@ def _backstop(signum: int) -> None:
     raised): delivered to the main thread again. The trace may raise it meanwhile: `_handler` then
     drops this copy (delivered too, the one Ctrl-C was raised twice: the command printed
     "interrupted", then died by SIGINT on its way out)."""
-    if _state["pending"] == signum and _state["active"]:
-        _state["backstop"] = time.monotonic()
-        _thread.interrupt_main(signum)
+    with _lock:
+        if _state["pending"] == signum and _state["active"]:
+            _state["backstop"] = time.monotonic()
+            _thread.interrupt_main(signum)
 
 
 def _defer(signum: int, frame) -> None:
@@ -140,7 +146,8 @@ def cli_signals():
     try:
         yield
     finally:
-        _state["active"] -= 1
+        with _lock:
+            _state["active"] -= 1
         if not _state["active"]:
             _take_pending()
         for s, h in old.items():
