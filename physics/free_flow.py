@@ -6,7 +6,8 @@ spatial L and the precession angle ψ about it, whose rate
     ψ̇ = |L| (L₁²/J₁ + L₂²/J₂) / (L₁² + L₂²)
 (Landau & Lifshitz, Mechanics §37) is integrated over the step by Gauss–Legendre quadrature of
 an analytic integrand. Everything is recomputed from the current state on each step, so the
-step keeps |L| and the spatial L to round-off and admits torque kicks between steps.
+step keeps |L| and the spatial L to round-off and admits torque kicks between steps. A body of
+revolution (two equal moments) needs neither: its flow is two uniform rotations (`_drift_symmetric`).
 
 Frames: body axes are permuted (a proper rotation Π) so that axis 3 is the axis the angular
 momentum circulates about (largest moment if |L|² > 2EB, smallest otherwise) and axis 2 the
