@@ -95,10 +95,17 @@ PREVIEW_AFTER_S = 0.08
 TINY_JOB_S = 0.03
 CACHE_BYTES = 1e9  # finished runs and their drawings kept in memory by the server (LRU)
 MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
-CHILD_NICE = 5  # children run below the server: the event loop and the pose stream come first
-# the children of slow runs and background work, far below the quick ones: at 12 two slow runs
-# still took a third of the CPU a quick child wanted (at 15, a tenth)
+# Children run below the server: its event loop and its drawing threads (one interpreter lock) are
+# what every browser waits for. With a hundred browsers the server's threads spent nearly as long
+# waiting for a core as running (0.4-0.5 against 0.5 of a core, /proc schedstat). 150-s soaks of a
+# hundred browsers, p95: nice 5, slow ones at 15: 0.70 s; slow ones in SCHED_IDLE: 0.73, 0.88 s;
+# nice 10: 0.81 s; nice 15 and SCHED_IDLE: 0.74 s; nice 10 and SCHED_IDLE: 0.38-0.51 s (five soaks).
+CHILD_NICE = 10
+# The children of slow runs and background work, far below the quick ones: at nice 12 two slow runs
+# still took a third of the CPU a quick child wanted (at 15, a tenth). Where Linux offers it they
+# run in SCHED_IDLE, which gives way at once to any other process: a quick run, the server.
 CHILD_NICE_SLOW = 15
+SLOW_CHILD_IDLE = True
 # A run judged quick that has taken this much CPU in a quick child, while another quick run waits
 # for one, is stopped and queued again as slow (a slider that made a quick scene slow): at most
 # this much of its work is lost, instead of the waiting run's seconds. CPU time, not wall time: on
@@ -560,12 +567,17 @@ class _Slot:
         # (README's first command), the child imported the checkout's theoria/ folder, which holds
         # only the front door, instead of the installed package; the child imports what the server did
         code = ("import os,sys; sys.path[:] = [p for p in sys.path if p]; "
-                "os.nice(int(sys.argv[3])) if hasattr(os,'nice') else None; "
+                "os.nice(int(sys.argv[3])) if hasattr(os,'nice') else None\n"
+                "if sys.argv[4] == 'idle' and hasattr(os, 'SCHED_IDLE'):\n"
+                "    try: os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))\n"
+                "    except OSError: pass\n"
                 "from theoria.app.worker import child_main; child_main(int(sys.argv[1]), int(sys.argv[2]))")
+        slow = self.jit and not self.quick
         try:
             self.proc = subprocess.Popen([sys.executable, "-c", code, str(r1), str(w2),
                                           str(CHILD_NICE if self.quick else CHILD_NICE_SLOW if self.jit
-                                              else max(0, CHILD_NICE - 3))],
+                                              else max(0, CHILD_NICE - 3)),
+                                          "idle" if slow and SLOW_CHILD_IDLE else "-"],
                                          pass_fds=(r1, w2), env=env, stdin=subprocess.DEVNULL,
                                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                          close_fds=True)
