@@ -467,7 +467,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("replay", help="open a theoria .rrd (rerun viewer) or .html export; refuses other files")
     s.add_argument("file")
     s.add_argument("--check", action="store_true", help="only validate the file: exit 0 if it is theoria's and whole, 2 if "
-                   "not, 3 for a recording too old to carry a digest")
+                   "not, 3 for a recording or export too old to carry a digest")
     s.add_argument("--web-viewer", action="store_true", help="rerun's web viewer instead of the native one "
                    "(prints its URL; stops with this command)")
     s.add_argument("--open", action="store_true", help="with --web-viewer: open the URL in a browser")

@@ -14,8 +14,10 @@ else with one clear line (exit 2).
   this process dies (PR_SET_PDEATHSIG); it sends no analytics.
 - ``.html`` (from `theoria export`): must carry the marker `app.export_html.MARKER`, the embedded
   viser scene, end with ``</html>`` (a truncated file does not) and match the sha256 digest the
-  export wrote into its marker (a piece cut out of the middle, or a changed byte, does not). Then
-  its ``file://`` URL is printed (the file plays in any browser with no server).
+  export wrote into its marker (a piece cut out of the middle, or a changed byte, does not); an
+  export made before theoria wrote that digest is read, and ``--check`` says it has none and exits
+  3, as for a recording. Then its ``file://`` URL is printed (the file plays in any browser with
+  no server).
 
 ``--check`` validates only (tests, scripts) and prints what was found.
 """
@@ -46,7 +48,7 @@ HTML_DIGEST_BLANK = "0" * 64
 HTML_MARKER_RE = re.compile(r'<meta name="generator" content="theoria export_html" data-theoria-scenario="([^"]*)"')
 
 
-# `--check` of a recording that carries no digest (written before theoria recorded one): it reads
+# `--check` of a recording or an export that carries no digest (written before theoria wrote one): it reads
 # whole, but a changed byte inside a chunk could not be seen; neither ok (0) nor refused (2)
 EXIT_NO_DIGEST = 3
 
@@ -156,7 +158,7 @@ def check_html(path: str) -> dict:
         raise ReplayError(f"{path}: theoria HTML export is damaged (its content does not match the digest "
                           "written when it was exported)")
     return {"kind": "html", "path": str(path), "scenario": m.group(1),
-            "url": Path(os.path.abspath(path)).as_uri(), "bytes": len(data)}
+            "url": Path(os.path.abspath(path)).as_uri(), "bytes": len(data), "digest": d and d.group(1)}
 
 
 def check(path: str) -> dict:
@@ -183,16 +185,21 @@ def replay(path: str, check_only: bool = False, web_viewer: bool = False, open_b
            host: str = "127.0.0.1") -> int:
     """Validate `path`, then open it (rerun viewer for .rrd; print the file:// URL for .html)."""
     info = check(path)
-    if info["kind"] == "html":
-        print(f"theoria export of {info['scenario']}: open {info['url']}")
-        return 0
+    html = info["kind"] == "html"
     if check_only:
-        head = f"theoria recording {info['recording_id']}: {info['entities']} entities, {info['rows']} rows"
+        if html:
+            head, hash_name, made = f"theoria export of {info['scenario']}", "sha256", ("exported", "export")
+        else:
+            head = f"theoria recording {info['recording_id']}: {info['entities']} entities, {info['rows']} rows"
+            hash_name, made = "blake2b", ("recorded", "record")
         if info["digest"] is None:
-            print(f"{head} — no digest (recorded before theoria wrote one): read whole, but its bytes cannot be "
-                  "verified; record it again to get one")
+            print(f"{head} — no digest ({made[0]} before theoria wrote one): read whole, but its bytes cannot be "
+                  f"verified; {made[1]} it again to get one")
             return EXIT_NO_DIGEST
-        print(f"{head}, blake2b {info['digest'][:16]}… — ok")
+        print(f"{head}, {hash_name} {info['digest'][:16]}… — ok" + (f": open {info['url']}" if html else ""))
+        return 0
+    if html:
+        print(f"theoria export of {info['scenario']}: open {info['url']}")
         return 0
     cmd, url = viewer_command(path, web_viewer, open_browser, host)
     if url is not None:

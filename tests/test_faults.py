@@ -184,6 +184,27 @@ def test_a_recording_without_a_digest_is_read_and_said_to_have_none(tmp_path, cl
     assert code == 3 and err == "" and out.count("\n") == 1 and "no digest" in out, (code, out, err)
 
 
+def test_an_export_without_a_digest_is_said_to_have_none_as_a_recording_is(files, tmp_path, cli_process):
+    """An HTML export as theoria wrote them before it carried a digest (its marker without
+    data-sha256): `--check` reads it, says in one line that it has none and exits 3, as it does for
+    a recording without one; opened without `--check` its URL is printed (exit 0). An export with
+    its digest: exit 0, the digest named."""
+    import re
+
+    _, _, html = files
+    old = tmp_path / "old.html"
+    old.write_text(re.sub(r' data-sha256="[0-9a-f]{64}"', "", html.read_text(encoding="utf-8"), count=1),
+                   encoding="utf-8")
+    assert "data-sha256" not in old.read_text(encoding="utf-8")[:4096]
+    code, out, err = cli_process("replay", old, "--check")
+    assert code == 3 and err == "" and out.count("\n") == 1 and "no digest" in out and "export it again" in out, \
+        (code, out, err)
+    code, out, err = cli_process("replay", old)
+    assert code == 0 and out.strip().endswith(old.resolve().as_uri()), (code, out, err)
+    code, out, err = cli_process("replay", html, "--check")
+    assert code == 0 and "sha256 " in out and "ok" in out and out.strip().endswith(html.resolve().as_uri()), out
+
+
 # ---- divergence ------------------------------------------------------------------------------------
 
 def _blowup_scenario(nan_at: float | None = 3.0, kind: str = "rotation"):
