@@ -1167,7 +1167,7 @@ class MapData:
 
 
 def open_map(path, metric: str, x: str | None = None, y: str | bool | None = None, reduce: str = "mean") -> MapData:
-    """Open a sweep result (Zarr) and return one metric as a 2-D array over two swept parameters
+    """Open a sweep result (Zarr, or an xarray Dataset already opened) and return one metric as a 2-D array over two swept parameters
     (x: columns, y: rows; by default the last two swept parameters), with axis names, units and
     values, and `run_values(i, j)` for the full parameters of any pixel. `y=False` gives a profile
     along x (one row). Any other dimension (e.g. the random `sample`, or the starting angle of a
@@ -1175,7 +1175,7 @@ def open_map(path, metric: str, x: str | None = None, y: str | bool | None = Non
     where the metric is nonzero — a capture probability)."""
     import xarray as xr
 
-    ds = xr.open_zarr(os.fspath(path), consolidated=False)
+    ds = path if isinstance(path, xr.Dataset) else xr.open_zarr(os.fspath(path), consolidated=False)
     if "theoria_sweep" not in ds.attrs:
         raise ParameterError("sweep", path, "a Zarr store written by theoria sweep")
     if metric not in ds.data_vars or metric == "status":

@@ -150,6 +150,14 @@ class SweepMaps:
             raise ParameterError("--sweep", self.path, what + "; this Zarr store has no theoria sweep in it")
         from theoria.scenarios import get
 
+        # The map shows the sweep as it was opened: read into memory now (the metrics are read whole
+        # below in any case). Read lazily from the folder, a sweep written there again while the
+        # server ran (`--force` renames a new store over the old) mixed the new numbers into the
+        # panel made for the old: maps of another size, a click that replayed a run not shown.
+        try:
+            ds = ds.load()
+        except Exception as e:  # noqa: BLE001 — a damaged chunk: one line
+            raise ParameterError("--sweep", self.path, f"{what}; a part of it cannot be read ({type(e).__name__})") from None
         self.ds = ds
         self.scenario = get(ds.attrs.get("scenario") or ds.attrs["theoria_sweep"]["scenario"])
         spec = ds.attrs["theoria_sweep"]
@@ -267,7 +275,7 @@ class SweepMaps:
         if view_label not in views:
             raise ParameterError("summary", view_label, "one of " + ", ".join(views))
         v = views[view_label]
-        m = open_map(self.path, metric, x=v.x, y=v.y if v.y is not None else False, reduce=v.reduce or "mean")
+        m = open_map(self.ds, metric, x=v.x, y=v.y if v.y is not None else False, reduce=v.reduce or "mean")
         vals = np.asarray(m.values, float)
         finite = vals[np.isfinite(vals)]
         if is_capture(metric) or v.reduce == "fraction" or metric.startswith("gp_capture_probability"):
@@ -282,7 +290,7 @@ class SweepMaps:
         pic = Picture(m, v, metric, png, lo, hi, f"{metric}|{v.key}")
         ref = self.reference(metric)
         if v.y is None and ref is not None:  # the theory's probability at the same points, as dots
-            pic.ref = np.asarray(open_map(self.path, ref, x=v.x, y=False, reduce="mean").values[0], float)
+            pic.ref = np.asarray(open_map(self.ds, ref, x=v.x, y=False, reduce="mean").values[0], float)
             pic.ref_metric = ref
         with self._lock:
             self._cache[key] = pic

@@ -148,3 +148,39 @@ def test_serve_refuses_what_is_not_a_sweep(tmp_path, what):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("theoria: error: ") and "--sweep" in lines[0], r.stderr
     assert "theoria sweep" in lines[0]
+
+
+def test_a_sweep_written_again_while_served_does_not_mix_into_the_map(tiny_sweep, tmp_path):
+    """The server shows the sweep as it was when it opened it. A researcher who writes another
+    sweep to the same folder meanwhile (`--force`: a new store renamed over the old) used to get
+    the old panel (metrics, axes) over the new store's numbers: a map of another size, and a click
+    that replayed a run the map did not show. Views not drawn before and the clicked run's values
+    still come from the store as it was opened."""
+    import shutil
+
+    from distributed import Client, LocalCluster
+
+    out = tmp_path / "served.zarr"
+    shutil.copytree(tiny_sweep, out)
+    maps = SweepMaps(out)
+    metric = maps.metrics[0]
+    views = [label for label, _ in maps.views(metric)]
+    first = maps.picture(metric, views[0])
+    before = first.map.values.copy()
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as lc, \
+            Client(lc) as c:
+        th.scenario("hyperion").sweep(grid={"eccentricity": (0.05, 0.15, 2), "probe_rate": [0.7, 1.2, 3.0]},
+                                      out=out, cluster=c, force=True, **FIXED)
+    assert sw.open_map(out, metric).values.shape == (2, 3)  # the folder now holds the other sweep
+    axes = {"eccentricity": [0.0, 0.1, 0.2], "probe_rate": GRID["probe_rate"]}  # the sweep as opened
+    for label in views:
+        pic = maps.picture(metric, label)
+        assert pic.map.x_values.tolist() == pytest.approx(axes[pic.map.x]), label
+        if pic.map.y:
+            assert pic.map.y_values.tolist() == pytest.approx(axes[pic.map.y]), label
+    maps._cache.clear()
+    again = maps.picture(metric, views[0])
+    assert np.array_equal(again.map.values, before, equal_nan=True)
+    row, col = 2, 3
+    assert again.map.run_values(row, col)["probe_rate"] == GRID["probe_rate"][col]
+    assert again.map.run_values(row, col)["eccentricity"] == pytest.approx(0.2)
