@@ -101,6 +101,12 @@ MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before
 # hundred browsers, p95: nice 5, slow ones at 15: 0.70 s; slow ones in SCHED_IDLE: 0.73, 0.88 s;
 # nice 10: 0.81 s; nice 15 and SCHED_IDLE: 0.74 s; nice 10 and SCHED_IDLE: 0.38-0.51 s (five soaks).
 CHILD_NICE = 10
+# The child kept for tiny runs (at most TINY_JOB_S of CPU each: a slider on the rigid-body scenes)
+# between the two: it is busy a few percent of the time, and a 10-ms run that waited for a core
+# behind the quick children made the flip's sliders the largest group over 200 ms. At nice 5
+# instead of 10: p95 0.325, 0.462 and 0.358 s (the last with tests running beside it) against
+# 0.375-0.510 s; the flip's sliders over 200 ms 31 and 62 of ~262 against 48-83.
+CHILD_NICE_TINY = 5
 # The children of slow runs and background work, far below the quick ones: at nice 12 two slow runs
 # still took a third of the CPU a quick child wanted (at 15, a tenth). Where Linux offers it they
 # run in SCHED_IDLE, which gives way at once to any other process: a quick run, the server.
@@ -575,7 +581,8 @@ class _Slot:
         slow = self.jit and not self.quick
         try:
             self.proc = subprocess.Popen([sys.executable, "-c", code, str(r1), str(w2),
-                                          str(CHILD_NICE if self.quick else CHILD_NICE_SLOW if self.jit
+                                          str(CHILD_NICE_TINY if self.tiny else CHILD_NICE if self.quick
+                                              else CHILD_NICE_SLOW if self.jit
                                               else max(0, CHILD_NICE - 3)),
                                           "idle" if slow and SLOW_CHILD_IDLE else "-"],
                                          pass_fds=(r1, w2), env=env, stdin=subprocess.DEVNULL,
