@@ -25,9 +25,9 @@ minimax kernels on [−π/4, π/4] after a Cody–Waite reduction by π/2, error
 result's scale), and θ is kept reduced modulo π (with the count of half turns beside it) so the
 phase keeps full precision over millions of turns. A body's arithmetic never depends on the
 other bodies of the batch: a batch of one and a batch of a thousand give bit-identical results
-(a batch is padded to whole blocks; a single body runs as a block of one, which takes 0.38 s of
-CPU where a padded block of sixteen took 0.67 s for tidal-capture's run, with the same bits:
-tests/test_spin_orbit_batch.py). The compiled loop
+(a batch is padded to whole blocks; a single body without the Lyapunov exponent runs as a block of
+one, which takes 0.38 s of CPU where a padded block of sixteen took 0.67 s for tidal-capture's run,
+with the same bits: tests/test_spin_orbit_batch.py, also with the kernel loaded from numba's cache). The compiled loop
 releases the GIL, so a Dask worker stays responsive (heartbeats) through a long chunk.
 """
 from __future__ import annotations
@@ -39,7 +39,10 @@ import numpy as np
 
 from .errors import ParameterError
 
-BLOCK = 16  # bodies per vector block (16: the compiler unrolls and vectorises the block loop; 8 stays scalar)
+# bodies per vector block of a batch (the block's length is an argument of the compiled loop; at 16
+# it is vectorised: a 160-body batch takes the same CPU as when the length was a constant, 0.137
+# against 0.140 s with tides)
+BLOCK = 16
 
 # fdlibm's __kernel_sin / __kernel_cos minimax coefficients on [−π/4, π/4] (Sun Microsystems,
 # freely redistributable): |error| < 2⁻⁵⁸ relative
@@ -308,7 +311,11 @@ def planar_batch(theta0, thetadot0, strength, orbit, h, n_steps, scheme="yoshida
         tab = OrbitTable(orbit, h, scheme, False, t0)
     ck, dk = SCHEMES[scheme]
     # pad to whole blocks (copies of the last body): every body runs the same vector code
-    block = BLOCK if N > 1 else 1  # one body: no fifteen copies of it to carry
+    # One body without the tangent map runs as a block of one (no fifteen copies of it to carry: the
+    # same bits, tidal-capture 0.67 -> 0.38 s). With it, a block of BLOCK: the kernel as numba loads
+    # it from its cache takes the logarithm in the vector loop with other bits than in the scalar
+    # one (the exponent differed in its last bits for 52 of 53 bodies; freshly compiled, for none).
+    block = BLOCK if N > 1 or lyapunov else 1
     Np = -(-N // block) * block if N else 0
     pad = lambda v: np.concatenate([v, np.repeat(v[-1:], Np - N)]) if N else v  # noqa: E731
     red = np.floor(th / np.pi + 0.5)

@@ -86,6 +86,50 @@ def test_a_body_gives_the_same_bits_alone_and_in_any_batch():
         assert one["lyapunov"][0] == big["lyapunov"][i]
 
 
+_SAME_BITS_SCRIPT = """
+import numpy as np
+from theoria.physics.orbits import KeplerOrbit
+from theoria.physics.spin_orbit_batch import BLOCK, planar_batch
+orb = KeplerOrbit(a=1.0, e=0.1, n=1.0)
+rng = np.random.default_rng(5)
+N = 3 * BLOCK + 5
+th0, w0, k, c = rng.uniform(-3, 3, N), rng.uniform(-1, 4, N), rng.uniform(0, 0.5, N), rng.uniform(0, 1e-3, N)
+bad = 0
+for lyap in (True, False):
+    kw = dict(scheme="blanes-moan4", stride=48, lyapunov=lyap, tide_rate=c)
+    big = planar_batch(th0, w0, k, orb, 2 * np.pi / 48, 48 * 30, **kw)
+    for i in range(N):
+        kw["tide_rate"] = c[i:i + 1]
+        one = planar_batch(th0[i:i + 1], w0[i:i + 1], k[i:i + 1], orb, 2 * np.pi / 48, 48 * 30, **kw)
+        kw["tide_rate"] = c
+        bad += sum(not np.array_equal(np.asarray(one[f])[0], np.asarray(big[f])[i])
+                   for f in ("theta", "thetadot", "theta_samples", "thetadot_samples", "lyapunov") if f in one)
+print("differing", bad)
+"""
+
+
+def test_a_body_gives_the_same_bits_alone_and_in_a_batch_with_the_kernel_from_numbas_cache(tmp_path):
+    """What a user's second run does: the kernel compiled by an earlier process and loaded from
+    numba's cache. Loaded so, its vector loop took the logarithm of the Lyapunov exponent with other
+    bits than its scalar loop (52 of 53 bodies differed alone and in a batch; compiled afresh in
+    the process, as in the test above, none did). Two processes share an empty cache folder: the
+    first compiles and writes it, the second loads it; each compares every body alone and in the
+    batch, with and without the exponent, with tides."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    outs = []
+    for _ in range(2):
+        r = subprocess.run([sys.executable, "-c", _SAME_BITS_SCRIPT], capture_output=True, text=True, env=env,
+                           timeout=600)
+        assert r.returncode == 0, r.stderr[-2000:]
+        outs.append(r.stdout.strip())
+        assert any(p.name.startswith("spin_orbit_batch._kernel") for p in tmp_path.rglob("*.nbi")), "nothing cached"
+    assert outs == ["differing 0", "differing 0"], outs
+
+
 def test_free_body_batch_is_the_single_integrator_bit_for_bit():
     rng = np.random.default_rng(2)
     I = np.array([2.0, 3.0, 4.0]) * (1 + 0.1 * rng.random((6, 3)))
