@@ -108,7 +108,7 @@ def _hyperion(values, progress=None):
     m["overlap_1_and_1.5"] = float((m["gp_half_width_1"] + m["gp_half_width_1.5"]) / 0.5)
     # the islands at these values: each resonance's periodic orbit followed from small ω₀
     islands = []
-    for p in RESONANCES[:4]:
+    for p in (RESONANCES[:4] if values["islands"] == "on" else ()):
         try:
             th_i, wd_i, tr = lib.continue_resonance(p, e, w0)
         except Exception:  # noqa: BLE001 — a lost branch is reported as NaN
@@ -142,11 +142,12 @@ def _hyperion(values, progress=None):
              for p in RESONANCES]
     comps.append(Comparison("Lyapunov exponent of the probe start", None, m["lyapunov_probe_per_orbit"], None,
                             "1/orbit", "nearby starts in the chaotic sea separate by a factor e every 1/λ orbits"))
-    notes = ["Periodic orbits followed from Goldreich & Peale's centres (small ω₀) to these values — " + "; ".join(islands),
-             "The surface of section is a point cloud, not a time series: extras['section'] holds "
-             "theta_mod_pi and theta_dot as (n_starts, n_orbits) arrays (one row per start, periapse "
-             "passages in order) and lyapunov_per_orbit (n_starts,); plot theta_dot against theta_mod_pi, "
-             "coloured by lyapunov_per_orbit. Draw the resonance zones θ̇/n = p ± gp_half_width_p."]
+    notes = (["Periodic orbits followed from Goldreich & Peale's centres (small ω₀) to these values — " + "; ".join(islands)]
+             if values["islands"] == "on" else [])
+    notes.append("The surface of section is a point cloud, not a time series: extras['section'] holds "
+                 "theta_mod_pi and theta_dot as (n_starts, n_orbits) arrays (one row per start, periapse "
+                 "passages in order) and lyapunov_per_orbit (n_starts,); plot theta_dot against theta_mod_pi, "
+                 "coloured by lyapunov_per_orbit. Draw the resonance zones θ̇/n = p ± gp_half_width_p.")
     if euler_applies:
         notes.append("Euler's linear forced libration (§833) is drawn as zeta_euler_rad: for Hyperion it fails "
                      "completely (ω₀ ≈ 1 is near his resonance A² = 2N, and ζ is not small).")
@@ -264,7 +265,8 @@ def _cost(values):
     S = ns * no
     probe = max(1, round(DRAWN_STEPS_PER_ORBIT * values["probe_orbits"]))
     lyap = max(no, 100) * spo
-    islands = len(RESONANCES[:4]) * (len(np.arange(0.05, values["omega0"], 0.05)) + 1) * ISLAND_STEPS_PER_W0_STEP
+    islands = len(RESONANCES[:4]) * (len(np.arange(0.05, values["omega0"], 0.05)) + 1) * ISLAND_STEPS_PER_W0_STEP \
+        if values["islands"] == "on" else 0
     samples = probe + 1
     euler_curve = 1 if abs(1 - values["omega0"] ** 2) > 1e-9 else 0
     return Cost(float(S * spo + probe + lyap + islands), samples,
@@ -297,9 +299,14 @@ register(Scenario(
         Param("probe_rate", 1.4, -1.0, 4.0, "n", "the drawn body: θ̇/n at periapse",
               label="Drawn body: spin θ̇/n at periapse"),
         Param("probe_orbits", 20.0, 1.0, 200.0, "", "orbits drawn", label="Orbits drawn"),
+        # the islands' periodic orbits, each followed from small ω₀ (two thirds of the quick
+        # preview's CPU when e or ω₀ is new): the preview leaves them out, and so can a sweep
+        Param("islands", "on", kind="choice", choices=("on", "off"),
+              help="the resonances' periodic orbits (island centres and their stability), followed from small ω₀",
+              label="Island centres (periodic orbits)", choice_labels=("on", "off"), advanced=True),
     ),
     camera=Camera((0.8, -2.0, 5.2), (0.0, 0.0, 0.0)),
-    preview={'n_starts': 12, 'n_orbits': 60},
+    preview={'n_starts': 12, 'n_orbits': 60, 'islands': 'off'},
     simulate_fn=_hyperion,
     draw=_draw,
     options={**ZETA_OPTION, **ORBIT_OPTION, "section": Option("surface of section + resonance zones")},

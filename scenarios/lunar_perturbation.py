@@ -16,6 +16,7 @@ from .base import Comparison, Run, Scenario, register
 from . import _validity
 from .budget import Cost, trajectory_bytes
 import functools
+from ..physics.kept import kept
 from ..physics.three_body import lunar_elements as le
 from .checks import register_check
 from ._three_body import GROUP, orbit_trajectory
@@ -26,13 +27,21 @@ CALIBRATION_STEPS = 3 * 14600
 DRAWN = 20000  # at most this many states drawn
 
 
-def _lunar(values, progress=None):
-    from ..physics.three_body import lunar_elements as le
-
-    el0, sun, mu, mus = le.initial_conditions(values["eccentricity"], values["inclination_deg"],
-                                              sun_eccentricity=values["sun_eccentricity"])
+@kept(16)  # moving the duration, the step, the sampling or the solar force reuses it
+def _calibrated(eccentricity, inclination_deg, sun_eccentricity):
+    """The initial osculating elements whose mean motion, eccentricity and inclination are the
+    Moon's (three element runs of two years: most of the quick preview's CPU), and the Sun's
+    elements and the masses; read-only, as it is shared."""
+    el0, sun, mu, mus = le.initial_conditions(eccentricity, inclination_deg, sun_eccentricity=sun_eccentricity)
     el0 = le.calibrate_mean_elements(el0, sun, mu, mus, le.MOON_J2000["sidereal_month_days"],
-                                     values["eccentricity"], math.radians(values["inclination_deg"]))
+                                     eccentricity, math.radians(inclination_deg))
+    el0.flags.writeable = False
+    return el0, sun, mu, mus
+
+
+def _lunar(values, progress=None):
+    el0, sun, mu, mus = _calibrated(float(values["eccentricity"]), float(values["inclination_deg"]),
+                                    float(values["sun_eccentricity"]))
     if progress:
         progress(0.1)
     days = values["duration_yr"] * JULIAN_YEAR_DAYS

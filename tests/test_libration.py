@@ -372,6 +372,27 @@ def test_islands_where_resonance_theory_puts_them(p):
     assert abs(np.trace(J)) < 2 and abs(np.linalg.det(J) - 1) < 1e-6  # area-preserving, elliptic
 
 
+def test_hyperions_quick_preview_leaves_out_the_island_centres_and_nothing_else():
+    """The islands' periodic orbits (four continuations from small ω₀) are metrics and a note of
+    the full run; the preview, and a run asked without them, skip them: the same section, body and
+    other metrics, and the islands' steps out of the run's cost."""
+    s = get("hyperion")
+    given = {"n_starts": 6, "n_orbits": 40, "probe_orbits": 2, "eccentricity": 0.13}
+    full = s.simulate(given)
+    lean = s.simulate({**given, "islands": "off"})
+    isl = {k for k in full.metrics if k.startswith("island_")}
+    assert len(isl) == 12 and not isl & set(lean.metrics)
+    assert lean.metrics == {k: v for k, v in full.metrics.items() if k not in isl}
+    assert any(n.startswith("Periodic orbits followed") for n in full.notes)
+    assert lean.notes == [n for n in full.notes if not n.startswith("Periodic orbits followed")]
+    assert np.array_equal(lean.trajectory.quat_wxyz, full.trajectory.quat_wxyz)
+    for k, v in full.extras["section"].items():
+        assert np.array_equal(lean.extras["section"][k], v), k
+    on, off = s.cost_of(s.resolve(given)).steps, s.cost_of(s.resolve({**given, "islands": "off"})).steps
+    assert on - off == 4 * (len(np.arange(0.05, 0.89, 0.05)) + 1) * 2900
+    assert s.preview["islands"] == "off"
+
+
 def test_hyperion_chaotic_sea_and_regular_island():
     """WPM 1984: e = 0.1, ω₀ = 0.89 — the 1:1 and 3:2 zones overlap (Chirikov), a start between
     them is chaotic (Lyapunov time of a few orbits), the synchronous fixed point is not."""

@@ -62,7 +62,8 @@ def test_metrics_change_with_the_time_scale_as_their_units_say(name):
 @pytest.mark.parametrize("name", th.scenarios())
 def test_every_metric_has_a_unit_and_every_declared_unit_a_metric(name):
     sc = th.scenario(name)
-    run = sc.simulate(**sc.preview)
+    # the preview's sizes, not its switches: a preview leaves out whole parts (Hyperion's islands)
+    run = sc.simulate(**{k: v for k, v in sc.preview.items() if not isinstance(v, str)})
     unknown = [k for k, u in run.metric_units.items() if u is None]
     assert not unknown, f"{name}: no unit in the name or in metric_units for {unknown}"
     stale = [p for p in sc.metric_units if not any(k == p or re.fullmatch(p, k) for k in run.metrics)]

@@ -1,7 +1,8 @@
 """A slider moved in class usually changes one number. Pieces of a run that depend on other numbers
 only (Hyperion's section and resonance branches, the Sun's and Moon's orbits of the Earth's
 precession, the forced libration on an eccentric orbit and its stability,
-the precession's resonance table, the ellipsoid's quadrature rule, the syzygy's measured swing)
+the precession's resonance table, the ellipsoid's quadrature rule, the syzygy's measured swing,
+the Moon's calibrated elements)
 are kept and reused by the next run that shares those numbers. Reused or made afresh, a run's numbers must be the same, bit for
 bit, and a changed number must not reuse a piece made for another."""
 from __future__ import annotations
@@ -21,6 +22,8 @@ CASES = [
     ("precession-circular", {"orbits": 3.0}, ("h", 0.01), ("flattening", 0.12)),
     ("gravity-gradient-accuracy", {"n_points": 4}, ("max_ratio", 0.4), ("semi_axes", (1.0, 0.7, 0.5))),
     ("syzygy", {}, ("duration_yr", 2.5), ("mass_ratio", 1e-4)),
+    # the Moon's calibrated initial elements (three two-year element runs)
+    ("lunar-perturbation", {"duration_yr": 1.0, "step_days": 0.1}, ("duration_yr", 1.5), ("inclination_deg", 5.5)),
     # the Sun's and Moon's orbits: a longer span goes on from the kept run, a shorter one is its start
     ("earth", {"years": 2.0, "step_days": 2.0}, ("H", 0.0033), ("years", 3.0)),
     ("earth", {"years": 3.0, "step_days": 2.0}, ("obliquity_deg", 23.0), ("years", 2.0)),
