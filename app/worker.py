@@ -1392,6 +1392,7 @@ class SimulationWorker:
             if not self.current(req):
                 return req
             expected = self.pool.expected_seconds(spec, req.values)
+            req.stamps["expected"] = -1.0 if expected is None else expected
             if spec.preview and (expected is None or expected > PREVIEW_AFTER_S):
                 self._preview(spec, req)
             job = self.pool.job_for(spec, req.values, self)
@@ -1563,6 +1564,7 @@ def timing_log(name: str, req: Request, pool: "SimPool | None" = None) -> None:
                        "queued_s": st.get("start", r) - r, "run_s": st.get("simulated", r) - st.get("start", r),
                        "show_s": st.get("shown", r) - st.get("simulated", r), "total_s": st.get("shown", r) - r,
                        "draw_s": st.get("shown", r) - st.get("drawing", r), "cpu_s": st.get("cpu"),
+                       "expected_s": st.get("expected"),
                        **({"pool": {**pool.stats, "kills": sum(s.kills for s in pool.slots),
                                     "queued": len(pool._queue), "busy": sum(s.job is not None for s in pool.slots)}}
                           if pool is not None else {})})
