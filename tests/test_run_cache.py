@@ -52,3 +52,37 @@ def test_a_stored_run_carries_neither_its_drawings_nor_the_cache(tmp_path):
     assert seconds == 0.1 and not [k for k in vars(back) if k.startswith("_theoria_")]
     assert (back.trajectory.t == run.trajectory.t).all()
     assert "_theoria_drawings" in vars(run)  # the server's own copy keeps its drawings
+
+
+def _arrays_reached(obj, depth=0) -> int:
+    """Every numpy array reached from `obj` through dicts, lists and tuples (their first 10,000
+    items) and dataclass fields (not `spec`), at most six levels down: what the run cache counts."""
+    import dataclasses
+
+    import numpy as np
+
+    if depth > 6:
+        return 0
+    if isinstance(obj, np.ndarray):
+        return obj.nbytes
+    if isinstance(obj, dict):
+        return sum(_arrays_reached(v, depth + 1) for v in obj.values())
+    if isinstance(obj, (list, tuple)):
+        return sum(_arrays_reached(v, depth + 1) for v in obj[:10000])
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return sum(_arrays_reached(getattr(obj, f.name), depth + 1) for f in dataclasses.fields(obj) if f.name != "spec")
+    return 0
+
+
+def test_the_cache_counts_every_array_of_runs_and_drawings():
+    """The cache's size of a run and of its drawing (walked quickly: leaves without a call) is the
+    bytes of every array reached from it, for scenes whose drawings hold per-frame text, paths,
+    meshes and sections."""
+    for name, given in [("hyperion", {"n_starts": 6, "n_orbits": 20, "probe_orbits": 2}),
+                        ("libration-eccentric", {"orbits": 3}), ("middle-axis-flip", {}), ("moon", {"years": 1})]:
+        spec = get(name)
+        run = spec.simulate(given)
+        drawing = drawing_of(spec, run)
+        for obj in (run.trajectory, run.extras, run.plot_series, drawing):
+            assert nbytes(obj) == _arrays_reached(obj), (name, type(obj).__name__)
+        assert nbytes(drawing) > 0 and nbytes(run.trajectory) > 0, name
