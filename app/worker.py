@@ -102,9 +102,9 @@ MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before
 # nice 10: 0.81 s; nice 15 and SCHED_IDLE: 0.74 s; nice 10 and SCHED_IDLE: 0.38-0.51 s (five soaks).
 CHILD_NICE = 10
 # The child kept for tiny runs (at most TINY_JOB_S of CPU each: a slider on the rigid-body scenes)
-# between the two: it is busy a few percent of the time, and a 10-ms run that waited for a core
-# behind the quick children made the flip's sliders the largest group over 200 ms. At nice 5
-# instead of 10: p95 0.325, 0.462 and 0.358 s (the last with tests running beside it) against
+# runs between the server and the quick children: it is busy a few percent of the time, and a
+# 10-ms run that waited for a core behind the quick children made the flip's sliders the largest
+# group over 200 ms. At nice 5 instead of 10: p95 0.325, 0.462 and 0.358 s (the last with tests running beside it) against
 # 0.375-0.510 s; the flip's sliders over 200 ms 31 and 62 of ~262 against 48-83.
 CHILD_NICE_TINY = 5
 # The children of slow runs and background work, far below the quick ones: at nice 12 two slow runs

@@ -27,8 +27,9 @@ phase keeps full precision over millions of turns. A body's arithmetic never dep
 other bodies of the batch: a batch of one and a batch of a thousand give bit-identical results
 (a batch is padded to whole blocks; a single body without the Lyapunov exponent runs as a block of
 one, which takes 0.38 s of CPU where a padded block of sixteen took 0.67 s for tidal-capture's run,
-with the same bits: tests/test_spin_orbit_batch.py, also with the kernel loaded from numba's cache). The compiled loop
-releases the GIL, so a Dask worker stays responsive (heartbeats) through a long chunk.
+with the same bits: tests/test_spin_orbit_batch.py, also with the kernel loaded from numba's
+cache). The compiled loop releases the GIL, so a Dask worker stays responsive (heartbeats)
+through a long chunk.
 """
 from __future__ import annotations
 
