@@ -709,7 +709,7 @@ def test_a_tiny_run_does_not_wait_for_busy_children():
         assert submit("warm-flip", flip, {}).wait(300)
         assert submit("warm-ecc", ecc, {"orbits": 5.0}).wait(300)
         flip_job = worker_mod.Job("k", flip, flip.resolve({"spin": 5.2}))
-        for k in range(6):  # a child's first run of a scenario also loads its compiled code
+        for k in range(10):  # a child's first run of a scenario also loads (or, after an edit, compiles) its code
             if pool._tiny(flip_job):
                 break
             assert submit(f"warm-flip-{k}", flip, {"spin": 5.0 + 0.01 * k}).wait(300)
