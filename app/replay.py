@@ -48,8 +48,8 @@ HTML_DIGEST_BLANK = "0" * 64
 HTML_MARKER_RE = re.compile(r'<meta name="generator" content="theoria export_html" data-theoria-scenario="([^"]*)"')
 
 
-# `--check` of a recording or an export that carries no digest (written before theoria wrote one): it reads
-# whole, but a changed byte inside a chunk could not be seen; neither ok (0) nor refused (2)
+# `--check` of a recording or an export that carries no digest (written before theoria wrote one):
+# it reads whole, but a changed byte inside it could not be seen; neither ok (0) nor refused (2)
 EXIT_NO_DIGEST = 3
 
 

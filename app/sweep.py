@@ -1167,10 +1167,10 @@ class MapData:
 
 
 def open_map(path, metric: str, x: str | None = None, y: str | bool | None = None, reduce: str = "mean") -> MapData:
-    """Open a sweep result (Zarr, or an xarray Dataset already opened) and return one metric as a 2-D array over two swept parameters
-    (x: columns, y: rows; by default the last two swept parameters), with axis names, units and
-    values, and `run_values(i, j)` for the full parameters of any pixel. `y=False` gives a profile
-    along x (one row). Any other dimension (e.g. the random `sample`, or the starting angle of a
+    """Open a sweep result (Zarr, or an xarray Dataset already opened) and return one metric as a
+    2-D array over two swept parameters (x: columns, y: rows; by default the last two swept
+    parameters), with axis names, units and values, and `run_values(i, j)` for the full parameters
+    of any pixel. `y=False` gives a profile along x (one row). Any other dimension (e.g. the random `sample`, or the starting angle of a
     capture sweep) is reduced with `reduce` ("mean", "median", "max", "min", or "fraction" of runs
     where the metric is nonzero — a capture probability)."""
     import xarray as xr

@@ -99,7 +99,7 @@ MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before
 # what every browser waits for. With a hundred browsers the server's threads spent nearly as long
 # waiting for a core as running (0.4-0.5 against 0.5 of a core, /proc schedstat). 150-s soaks of a
 # hundred browsers, p95: nice 5, slow ones at 15: 0.70 s; slow ones in SCHED_IDLE: 0.73, 0.88 s;
-# nice 10: 0.81 s; nice 15 and SCHED_IDLE: 0.74 s; nice 10 and SCHED_IDLE: 0.38-0.51 s (five soaks).
+# nice 10: 0.81 s; nice 15 and SCHED_IDLE: 0.74 s; nice 10 and SCHED_IDLE: 0.38-0.51 s (four soaks).
 CHILD_NICE = 10
 # The child kept for tiny runs (at most TINY_JOB_S of CPU each: a slider on the rigid-body scenes)
 # runs between the server and the quick children: it is busy a few percent of the time, and a

@@ -315,9 +315,8 @@ register(Scenario(
 
 @functools.lru_cache(maxsize=1)
 def _lunar_run():
-    el, sun, mu, mus = le.initial_conditions()
-    el = le.calibrate_mean_elements(el, sun, mu, mus, le.MOON_J2000["sidereal_month_days"],
-                                    le.MOON_J2000["eccentricity"], math.radians(le.MOON_J2000["inclination_deg"]))
+    el, sun, mu, mus = _calibrated(le.MOON_J2000["eccentricity"], le.MOON_J2000["inclination_deg"],
+                                   le.SUN_J2000["eccentricity"])
     t, E = le.integrate_rk4("elements", el, 40 * JULIAN_YEAR_DAYS, 0.025, 0.5, mu, mus, sun)
     return le.node_and_apse(t, E)
 
