@@ -793,6 +793,19 @@ class ClientSession:
         except Exception:
             pass
 
+    def _restore_view(self, restore, drawing) -> None:
+        """A link's playing, time, speed and camera on the run just drawn."""
+        # playing first: pausing brings a playing clock up to now, which moved a restored time on
+        # by the time since the last tick (one frame, now and then)
+        self._set_playing(restore.playing)
+        if restore.time is not None and drawing.n_frames > 1:
+            t = drawing.times
+            self.clock = float(np.clip((restore.time - t[0]) / ((t[-1] - t[0]) or 1.0), 0.0, 1.0))
+        if restore.speed is not None:
+            self.speed.value = float(np.clip(restore.speed, 0.1, 10.0))
+        if restore.camera is not None:
+            self._set_camera_from_link(restore.camera)
+
     def _apply(self, req, result, t_sim: float) -> None:
         """Show a finished run (the worker's thread): its drawing, table, plot and status."""
         spec, values = req.spec, req.values
@@ -827,14 +840,7 @@ class ClientSession:
             self._update_plot(result)
             if restore is not None:
                 self._restore = None
-                if restore.time is not None and drawing.n_frames > 1:
-                    t = drawing.times
-                    self.clock = float(np.clip((restore.time - t[0]) / ((t[-1] - t[0]) or 1.0), 0.0, 1.0))
-                self._set_playing(restore.playing)
-                if restore.speed is not None:
-                    self.speed.value = float(np.clip(restore.speed, 0.1, 10.0))
-                if restore.camera is not None:
-                    self._set_camera_from_link(restore.camera)
+                self._restore_view(restore, drawing)
             self.view.set_frame(self._frame_index())
             self._follow_camera()
             self._time_gui()

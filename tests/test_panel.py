@@ -4,6 +4,7 @@ without a browser."""
 from __future__ import annotations
 
 import math
+import time
 from html.parser import HTMLParser
 
 import numpy as np
@@ -161,6 +162,24 @@ def test_session_restores_a_link(monkeypatch):
         assert s.toggles["axes"].value is False
         st = s.link_state()
         assert st.params["spin"] == "4.5" and st.camera[:3] == (4.0, 1.0, 2.0) and st.overlays == {"axes": False}
+
+
+def test_a_linked_time_is_the_frame_shown_even_when_the_page_was_playing():
+    """A link opened while the first run plays: pausing brought the clock up to now *after* the
+    link's time was set, and a copied link came back one frame later (3.93 for 3.92), now and then
+    in a browser; here the last tick is put a second back so that it always would."""
+    from theoria.app.link import LinkState
+    from test_gallery import _session, _wait
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        times = s.drawing.times
+        for want in (times[392], times[1], times[len(times) // 2]):
+            s._set_playing(True)
+            s._last_tick = time.perf_counter() - 1.0
+            s._restore_view(LinkState(time=float(want), playing=False), s.drawing)
+            assert not s.playing
+            assert times[s._frame_index()] == want
 
 
 def test_export_says_where_the_file_went_and_its_size(tmp_path, capsys):
