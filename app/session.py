@@ -107,15 +107,35 @@ def series_label(key: str) -> str:
     return f"{m.group(1)}{tail}{m.group(2) or ''}"
 
 
+class _PerThread:
+    """A flag each thread sees its own of. The code that sets a control itself raises it, and the
+    control's callback (which viser runs at once, on the same thread) then knows not to act; a
+    browser's event handled meanwhile on another thread is not mistaken for it (the playback
+    thread moving the scrubber twice a second made a click or a scrub land in that window, and
+    be ignored)."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        return self if obj is None else getattr(obj._flags, self.name, False)
+
+    def __set__(self, obj, value) -> None:
+        setattr(obj._flags, self.name, bool(value))
+
+
 class ClientSession:
     """GUI, scene, worker and playback of one browser."""
 
     active = 0  # sessions open on this process (sets the playback rate)
+    _guard = _PerThread()  # set while the code itself moves the scrubber or the checkboxes
+    _pguard = _PerThread()  # set while the code itself sets the preset or the parameter controls
 
     def __init__(self, server: viser.ViserServer, client: viser.ClientHandle, scenario: str | None,
                  run=None, sweep=None):
         """`run`: a finished Run to show first (`Run.show()`), with its scenario and parameters.
         `sweep`: a sweep result (app/sweep_map.SweepMaps) shown as a map in a Sweep tab."""
+        self._flags = threading.local()  # _guard and _pguard, one for each thread
         self.server, self.client = server, client
         self.sweep = sweep
         ClientSession.active += 1
@@ -142,8 +162,11 @@ class ClientSession:
         self.good_values: dict[str, Any] | None = None
         self.playing = True
         self.clock = 0.0  # playback time as a fraction of the run, 0..1
-        self._guard = False  # set while the code itself moves the scrubber or the checkboxes
-        self._pguard = False  # set while the code itself sets the preset or the parameter controls
+        # the playback thread advances the clock while a browser's callback or a drawing thread
+        # sets it: one lock, so that a scrub, a step or a link's time is never overwritten by an
+        # advance that had read the clock before it
+        self._clock_lock = threading.Lock()
+        self._scrub_taken = 0.0  # the scrubber's update time when it last followed or set the clock
         self._view_lock = threading.RLock()  # the worker rebuilds while the player animates
         # a browser's own events, one at a time: viser runs each callback on its thread pool as it
         # comes, and twenty scene switches sent at once raced each other's panels (controls left
@@ -218,6 +241,7 @@ class ClientSession:
                                                  hint="keys: space play/pause, ← → step")
             self.playback.on_click(self._on(lambda: self._on_playback(self.playback.value)))
             self.scrub = gui.add_slider("Time (% of the run)", min=0.0, max=100.0, step=0.1, initial_value=0.0)
+            self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)  # made, not moved by a browser
             self.scrub.on_update(self._on(self._on_scrub))
             self.time_md = gui.add_markdown("t = 0")
             self.speed = gui.add_slider("Playback speed", min=0.1, max=10.0, step=0.1, initial_value=1.0,
@@ -666,8 +690,7 @@ class ClientSession:
 
     def _reset(self) -> None:
         """The clock back to the start of the run, playing or paused."""
-        self.clock = 0.0
-        self._last_tick = None
+        self._set_clock(0.0)
         self._show_clock(force=True)
         self._time_gui()
         self._send_clock()
@@ -677,7 +700,7 @@ class ClientSession:
         self._set_playing(False)
         n = self.drawing.n_frames if self.drawing is not None else 100
         step = max(STEP_FRACTION, 1.0 / max(n - 1, 1))
-        self.clock = float(np.clip(self.clock + sign * step, 0.0, 1.0))
+        self._set_clock(self.clock + sign * step)
         self._show_clock(force=True)
         self._time_gui()
         self._send_clock()
@@ -685,8 +708,8 @@ class ClientSession:
     def _on_scrub(self) -> None:
         if self._guard:
             return
-        self.clock = float(self.scrub.value) / 100.0
-        self._last_tick = None
+        self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)
+        self._set_clock(float(self.scrub.value) / 100.0)
         self._show_clock()
         self._time_gui(scrub=False)
         self._send_clock()
@@ -800,7 +823,7 @@ class ClientSession:
         self._set_playing(restore.playing)
         if restore.time is not None and drawing.n_frames > 1:
             t = drawing.times
-            self.clock = float(np.clip((restore.time - t[0]) / ((t[-1] - t[0]) or 1.0), 0.0, 1.0))
+            self._set_clock((restore.time - t[0]) / ((t[-1] - t[0]) or 1.0))
         if restore.speed is not None:
             self.speed.value = float(np.clip(restore.speed, 0.1, 10.0))
         if restore.camera is not None:
@@ -987,14 +1010,21 @@ class ClientSession:
         """Bring the clock to `now`: while playing it runs at real time × speed. False when the
         clock only starts now."""
         now = time.perf_counter() if now is None else now
-        if not (self.playing and self.result is not None):
-            self._last_tick = None
-            return False
-        last, self._last_tick = self._last_tick, now
-        if last is None:
-            return False
-        self.clock = (self.clock + (now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
+        with self._clock_lock:
+            if not (self.playing and self.result is not None):
+                self._last_tick = None
+                return False
+            last, self._last_tick = self._last_tick, now
+            if last is None:
+                return False
+            self.clock = (self.clock + (now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
         return True
+
+    def _set_clock(self, fraction: float) -> None:
+        """Put the clock at `fraction` of the run; a playing clock runs on from there."""
+        with self._clock_lock:
+            self.clock = float(np.clip(fraction, 0.0, 1.0))
+            self._last_tick = None
 
     def tick_hz(self) -> float:
         """At most this many playback ticks a second: a page that plays by itself needs the server
@@ -1024,12 +1054,15 @@ class ClientSession:
         d = self.drawing
         if d is None:
             return
-        if scrub:
+        # not over a browser's scrub whose callback has yet to run (viser sets the value as the
+        # message arrives, and runs the callback later on a thread of its pool)
+        if scrub and getattr(self.scrub, "update_timestamp", 0.0) <= self._scrub_taken:
             self._guard = True
             try:
                 self.scrub.value = round(100 * self.clock, 1)
             finally:
                 self._guard = False
+            self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)
         t = d.times
         now = t[min(self.view.frame, len(t) - 1)]
         self.time_md.content = f"t = {human_number(now)} of {human_number(t[-1])} {_unit_words(d.time_unit)}"

@@ -182,6 +182,83 @@ def test_a_linked_time_is_the_frame_shown_even_when_the_page_was_playing():
             assert times[s._frame_index()] == want
 
 
+def test_the_clock_set_while_playing_is_never_overwritten_by_the_playback_thread():
+    """The playback thread reads the clock, adds the time since its last tick and writes it back;
+    a scrub, a step or a link's time set in between was lost (with the scrubber's callback in place
+    of `_set_clock`, 8 to 22 of 10,000 before the clock had its lock). Here the thread ticks without
+    pause and the interpreter switches threads every microsecond, so that the two meet often."""
+    import sys
+    import threading
+    from test_gallery import _session, _wait
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        s._set_playing(True)
+        stop = threading.Event()
+
+        def play():
+            while not stop.is_set():
+                s._advance()
+
+        lost, switch = [], sys.getswitchinterval()
+        player = threading.Thread(target=play, daemon=True)
+        sys.setswitchinterval(1e-6)
+        player.start()
+        try:
+            for i in range(10000):
+                want = 0.2 if i % 2 else 0.7
+                s._set_clock(want)
+                if abs(s.clock - want) > 0.05:  # a playing clock moves on, by far less than that
+                    lost.append((want, s.clock))
+        finally:
+            stop.set()
+            player.join()
+            sys.setswitchinterval(switch)
+        assert not lost, f"{len(lost)} of 10000 settings of the clock lost, e.g. {lost[:3]}"
+
+
+def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile():
+    """viser sets a browser's value as its message arrives and runs the callback later, on a
+    thread of its pool. Playback moving the scrubber to its own time in between (twice a second)
+    replaced the student's value before the callback read it; and while the playback thread held
+    the flag that marks the code's own changes, a browser's event on another thread was ignored."""
+    import threading
+    from test_gallery import _session, _wait
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        s._set_playing(True)
+        s._set_clock(0.7)
+        object.__setattr__(s.scrub, "value", 20.0)  # the browser's value, as viser sets it
+        object.__setattr__(s.scrub, "update_timestamp", time.time() + 1.0)
+        s._time_gui()  # playback's read-out comes first ...
+        s._browser_event(s._on_scrub)  # ... then the callback
+        assert s.clock == pytest.approx(0.2, abs=0.01) and s.scrub.value == 20.0
+        s._time_gui()  # taken: the scrubber follows the clock again
+        assert s.scrub.value == round(100 * s.clock, 1)
+
+        # the flag raised by another thread (playback, moving the scrubber) meanwhile
+        raised, done = threading.Event(), threading.Event()
+
+        def playback_sets_the_scrubber():
+            s._guard = True
+            raised.set()
+            done.wait(10)
+            s._guard = False
+
+        other = threading.Thread(target=playback_sets_the_scrubber)
+        other.start()
+        try:
+            raised.wait(10)
+            object.__setattr__(s.scrub, "value", 50.0)
+            object.__setattr__(s.scrub, "update_timestamp", time.time() + 2.0)
+            s._browser_event(s._on_scrub)
+            assert s.clock == pytest.approx(0.5, abs=0.01)
+        finally:
+            done.set()
+            other.join()
+
+
 def test_export_says_where_the_file_went_and_its_size(tmp_path, capsys):
     from theoria.app.cli import main
 

@@ -341,6 +341,7 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
         _page_plays(page)
         seen = page.evaluate(POSES_JS, 2)
         assert seen["poses"] >= 4, seen  # the body turns
+        assert _wait_for(lambda: s.scrub.value > 0)  # ... and the time scrubber follows it
         page.get_by_role("button", name="Pause").click()
         assert _wait_for(lambda: not s.playing)
         time.sleep(0.8)
@@ -353,6 +354,7 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
         time.sleep(0.8)
         assert page.evaluate("() => window.theoria.P.frame") == s.view.frame
         assert _same_rotation(page.evaluate(BODY_Q_JS), s.view._h["/world/body"].wxyz)
+        assert s.scrub.value == round(100 * s.clock, 1)
     finally:
         ctx.close()
 
