@@ -18,6 +18,7 @@ ephemeris) go into a folder kept folded ("More settings").
 from __future__ import annotations
 
 import math
+import threading
 from typing import Any, Callable
 
 from theoria.physics.errors import ParameterError
@@ -85,6 +86,24 @@ def format_value(p: Param, v: Any) -> str:
     return exact(v)
 
 
+class PerThread:
+    """A flag each thread sees its own of (kept in the owner's `_flags`, a threading.local). The
+    code that sets a control itself raises it, and the control's callback (which viser runs at
+    once, on the same thread) then knows not to act; a browser's event handled meanwhile on
+    another thread is not mistaken for it (a failed run putting a control back on a drawing
+    thread, or playback moving the scrubber twice a second, made a browser's change that landed
+    in that window be ignored)."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        return self if obj is None else getattr(obj._flags, self.name, False)
+
+    def __set__(self, obj, value) -> None:
+        setattr(obj._flags, self.name, bool(value))
+
+
 class ParamControls:
     """The controls of one scenario. `values()` gives the values last taken (parsed and in range
     for text fields; what the sliders and dropdowns show otherwise).
@@ -92,10 +111,13 @@ class ParamControls:
     `on_change(name, debounce)`: a value was taken (debounce True for a slider being dragged).
     `on_error(ParameterError)`: a typed value was refused (the field shows the last good value)."""
 
+    _guard = PerThread()  # set while the code itself shows values (their callbacks do nothing)
+
     def __init__(self, gui, spec, values: dict[str, Any] | None = None,
                  on_change: Callable[[str, bool], None] | None = None,
                  on_error: Callable[[ParameterError], None] | None = None, advanced=None,
                  order: float | None = None, wrap: Callable | None = None):
+        self._flags = threading.local()  # _guard, one for each thread
         self.spec = spec
         # wrap(fn) → a viser callback calling fn() (the session's: one browser event at a time)
         self._wrap = wrap or (lambda fn: (lambda event: fn()))
@@ -106,7 +128,6 @@ class ParamControls:
         self.forms: dict[str, Any] = {}
         self.kinds: dict[str, str] = {}  # name → "slider" | "text" | "choice"
         self._containers: list = []  # what remove() takes away
-        self._guard = False
         self._order = order  # place in the panel (viser's `order`): between two elements made earlier
         self._k = 0
         vals = spec.resolve(None) if values is None else dict(values)

@@ -40,7 +40,7 @@ from theoria.scenarios.drawing import OVERLAYS, View, palette
 
 from . import browser, gallery, page, playback
 from . import link as linkmod
-from .controls import ParamControls
+from .controls import ParamControls, PerThread
 from .export_html import configure_scene
 from .format import human_number
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
@@ -107,29 +107,12 @@ def series_label(key: str) -> str:
     return f"{m.group(1)}{tail}{m.group(2) or ''}"
 
 
-class _PerThread:
-    """A flag each thread sees its own of. The code that sets a control itself raises it, and the
-    control's callback (which viser runs at once, on the same thread) then knows not to act; a
-    browser's event handled meanwhile on another thread is not mistaken for it (the playback
-    thread moving the scrubber twice a second made a click or a scrub land in that window, and
-    be ignored)."""
-
-    def __set_name__(self, owner, name: str) -> None:
-        self.name = name
-
-    def __get__(self, obj, owner=None):
-        return self if obj is None else getattr(obj._flags, self.name, False)
-
-    def __set__(self, obj, value) -> None:
-        setattr(obj._flags, self.name, bool(value))
-
-
 class ClientSession:
     """GUI, scene, worker and playback of one browser."""
 
     active = 0  # sessions open on this process (sets the playback rate)
-    _guard = _PerThread()  # set while the code itself moves the scrubber or the checkboxes
-    _pguard = _PerThread()  # set while the code itself sets the preset or the parameter controls
+    _guard = PerThread()  # set while the code itself moves the scrubber or the checkboxes
+    _pguard = PerThread()  # set while the code itself sets the preset or the parameter controls
 
     def __init__(self, server: viser.ViserServer, client: viser.ClientHandle, scenario: str | None,
                  run=None, sweep=None):

@@ -259,6 +259,35 @@ def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile(
             other.join()
 
 
+def test_a_browsers_change_is_taken_while_another_thread_puts_a_control_back():
+    """A refused run puts its control back from a drawing thread (`set_values`, with the flag that
+    makes the controls' own callbacks do nothing); a slider a student moved meanwhile, handled on
+    another thread, was ignored while that flag was up."""
+    import threading
+    from theoria.app.controls import ParamControls
+    from test_gallery import FakeGui
+
+    changes = []
+    ctl = ParamControls(FakeGui(), get("middle-axis-flip"), on_change=lambda name, debounce: changes.append(name))
+    raised, done = threading.Event(), threading.Event()
+
+    def put_back():
+        ctl._guard = True
+        raised.set()
+        done.wait(10)
+        ctl._guard = False
+
+    other = threading.Thread(target=put_back)
+    other.start()
+    try:
+        raised.wait(10)
+        ctl.handles["spin"].value = 4.0  # the browser's change; its callback runs on this thread
+        assert ctl.values()["spin"] == 4.0 and changes == ["spin"]
+    finally:
+        done.set()
+        other.join()
+
+
 def test_export_says_where_the_file_went_and_its_size(tmp_path, capsys):
     from theoria.app.cli import main
 
