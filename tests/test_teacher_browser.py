@@ -355,6 +355,19 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
         assert page.evaluate("() => window.theoria.P.frame") == s.view.frame
         assert _same_rotation(page.evaluate(BODY_Q_JS), s.view._h["/world/body"].wxyz)
         assert s.scrub.value == round(100 * s.clock, 1)
+        # playing again, a time typed into the scrubber's field is where the run plays on from
+        page.get_by_role("button", name="Play").click()
+        assert _wait_for(lambda: s.playing)
+        track = page.evaluate_handle("""(label) => {
+          const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
+          let p = l;  // the scrubber's track (a click there sends one value; its number field is
+          for (let k = 0; k < 8 && p; k++) { p = p.parentElement;  // rewritten twice a second)
+            const t = p && p.querySelector('.mantine-Slider-track'); if (t) return t; }
+          return null; }""", "Time (% of the run)").as_element()
+        assert s.clock < 0.6 and s.speed.value == 1  # played on from here, 0.9 is 6 s away
+        box = track.bounding_box()
+        page.mouse.click(box["x"] + 0.9 * box["width"], box["y"] + box["height"] / 2)
+        assert _wait_for(lambda: 0.85 <= s.clock < 0.95, limit=3.0), s.clock
     finally:
         ctx.close()
 
