@@ -52,6 +52,9 @@ from .worker import SimulationWorker, drawing_of, limits_text, timing_log
 # browsers each plays back at a lower rate and slider changes stay quick.
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
 CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubber while playing
+# s the scrubber is left to the browser after it moved it: its number field sends each keystroke,
+# and the scrubber following playback rewrote the field under a teacher typing "90" (lost)
+SCRUB_HOLD_S = 3.0
 # a page that plays by itself needs the server's ticks only for the time read-out
 PAGE_TICK_HZ = 1.0 / CLOCK_TEXT_EVERY
 SLIDER_DEBOUNCE_S = 0.15  # slider moves closer than this are a drag: only its last value is simulated
@@ -150,6 +153,7 @@ class ClientSession:
         # advance that had read the clock before it
         self._clock_lock = threading.Lock()
         self._scrub_taken = 0.0  # the scrubber's update time when it last followed or set the clock
+        self._scrub_moved = -1e9  # when a browser last moved the scrubber (perf_counter)
         self._view_lock = threading.RLock()  # the worker rebuilds while the player animates
         # a browser's own events, one at a time: viser runs each callback on its thread pool as it
         # comes, and twenty scene switches sent at once raced each other's panels (controls left
@@ -692,6 +696,7 @@ class ClientSession:
         if self._guard:
             return
         self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)
+        self._scrub_moved = time.perf_counter()
         self._set_clock(float(self.scrub.value) / 100.0)
         self._show_clock()
         self._time_gui(scrub=False)
@@ -979,12 +984,13 @@ class ClientSession:
                     self._show_clock()
                 if now - self._last_gui > CLOCK_TEXT_EVERY:
                     self._last_gui = now
+                    follow = now - self._scrub_moved > SCRUB_HOLD_S  # no hand on the scrubber
                     if alone:  # the read-out at the page's frame, one batch (one wake-up of the sender)
                         self.view.frame = self._frame_index()
                         with self._view_lock, self.client.atomic():
-                            self._time_gui()
+                            self._time_gui(scrub=follow)
                     else:
-                        self._time_gui()
+                        self._time_gui(scrub=follow)
         if now - self._link_time > (1.0 if self.playing else LINK_EVERY_S):
             self._link_time = now
             self._sync_link()

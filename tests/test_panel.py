@@ -223,6 +223,7 @@ def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile(
     replaced the student's value before the callback read it; and while the playback thread held
     the flag that marks the code's own changes, a browser's event on another thread was ignored."""
     import threading
+    from theoria.app import session as session_mod
     from test_gallery import _session, _wait
 
     with _session("middle-axis-flip") as (s, client):
@@ -234,8 +235,19 @@ def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile(
         s._time_gui()  # playback's read-out comes first ...
         s._browser_event(s._on_scrub)  # ... then the callback
         assert s.clock == pytest.approx(0.2, abs=0.01) and s.scrub.value == 20.0
-        s._time_gui()  # taken: the scrubber follows the clock again
-        assert s.scrub.value == round(100 * s.clock, 1)
+        # playing on, the scrubber is left to the hand that moved it for a while (its number field
+        # sends each keystroke: rewritten, "90" typed became "9" and then the playing time) ...
+        def tick():
+            t = time.perf_counter()
+            s._tick(t)
+            s._last_gui = -1e9
+            s._tick(t + 0.2)
+
+        tick()
+        assert s.scrub.value == 20.0 and s.clock > 0.2
+        s._scrub_moved -= session_mod.SCRUB_HOLD_S  # ... then follows the clock again
+        tick()
+        assert s.scrub.value == round(100 * s.clock, 1) and s.scrub.value > 20.0
 
         # the flag raised by another thread (playback, moving the scrubber) meanwhile
         raised, done = threading.Event(), threading.Event()

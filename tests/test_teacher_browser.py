@@ -368,6 +368,18 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
         box = track.bounding_box()
         page.mouse.click(box["x"] + 0.9 * box["width"], box["y"] + box["height"] / 2)
         assert _wait_for(lambda: 0.85 <= s.clock < 0.95, limit=3.0), s.clock
+        # typed into its number field as a person types (each keystroke is sent), while it plays
+        page.get_by_role("button", name="Reset").click()
+        assert _wait_for(lambda: s.clock < 0.2)
+        field = track.evaluate_handle("""(t) => { let p = t;
+          for (let k = 0; k < 8 && p; k++) { p = p.parentElement;
+            const i = p && p.querySelector('input:not([type=hidden])'); if (i) return i; }
+          return null; }""").as_element()
+        field.click()
+        field.press("Control+a")
+        field.type("70.5", delay=600)
+        field.press("Enter")
+        assert _wait_for(lambda: 0.7 <= s.clock < 0.8, limit=3.0), (s.clock, field.input_value())
     finally:
         ctx.close()
 
