@@ -3,7 +3,9 @@ as a link (app/link.py), the session's playback controls and the page's first by
 without a browser."""
 from __future__ import annotations
 
+import contextlib
 import math
+import threading
 import time
 from html.parser import HTMLParser
 
@@ -188,7 +190,6 @@ def test_the_clock_set_while_playing_is_never_overwritten_by_the_playback_thread
     of `_set_clock`, 8 to 22 of 10,000 before the clock had its lock). Here the thread ticks without
     pause and the interpreter switches threads every microsecond, so that the two meet often."""
     import sys
-    import threading
     from test_gallery import _session, _wait
 
     with _session("middle-axis-flip") as (s, client):
@@ -217,12 +218,32 @@ def test_the_clock_set_while_playing_is_never_overwritten_by_the_playback_thread
         assert not lost, f"{len(lost)} of 10000 settings of the clock lost, e.g. {lost[:3]}"
 
 
+@contextlib.contextmanager
+def _raised_on_another_thread(owner):
+    """`owner._guard` (the code's own change under way) raised by another thread meanwhile."""
+    raised, done = threading.Event(), threading.Event()
+
+    def hold():
+        owner._guard = True
+        raised.set()
+        done.wait(10)
+        owner._guard = False
+
+    other = threading.Thread(target=hold)
+    other.start()
+    try:
+        assert raised.wait(10)
+        yield
+    finally:
+        done.set()
+        other.join()
+
+
 def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile():
     """viser sets a browser's value as its message arrives and runs the callback later, on a
     thread of its pool. Playback moving the scrubber to its own time in between (twice a second)
     replaced the student's value before the callback read it; and while the playback thread held
     the flag that marks the code's own changes, a browser's event on another thread was ignored."""
-    import threading
     from theoria.app import session as session_mod
     from test_gallery import _session, _wait
 
@@ -250,54 +271,25 @@ def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile(
         assert s.scrub.value == round(100 * s.clock, 1) and s.scrub.value > 20.0
 
         # the flag raised by another thread (playback, moving the scrubber) meanwhile
-        raised, done = threading.Event(), threading.Event()
-
-        def playback_sets_the_scrubber():
-            s._guard = True
-            raised.set()
-            done.wait(10)
-            s._guard = False
-
-        other = threading.Thread(target=playback_sets_the_scrubber)
-        other.start()
-        try:
-            raised.wait(10)
+        with _raised_on_another_thread(s):
             object.__setattr__(s.scrub, "value", 50.0)
             object.__setattr__(s.scrub, "update_timestamp", time.time() + 2.0)
             s._browser_event(s._on_scrub)
             assert s.clock == pytest.approx(0.5, abs=0.01)
-        finally:
-            done.set()
-            other.join()
 
 
 def test_a_browsers_change_is_taken_while_another_thread_puts_a_control_back():
     """A refused run puts its control back from a drawing thread (`set_values`, with the flag that
     makes the controls' own callbacks do nothing); a slider a student moved meanwhile, handled on
     another thread, was ignored while that flag was up."""
-    import threading
     from theoria.app.controls import ParamControls
     from test_gallery import FakeGui
 
     changes = []
     ctl = ParamControls(FakeGui(), get("middle-axis-flip"), on_change=lambda name, debounce: changes.append(name))
-    raised, done = threading.Event(), threading.Event()
-
-    def put_back():
-        ctl._guard = True
-        raised.set()
-        done.wait(10)
-        ctl._guard = False
-
-    other = threading.Thread(target=put_back)
-    other.start()
-    try:
-        raised.wait(10)
+    with _raised_on_another_thread(ctl):
         ctl.handles["spin"].value = 4.0  # the browser's change; its callback runs on this thread
         assert ctl.values()["spin"] == 4.0 and changes == ["spin"]
-    finally:
-        done.set()
-        other.join()
 
 
 def test_export_says_where_the_file_went_and_its_size(tmp_path, capsys):
