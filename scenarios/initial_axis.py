@@ -110,8 +110,10 @@ register(Scenario(
         Param("torque", (1.0, 1.0, 1.0), kind="vec3", minimum=-1e3, maximum=1e3, unit="N m",
               help="moments P, Q, R about the body axes (constant in the body)",
               label="Torques P, Q, R about the body axes"),
-        Param("probe_time", 1e-3, 0.0, 1.0, "s", "how long after the start the axis is measured",
-              exclusive_min=True, step=1e-4, label="Axis measured after", advanced=True),
+        # from a nanosecond: at 1e-300 s the rate ω = τt/I squared underflows, and its direction
+        # was 0/0
+        Param("probe_time", 1e-3, 1e-9, 1.0, "s", "how long after the start the axis is measured",
+              step=1e-4, label="Axis measured after", advanced=True),
         Param("duration", 5.0, 0.0, 1e5, "s", "length of the run", exclusive_min=True, step=0.5,
               label="Length of the run"),
         Param("step", 0.002, 0.0, 1.0, "s", "integrator step", exclusive_min=True, step=0.001,

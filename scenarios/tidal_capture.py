@@ -132,7 +132,8 @@ def _simulate(values, progress=None):
     for p in (1.5,):
         H = abs(tides.resonance_strength(p, e))
         A = values["tide_rate"] * float(tides.hut_omega(e))
-        ratio = A * (np.pi * abs(p - q) + 2 * w0 * np.sqrt(H)) / (0.5 * w0**2 * H) if H > 0 else np.inf
+        depth = 0.5 * w0**2 * H  # 0 for a round body (ω₀² underflows below 1e-154): no resonance to hold it
+        ratio = A * (np.pi * abs(p - q) + 2 * w0 * np.sqrt(H)) / depth if depth > 0 else np.inf
         m[f"tide_to_resonance_ratio_{p:g}"] = float(ratio)
         if ratio > 0.1:
             warnings.append(f"tides strong against the {p:g} resonance (energy lost per libration {ratio:.2f} × its "
