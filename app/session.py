@@ -116,6 +116,7 @@ class ClientSession:
     active = 0  # sessions open on this process (sets the playback rate)
     _guard = PerThread()  # set while the code itself moves the scrubber or the checkboxes
     _pguard = PerThread()  # set while the code itself sets the preset or the parameter controls
+    _sguard = PerThread()  # set while the code itself changes the sweep map's dropdowns
 
     def __init__(self, server: viser.ViserServer, client: viser.ClientHandle, scenario: str | None,
                  run=None, sweep=None):
@@ -470,9 +471,12 @@ class ClientSession:
 
     def _safe(self, fn, *args) -> None:
         """Run a callback (playback giving way meanwhile); no exception reaches viser's loop, and
-        nothing a browser sends writes more than the rate-limited log's lines to the console."""
+        nothing a browser sends writes more than the rate-limited log's lines to the console.
+        Not under the browser's event lock: a drawing thread sets the scrubber while it holds the
+        view lock, and the callback viser runs at once for it waited for a browser's event that
+        waited for the view lock (every drawing thread of the server stuck, every class frozen)."""
         try:
-            with self._callback_lock, playback.showing():
+            with playback.showing():
                 fn(*args)
         except ParameterError as e:
             self._notify_bad(e)
@@ -533,7 +537,6 @@ class ClientSession:
         """The Sweep tab: the map of one metric over two swept parameters, what it shows, and which
         run the scene replays. Rendering happens on the map's own thread (SweepMaps)."""
         gui, sw = self.client.gui, self.sweep
-        self._sguard = False  # set while the code itself changes the map's dropdowns
         sizes = " × ".join(str(sw.ds.sizes[d]) for d in sw.dims)
         about = sw.preset.description if sw.preset is not None else ""
         self.sweep_head = gui.add_markdown(
@@ -587,7 +590,7 @@ class ClientSession:
         want = (self._metric_labels[self.sweep_metric.value], self.sweep_view.value)
         self._sweep_want = want
         fut = self.sweep.picture_async(*want)
-        fut.add_done_callback(lambda f: self._safe(self._map_ready, f, want))
+        fut.add_done_callback(lambda f: self._browser_event(self._map_ready, f, want))
 
     def _map_ready(self, fut, want) -> None:
         if want != self._sweep_want or self._closed:

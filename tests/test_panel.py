@@ -278,6 +278,40 @@ def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile(
             assert s.clock == pytest.approx(0.5, abs=0.01)
 
 
+def test_a_drawing_thread_setting_the_scrubber_never_waits_for_a_browsers_event():
+    """A drawing thread shows a run holding the view lock and moves the scrubber; viser runs the
+    scrubber's callback at once on that thread. That callback took the browser's event lock,
+    held by a browser's step waiting for the view lock: both stuck for good, and with them every
+    drawing thread of the server (found by a teacher's arrow keys on a slider: a second browser
+    then never got its first scene)."""
+    import threading
+    from test_gallery import _session, _wait
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        entered, drawn = threading.Event(), threading.Event()
+
+        def browser_steps():  # holds the event lock, then wants the view lock (to show the frame)
+            entered.set()
+            s._step(1)
+
+        def drawing_thread():
+            with s._view_lock:
+                browser = threading.Thread(target=s._browser_event, args=(browser_steps,), daemon=True)
+                browser.start()
+                assert entered.wait(10)
+                s.clock = 0.3  # the run shown: the scrubber follows its clock
+                s._time_gui()
+            drawn.set()
+            browser.join(10)
+
+        t = threading.Thread(target=drawing_thread, daemon=True)
+        t.start()
+        assert drawn.wait(10), "the drawing thread waits for the browser's event, which waits for it"
+        t.join(10)
+        assert not t.is_alive()
+
+
 def test_a_browsers_change_is_taken_while_another_thread_puts_a_control_back():
     """A refused run puts its control back from a drawing thread (`set_values`, with the flag that
     makes the controls' own callbacks do nothing); a slider a student moved meanwhile, handled on
