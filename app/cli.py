@@ -78,9 +78,9 @@ def _max_steps(text: str) -> float | None:
     try:
         v = float(text)
     except ValueError:
-        raise ParameterError("--max-steps", text, "a number of integrator steps > 0, or none") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ParameterError("--max-steps", text, "a number of integrator steps > 0, or none")
+        raise ParameterError("--max-steps", text, "a number of integrator steps ≥ 1, or none") from None
+    if not (math.isfinite(v) and v >= 1):  # a run takes at least one step
+        raise ParameterError("--max-steps", text, "a number of integrator steps ≥ 1, or none")
     return v
 
 

@@ -192,6 +192,8 @@ def test_cli_refuses_naming_the_steps(capsys, no_integration):
     (["--max-steps", "abc"], 2, "--max-steps=abc"),
     (["--max-memory=-3GB"], 2, "--max-memory=-3GB"),
     (["--max-memory", "0"], 2, "a size > 0"),
+    (["--max-steps", "0.5"], 2, "--max-steps=0.5: a number of integrator steps ≥ 1"),
+    (["--max-steps", "1e-300"], 2, "--max-steps=1e-300"),
 ])
 def test_cli_limits_override(args, code, needle, capsys):
     got = main(["run", "free-tumble", "--json", *args])
