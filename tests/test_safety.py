@@ -675,3 +675,39 @@ def test_progress_is_written_for_a_terminal_only(tmp_path):
                        capture_output=True, env=ENV, cwd=ROOT, timeout=WAIT_S)
     assert p.returncode == 0, p.stderr.decode()
     assert b"\r" not in p.stderr and b"%" not in p.stderr, p.stderr.decode()
+
+
+def _caught(pid: int) -> int:
+    """The signals a process has handlers for (the kernel's SigCgt mask), 0 once it is gone."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            return next(int(line.split()[1], 16) for line in f if line.startswith("SigCgt:"))
+    except (OSError, StopIteration):
+        return 0
+
+
+@pytest.mark.parametrize("how", ["console script", "python -m theoria"])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_while_the_command_imports_is_one_line(sig, how):
+    """Ctrl-C or SIGTERM in the first half second, while the command imports numpy and the
+    scenarios (before its own handlers are in place): a traceback of importlib's frames and exit
+    −2, or a silent exit −15, before. The command must catch SIGTERM before numpy is loaded; the
+    signal is sent the moment it does."""
+    script = os.path.join(os.path.dirname(sys.executable), "theoria")
+    cmd = [script] if how == "console script" else [sys.executable, "-m", "theoria"]
+    p = subprocess.Popen([*cmd, "run", "free-tumble", "--duration", "2"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, env=ENV, cwd=ROOT)
+    try:
+        term = 1 << (signal.SIGTERM - 1)
+        t0 = time.monotonic()
+        while not _caught(p.pid) & term and p.poll() is None and time.monotonic() - t0 < 30:
+            time.sleep(0.0005)
+        with open(f"/proc/{p.pid}/maps") as f:
+            loaded = f.read()
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=60)
+    finally:
+        p.kill()
+    assert "_multiarray_umath" not in loaded, "SIGTERM is caught only after numpy was imported"
+    assert p.returncode == 128 + sig, (p.returncode, err[-400:])
+    assert err == (b"theoria: interrupted\n" if sig == signal.SIGINT else b"theoria: terminated\n") and out == b""

@@ -23,13 +23,17 @@ reachable but not needed.
 """
 from __future__ import annotations
 
-from importlib import metadata as _metadata
+from . import _console
 
-from .physics.errors import BudgetExceeded, Cancelled, Diverged, ParameterError
-from .physics.params import Param
-from .physics.trajectory import Trajectory
-from .scenarios.base import Comparison, Run, Scenario
-from .scenarios.budget import MAX_MEMORY, MAX_STEPS, Cost
+_console.guard()  # the command line: a Ctrl-C while it imports is one line, not a traceback
+
+from importlib import metadata as _metadata  # noqa: E402
+
+from .physics.errors import BudgetExceeded, Cancelled, Diverged, ParameterError  # noqa: E402
+from .physics.params import Param  # noqa: E402
+from .physics.trajectory import Trajectory  # noqa: E402
+from .scenarios.base import Comparison, Run, Scenario  # noqa: E402
+from .scenarios.budget import MAX_MEMORY, MAX_STEPS, Cost  # noqa: E402
 
 try:
     __version__ = _metadata.version("theoria-motus")
