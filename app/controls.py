@@ -23,7 +23,7 @@ from typing import Any, Callable
 
 from theoria.physics.errors import ParameterError
 from theoria.physics.params import Param
-from .format import exact
+from .format import capitalised, exact
 
 MAX_SLIDER_STEPS = 2000
 
@@ -47,7 +47,7 @@ def hint_of(p: Param) -> str:
     allowed = p.allowed()
     if p.kind == "choice":
         return p.help
-    return f"{p.help[:1].upper()}{p.help[1:]}. Allowed: {allowed.split(' ', 2)[-1] if allowed.startswith('allowed range') else allowed}"
+    return f"{capitalised(p.help)}. Allowed: {allowed.split(' ', 2)[-1] if allowed.startswith('allowed range') else allowed}"
 
 
 def _on_grid(v: float, lo: float, step: float) -> bool:

@@ -78,3 +78,9 @@ def comparison_rows(comparisons, digits: int = 6) -> list[tuple[str, str, str, s
         label = c.label + (f" ({c.note})" if c.note else "")
         out.append((label, number(c.euler, digits), number(c.simulated, digits), number(c.modern, digits), c.unit))
     return out
+
+
+def capitalised(text: str) -> str:
+    """The first letter as a capital, for a label that starts a line; a Greek letter stays as it
+    is (ω and Ω are different quantities: "Ω and L arrows" read as the node's longitude)."""
+    return text[:1].upper() + text[1:] if text[:1].isascii() else text

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..scenarios.units import NAME_SUFFIXES, unit_in_name
 from . import gallery
-from .format import human_number
+from .format import capitalised, human_number
 
 UPLOT_POINTS = 2000  # points per series in the live plot
 
@@ -122,9 +122,13 @@ def metric_label(key: str, unit: str | None = None) -> str:
         else:
             words.append(_WORDS.get(w, w))
     text = " ".join(words)
-    if text[:1].isascii():  # β stays β
-        text = text[:1].upper() + text[1:]
+    text = capitalised(text)  # β stays β
     return f"{text} ({unit})" if unit else text
+
+
+def _unit_not_in(label: str, unit: str) -> bool:
+    """A unit to add after a comparison's label ("… max (°)" already says it: not "(°) (°)")."""
+    return bool(unit) and not label.rstrip().endswith(f"({unit})")
 
 
 # ---- the panel's texts -----------------------------------------------------------------------
@@ -165,7 +169,8 @@ def compare_html(result) -> str:
             f"<tr><th></th><th style='{th}'>Euler</th><th style='{th}'>simulated</th><th style='{th}'>modern</th></tr>"]
     for c in result.comparisons:
         unit = gallery.pretty_unit(c.unit)
-        label = html.escape(c.label) + (f" <span style='color:#666'>({html.escape(unit)})</span>" if unit else "")
+        label = html.escape(c.label) + (f" <span style='color:#666'>({html.escape(unit)})</span>"
+                                        if _unit_not_in(c.label, unit) else "")
         words, tone = verdict(c)
         note = f"<div style='color:#666;font-size:0.85em'>{html.escape(c.note)}</div>" if c.note else ""
         cell = "padding:1px 4px;text-align:right;white-space:nowrap;font-variant-numeric:tabular-nums"
@@ -222,7 +227,7 @@ def comparison_markdown(result) -> str:
         lines += ["| | Euler | simulated | modern | |", "|---|---|---|---|---|"]
         for c in result.comparisons:
             unit = gallery.pretty_unit(c.unit)
-            label = (c.label + (f" ({unit})" if unit else "")).replace("|", "\\|")
+            label = (c.label + (f" ({unit})" if _unit_not_in(c.label, unit) else "")).replace("|", "\\|")
             lines.append(f"| {label} | {human_number(c.euler)} | {human_number(c.simulated)} | "
                          f"{human_number(c.modern)} | {verdict(c)[0]} |")
         lines.append("")

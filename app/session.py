@@ -42,7 +42,7 @@ from . import browser, gallery, page, playback
 from . import link as linkmod
 from .controls import ParamControls, PerThread
 from .export_html import configure_scene
-from .format import human_number
+from .format import capitalised, human_number
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
                     read_markdown, y_axis_px)
 from .scene import SceneView
@@ -242,7 +242,7 @@ class ClientSession:
                 self.options_folder = gui.add_folder("This scene")
                 self.toggles = {}
                 for key, (label, _, _) in OVERLAYS.items():
-                    cb = gui.add_checkbox(label[:1].upper() + label[1:], initial_value=True)
+                    cb = gui.add_checkbox(capitalised(label), initial_value=True)
                     cb.on_update(self._on(self._on_toggle, key))
                     self.toggles[key] = cb
                 self.exag = gui.add_slider("Exaggerate the shape", min=1.0, max=20.0, step=0.5, initial_value=1.0,
@@ -908,7 +908,7 @@ class ClientSession:
         self._option_handles = []
         with self.options_folder:
             for k, opt in spec.options.items():
-                label = opt.label[:1].upper() + opt.label[1:]
+                label = capitalised(opt.label)
                 cb = self.client.gui.add_checkbox(label, initial_value=self.view_opts.option(k, spec))
                 cb.on_update(self._on(self._on_option, k, cb))
                 self._option_handles.append(cb)

@@ -34,7 +34,7 @@ import numpy as np
 from theoria.physics.errors import ParameterError
 from theoria.physics.params import pretty_unit
 
-from .format import human_number
+from .format import capitalised, human_number
 from .panel import metric_label
 from .sweep import SAMPLE, SWEEP_PRESETS, MapData, open_map
 
@@ -191,7 +191,7 @@ class SweepMaps:
             return "random draw", ""
         try:
             p = self.scenario.param(name)
-            return p.title()[:1].upper() + p.title()[1:], p.unit_text()
+            return capitalised(p.title()), p.unit_text()
         except KeyError:
             return name.replace("_", " "), pretty_unit(self.ds[name].attrs.get("units", ""))
 

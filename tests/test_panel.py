@@ -52,6 +52,32 @@ def test_metric_keys_become_words_with_units():
     assert "_" not in metric_label("nutation_longitude_18_6yr_iau2000_arcsec")
 
 
+def test_a_label_that_starts_with_a_greek_letter_keeps_it():
+    """ω (the rotation) and Ω (the node's longitude) are different quantities: "ω and L arrows"
+    was shown as "Ω and L arrows" in every scenario's list of what is drawn."""
+    from theoria.app.format import capitalised
+    from theoria.scenarios.drawing import OVERLAYS
+    from test_gallery import _session
+
+    assert capitalised("ω and L arrows") == "ω and L arrows" and capitalised("polhode") == "Polhode"
+    with _session("free-tumble") as (s, client):
+        shown = {h.label for h in client.gui.handles if h.kind == "checkbox"}
+    assert "ω and L arrows" in shown and not any(label.startswith("Ω") for label in shown)
+    assert len(shown) >= len(OVERLAYS)
+
+
+def test_a_comparison_whose_label_says_its_unit_shows_it_once():
+    """"optical libration in longitude, max (°) (°)" (the Moon, Cassini, the long view)."""
+    import types
+    from theoria.app.panel import compare_html, comparison_markdown
+
+    said = Comparison("optical libration in longitude, max (°)", None, 7.9, 7.9, "deg", "")
+    unsaid = Comparison("obliquity", None, 23.4, 23.4, "deg", "")
+    result = types.SimpleNamespace(comparisons=[said, unsaid], warnings=[], notes=[])
+    for text in (compare_html(result), comparison_markdown(result)):
+        assert text.count("(°)") == 2, text  # once in each row
+
+
 def test_units_in_words():
     assert pretty_unit("kg m^2") == "kg·m²" and pretty_unit("m^3/s^2") == "m³/s²" and pretty_unit("1") == ""
     assert pretty_unit("deg") == "°"
