@@ -92,6 +92,13 @@ SETUP = r"""
     m.sendMessage({type: 'GuiUpdateMessage', uuid: img.dataset.uuid,
                    updates: {value: i + ',' + j + ',' + img.dataset.key + ',' + T.clicks}});
   }, true);
+  // an arrow key on a focused slider moves that slider only: viser's command hotkeys (← → step
+  // the clock) listen on the document and skip only text fields, so one key did both
+  document.body.addEventListener('keydown', (e) => {
+    const t = e.target;
+    if (t && t.getAttribute && t.getAttribute('role') === 'slider'
+        && /^(Arrow(Left|Right|Up|Down)|Home|End|Page(Up|Down))$/.test(e.key)) e.stopPropagation();
+  });
   T.SUBMIT_AFTER_MS = 120;
   document.addEventListener('submit', (e) => {
     const f = e.target;

@@ -292,6 +292,39 @@ def test_presenter_mode_large_type_no_controls_and_keys(browser, app):
         ctx.close()
 
 
+def test_an_arrow_key_on_a_focused_slider_moves_the_slider_only(browser, app):
+    """← and → step the clock (a command's hotkey), but not for a slider that has the focus: one
+    key moved the slider and stepped the clock, two actions at once."""
+    from theoria.scenarios import get
+
+    base, sessions = app
+    flip = get("middle-axis-flip")
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(flip))
+    try:
+        s = _session_for(sessions, before, flip.name)
+        page.get_by_role("button", name="Pause").click()
+        assert _wait_for(lambda: not s.playing)
+        time.sleep(0.5)
+        clock, speed = s.clock, s.speed.value
+        thumb = page.evaluate_handle("""(label) => {
+          const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
+          let p = l;
+          for (let k = 0; k < 8 && p; k++) { p = p.parentElement;
+            const t = p && p.querySelector('[role=slider]'); if (t) return t; }
+          return null; }""", "Playback speed").as_element()
+        thumb.focus()
+        page.keyboard.press("ArrowRight")
+        assert _wait_for(lambda: s.speed.value > speed, limit=10.0)
+        time.sleep(1.0)
+        assert s.clock == clock and not s.playing
+        page.mouse.click(300, 500)  # away from the panel, the key steps the clock again
+        page.keyboard.press("ArrowRight")
+        assert _wait_for(lambda: s.clock > clock, limit=10.0)
+    finally:
+        ctx.close()
+
+
 # the body's orientation on the page, each animation frame for `seconds`: frames drawn, poses seen
 POSES_JS = """(seconds) => new Promise(resolve => {
   const m = window.__viserMutable.nodeRefFromName;
