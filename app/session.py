@@ -155,6 +155,7 @@ class ClientSession:
         self._clock_lock = threading.Lock()
         self._scrub_taken = 0.0  # the scrubber's update time when it last followed or set the clock
         self._scrub_moved = -1e9  # when a browser last moved the scrubber (perf_counter)
+        self._linked_time = None  # a link's time, again on the full run after its quick preview
         self._view_lock = threading.RLock()  # the worker rebuilds while the player animates
         # a browser's own events, one at a time: viser runs each callback on its thread pool as it
         # comes, and twenty scene switches sent at once raced each other's panels (controls left
@@ -465,6 +466,7 @@ class ClientSession:
 
     def _browser_event(self, fn, *args) -> None:
         """`fn(*args)` for something the browser did, after its earlier events are handled."""
+        self._linked_time = None  # the view is the browser's now, not the link's
         with self._callback_lock:
             if not self._closed:
                 self._safe(fn, *args)
@@ -813,8 +815,7 @@ class ClientSession:
         # by the time since the last tick (one frame, now and then)
         self._set_playing(restore.playing)
         if restore.time is not None and drawing.n_frames > 1:
-            t = drawing.times
-            self._set_clock((restore.time - t[0]) / ((t[-1] - t[0]) or 1.0))
+            self._set_clock((restore.time - drawing.times[0]) / ((drawing.times[-1] - drawing.times[0]) or 1.0))
         if restore.speed is not None:
             self.speed.value = float(np.clip(restore.speed, 0.1, 10.0))
         if restore.camera is not None:
@@ -852,9 +853,15 @@ class ClientSession:
             self.result, self.good_values = result, values
             self._show_result_text(result)
             self._update_plot(result)
+            preview = bool(getattr(req, "preview", False))
             if restore is not None:
                 self._restore = None
                 self._restore_view(restore, drawing)
+                # a quick preview's frames are not the full run's: the link's time once more on it
+                self._linked_time = restore.time if preview else None
+            elif self._linked_time is not None and not preview and drawing.n_frames > 1:
+                linked, self._linked_time = self._linked_time, None
+                self._set_clock((linked - drawing.times[0]) / ((drawing.times[-1] - drawing.times[0]) or 1.0))
             self.view.set_frame(self._frame_index())
             self._follow_camera()
             self._time_gui()

@@ -192,6 +192,27 @@ def test_session_restores_a_link(monkeypatch):
         assert st.params["spin"] == "4.5" and st.camera[:3] == (4.0, 1.0, 2.0) and st.overlays == {"axes": False}
 
 
+def test_a_linked_time_is_the_full_runs_frame_after_a_quick_preview(monkeypatch):
+    """A link to a heavy scene is first shown on its quick preview, whose frames are not the full
+    run's: the link's time fell on the preview's frame, and the full run then showed the frame
+    after it (libration-eccentric: 51.43 for 51.427872, twice)."""
+    from theoria.app import browser
+    from theoria.app.link import _num
+    from theoria.app.worker import drawing_of
+    from test_gallery import _session, _wait
+
+    spec = get("libration-eccentric")
+    full = drawing_of(spec, spec.simulate_fn(spec.resolve(None))).times
+    want = float(_num(full[len(full) // 3 + 1], 8))  # as the address writes it
+    q = f"s={spec.name}&t={want}&play=0"
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: "http://127.0.0.1:1/?" + q)
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.drawing is not None and s.drawing_spec == spec.name and len(s.drawing.times) == len(full)
+              and s.updates >= 2, 120)
+        assert s.updates >= 2, "shown without a quick preview first: the test does not test"
+        assert abs(s.drawing.times[s.view.frame] - want) < 1e-6 * want and not s.playing
+
+
 def test_a_linked_time_is_the_frame_shown_even_when_the_page_was_playing():
     """A link opened while the first run plays: pausing brought the clock up to now *after* the
     link's time was set, and a copied link came back one frame later (3.93 for 3.92), now and then
