@@ -29,12 +29,18 @@ PANEL_SCREENS_JS = f"""() => {{
   const v = p.querySelector('.mantine-ScrollArea-viewport');
   const header = v.getBoundingClientRect().top - p.getBoundingClientRect().top;
   return (header + v.scrollHeight) / window.innerHeight; }}"""
-INPUT_JS = """(label) => {
+# the first element matching `css` near the control labelled `label` (in its row of the panel)
+NEAR_LABEL_JS = """([label, css]) => {
   const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
   if (!l) return null;
   let p = l;
-  for (let k = 0; k < 8 && p; k++) { p = p.parentElement; const i = p && p.querySelector('input'); if (i) return i; }
+  for (let k = 0; k < 8 && p; k++) { p = p.parentElement; const i = p && p.querySelector(css); if (i) return i; }
   return null; }"""
+INPUT_JS = f"""(label) => ({NEAR_LABEL_JS})([label, 'input'])"""
+
+
+def _near(page, label: str, css: str):
+    return page.evaluate_handle(NEAR_LABEL_JS, [label, css]).as_element()
 
 
 # the page's camera position in the scene's own coordinates (the link's): three.js holds it in its
@@ -307,12 +313,7 @@ def test_an_arrow_key_on_a_focused_slider_moves_the_slider_only(browser, app):
         assert _wait_for(lambda: not s.playing)
         time.sleep(0.5)
         clock, speed = s.clock, s.speed.value
-        thumb = page.evaluate_handle("""(label) => {
-          const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
-          let p = l;
-          for (let k = 0; k < 8 && p; k++) { p = p.parentElement;
-            const t = p && p.querySelector('[role=slider]'); if (t) return t; }
-          return null; }""", "Playback speed").as_element()
+        thumb = _near(page, "Playback speed", "[role=slider]")
         thumb.focus()
         page.keyboard.press("ArrowRight")
         assert _wait_for(lambda: s.speed.value > speed, limit=10.0)
@@ -391,12 +392,9 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
         # playing again, a time typed into the scrubber's field is where the run plays on from
         page.get_by_role("button", name="Play").click()
         assert _wait_for(lambda: s.playing)
-        track = page.evaluate_handle("""(label) => {
-          const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
-          let p = l;  // the scrubber's track (a click there sends one value; its number field is
-          for (let k = 0; k < 8 && p; k++) { p = p.parentElement;  // rewritten twice a second)
-            const t = p && p.querySelector('.mantine-Slider-track'); if (t) return t; }
-          return null; }""", "Time (% of the run)").as_element()
+        # the scrubber's track (a click there sends one value; its number field is rewritten twice
+        # a second)
+        track = _near(page, "Time (% of the run)", ".mantine-Slider-track")
         assert s.clock < 0.6 and s.speed.value == 1  # played on from here, 0.9 is 6 s away
         box = track.bounding_box()
         page.mouse.click(box["x"] + 0.9 * box["width"], box["y"] + box["height"] / 2)
@@ -404,10 +402,7 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
         # typed into its number field as a person types (each keystroke is sent), while it plays
         page.get_by_role("button", name="Reset").click()
         assert _wait_for(lambda: s.clock < 0.2)
-        field = track.evaluate_handle("""(t) => { let p = t;
-          for (let k = 0; k < 8 && p; k++) { p = p.parentElement;
-            const i = p && p.querySelector('input:not([type=hidden])'); if (i) return i; }
-          return null; }""").as_element()
+        field = _near(page, "Time (% of the run)", "input:not([type=hidden])")
         field.click()
         field.press("Control+a")
         field.type("70.5", delay=600)
