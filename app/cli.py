@@ -313,7 +313,7 @@ def cmd_sweep(args) -> int:
     sc = get(name)
     try:
         summary, _ = run_sweep(sc, out=args.out, cluster=args.cluster, resume=args.resume, force=args.force,
-                               metrics=args.metrics,
+                               metrics=args.metrics, limits=_limits(args),
                                preset=args.preset, seed=args.seed, chunk=args.chunk, workers=args.workers,
                                progress=not args.quiet, **kw)
     except SweepError as e:
@@ -491,6 +491,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--resume", action="store_true", help="keep the finished chunks of --out and compute the rest")
     s.add_argument("--force", action="store_true", help="replace what --out holds (an earlier sweep)")
     s.add_argument("--metrics", default=None, metavar="A,B", help="the metrics to keep (default: all)")
+    s.add_argument("--max-steps", default=None, metavar="N",
+                   help="a run of more integrator steps is not run, its status 'refused' (default 2e7; none: no limit)")
+    s.add_argument("--max-memory", default=None, metavar="SIZE",
+                   help="the same for a run that keeps more memory (default 1GB; none: no limit)")
     s.add_argument("--chunk", default=None, metavar="N", help="runs per chunk (default: chosen from the grid)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     s.add_argument("--json", action="store_true", help="print a summary as JSON on stdout")

@@ -89,6 +89,7 @@ class Plan:
     metrics: list[str] | None
     chunks: tuple[int, ...] = ()
     batched: bool = False
+    limits: dict[str, float | None] = field(default_factory=dict)  # each run's budget (check_budget)
 
     @property
     def dims(self) -> tuple[str, ...]:
@@ -375,7 +376,9 @@ def run_chunk(task: dict) -> dict:
         for i in range(n):
             values = {**fixed, **{k: _item(v[i]) for k, v in points.items()}}
             try:
-                run = sc.simulate_fn(sc.resolve(values))
+                values = sc.resolve(values)
+                sc.check_budget(values, **task.get("limits", {}))  # as every run: hours of steps are refused
+                run = sc.simulate_fn(values)
             except ParameterError as e:
                 status[i] = STATUS["refused"]
                 messages[i] = str(e)
@@ -852,8 +855,10 @@ def _workers_ignore_ctrl_c():
 
 def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, resume=False, metrics=None,
               fixed=None, preset=None, seed=0, chunk=None, workers=None, progress=True,
-              on_chunk=None, force=False) -> tuple[Summary, Any]:
-    """Plan, check, run and write a sweep. Returns (Summary, the opened result)."""
+              on_chunk=None, force=False, limits=None) -> tuple[Summary, Any]:
+    """Plan, check, run and write a sweep. Returns (Summary, the opened result). `limits`:
+    {"max_steps": …, "max_memory": …} for each run (default the app's; a run over them is not run,
+    its status 'refused' with the budget's message)."""
     if out is None:
         raise ParameterError("--out", None, "a file name ending in .zarr or .parquet")
     out = os.fspath(out)
@@ -875,6 +880,7 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if workers is not None and (int(workers) < 1 or int(workers) > 256):
         raise ParameterError("--workers", workers, "from 1 to 256")
     plan = make_plan(sc, grid, random, samples, fixed, preset, metrics, seed, chunk, nworkers)
+    plan.limits = dict(limits or {})
     with _one_sweep_writes(out):
         return _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, on_chunk)
 
@@ -1028,7 +1034,8 @@ def _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, thre
     futures = {}
     for i in todo:
         task = {"scenario": sc.name, "fixed": plan.fixed, "points": plan.points(regions[i]),
-                "metrics": plan.metrics, "batched": plan.batched, "threads": threads}
+                "metrics": plan.metrics, "batched": plan.batched, "threads": threads,
+                "limits": plan.limits}
         fut = client.submit(run_chunk, task, pure=False, key=f"theoria-sweep-{sc.name}-{i}-{os.getpid()}-{time.time_ns()}")
         futures[fut] = i
     ac = as_completed(list(futures))

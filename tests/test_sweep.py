@@ -556,3 +556,18 @@ def test_ctrl_c_while_the_store_is_created_is_one_line(tmp_path):
         assert "Traceback" not in err and "RuntimeError" not in err, (delay, err[-2000:])
         assert err == "theoria: interrupted\n", (delay, err[-2000:])
         assert not [q.name for q in tmp_path.iterdir() if ".making-" in q.name], delay
+
+
+def test_a_run_over_the_budget_is_refused_in_a_sweep_not_run():
+    """Each run of a sweep is held to the budget every run is (a probe's sweep of free-tumble at
+    durations 1e5 and 1e6 s ran 1e8 and 1e9 integrator steps, 859 s of CPU, and wrote them "ok"):
+    over it, the run is not run and its status is 'refused' with the budget's message; the
+    command's --max-steps / --max-memory set the limits."""
+    points = {"duration": np.array([2.0, 1e6])}
+    task = {"scenario": "free-tumble", "fixed": {}, "points": points, "metrics": None, "batched": False,
+            "threads": None, "limits": {}}
+    res = sw.run_chunk(task)
+    assert list(res["status"]) == [sw.STATUS["ok"], sw.STATUS["refused"]]
+    assert "1e+08 integrator steps" in res["messages"][1] and "max_steps" in res["messages"][1]
+    res = sw.run_chunk({**task, "points": {"duration": np.array([2.0])}, "limits": {"max_steps": 100}})
+    assert list(res["status"]) == [sw.STATUS["refused"]] and "over the limit of 100" in res["messages"][0]
