@@ -40,7 +40,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..physics.errors import ParameterError, show_value
-from .files import WriteError
+from .files import WriteError, write_whole
 from .interrupt import signals_held
 
 class SweepError(RuntimeError):
@@ -342,6 +342,17 @@ def _chunk_shape(plan: Plan, chunk, workers) -> tuple[int, ...]:
 
 # --------------------------------------------------------------------------- the work of a chunk
 
+def _read_json(path: str, flag: str):
+    """A sweep's own description file, or one line saying it cannot be read (an older theoria's
+    write cut by a full disk left it empty)."""
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as e:
+        raise ParameterError(flag, os.path.dirname(path), f"its {os.path.basename(path)} cannot be read "
+                             f"({type(e).__name__}); --force starts the sweep again") from None
+
+
 def run_chunk(task: dict) -> dict:
     """One chunk, on a worker: the batched path, or single runs one after another. Returns metric
     arrays (name → (n,)), `status` codes and messages for the runs that did not finish ok."""
@@ -599,8 +610,7 @@ class ParquetWriter:
         spec = plan.spec()
         specfile = os.path.join(self.parts, "_sweep.json")
         if resume and os.path.exists(specfile):
-            with open(specfile) as f:
-                old = json.load(f)
+            old = _read_json(specfile, "--resume")
             plan.chunks = tuple(old["chunks"])
             spec = plan.spec()
             diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
@@ -624,8 +634,7 @@ class ParquetWriter:
             if os.path.exists(self.parts):
                 shutil.rmtree(self.parts)
             os.makedirs(self.parts)
-            with open(specfile, "w") as f:
-                json.dump(spec, f)
+            write_whole(specfile, json.dumps(spec).encode())  # a full disk leaves none, not an empty one
         self.sessions_file = os.path.join(self.parts, "_sessions.json")
         self.kept = self.parts
 
@@ -663,11 +672,9 @@ class ParquetWriter:
             return
         sessions = []
         if os.path.exists(self.sessions_file):
-            with open(self.sessions_file) as f:
-                sessions = json.load(f)
+            sessions = _read_json(self.sessions_file, "--resume")
         sessions.append(info)
-        with open(self.sessions_file, "w") as f:
-            json.dump(sessions, f)
+        write_whole(self.sessions_file, json.dumps(sessions).encode())
         self.sessions = sessions
 
     def discard(self):

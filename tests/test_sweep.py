@@ -571,3 +571,19 @@ def test_a_run_over_the_budget_is_refused_in_a_sweep_not_run():
     assert "1e+08 integrator steps" in res["messages"][1] and "max_steps" in res["messages"][1]
     res = sw.run_chunk({**task, "points": {"duration": np.array([2.0])}, "limits": {"max_steps": 100}})
     assert list(res["status"]) == [sw.STATUS["refused"]] and "over the limit of 100" in res["messages"][0]
+
+
+def test_a_sweep_description_left_empty_is_one_line_on_resume(tmp_path):
+    """A full disk cut the sweep's description (OUT.parts/_sweep.json) to 0 bytes; --resume then
+    ended in a JSONDecodeError traceback. It is written whole now, and one that cannot be read is
+    refused in one line naming it (written whole: app/files.py, tested in test_safety.py)."""
+    sc = th.scenario("free-tumble")
+    out = str(tmp_path / "s.parquet")
+    plan = sw.make_plan(sc, grid={"step": (0.001, 0.01, 2)})
+    sw.ParquetWriter(out, plan, resume=False)
+    spec = tmp_path / "s.parquet.parts" / "_sweep.json"
+    assert json.loads(spec.read_text())["scenario"] == "free-tumble"
+    spec.write_text("")
+    with pytest.raises(th.ParameterError) as e:
+        sw.ParquetWriter(out, sw.make_plan(sc, grid={"step": (0.001, 0.01, 2)}), resume=True)
+    assert "_sweep.json" in str(e.value) and "--force" in str(e.value)
