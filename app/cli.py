@@ -533,6 +533,15 @@ def _drop_stdout() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:  # on the way out of the handlers' block, after the command's own
+        return _fail("interrupted", EXIT_INTERRUPTED)
+    except Terminated:
+        return _fail("terminated", EXIT_TERMINATED)
+
+
+def _main(argv: list[str] | None) -> int:
     import errno
 
     with cli_signals():

@@ -8,6 +8,7 @@ stream flushed), the same. Nothing is written in either phase that a stop could 
 (every file is written whole inside `main`), so the stop is immediate: the one line and the exit
 status, without unwinding.
 """
+import atexit
 import os
 import signal
 import sys
@@ -29,10 +30,23 @@ def _is_the_command() -> bool:
     return os.path.basename(argv[0]) == "theoria" or by_m
 
 
+def _last_at_exit() -> None:
+    """After the last exit handler the interpreter puts the default actions back for signals with
+    a Python handler (a SIGTERM there ended the process as killed, exit −15, after the command had
+    said what it did). Ignored signals it leaves ignored: for those last steps the two are, and
+    the exit status is the command's. (Blocking them would not do: other threads would take them.)"""
+    for s in (signal.SIGINT, signal.SIGTERM):
+        try:
+            signal.signal(s, signal.SIG_IGN)
+        except (OSError, ValueError):
+            pass
+
+
 def guard() -> None:
     """Stop at once on Ctrl-C or SIGTERM, where Python's own handling is still in place."""
     if not _is_the_command() or threading.current_thread() is not threading.main_thread():
         return
+    atexit.register(_last_at_exit)  # registered first: run last
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         signal.signal(signal.SIGINT, _stop)
     if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
