@@ -133,7 +133,8 @@ class ClientSession:
         self.address = address if run is None else None
         self.page_plays = address is not None
         self.link = linkmod.from_address(self.address)
-        if self.link.scenario not in self.scenarios:
+        unknown = self.link.scenario if self.link.scenario not in self.scenarios else None
+        if unknown is not None:  # said once the panel is there
             self.link.scenario = None
         name = self.link.scenario or scenario
         self.spec = get(name) if name else self.scenarios.get("free-tumble") or next(iter(self.scenarios.values()))
@@ -179,6 +180,9 @@ class ClientSession:
         self._last_tick = None
         self._last_gui = 0.0
         playback.ticker().add(self)
+        if unknown:
+            self._notify_bad(ParameterError("scenario", unknown, "the name of one of the scenes (the list at the top "
+                                                          f"of the panel); {self.spec.title} is shown"))
         if run is not None and run.scenario == self.spec.name:
             self.controls.set_values(run.params)
             self._apply(self.worker.adopt(self.spec, run.params), run, 0.0)

@@ -192,6 +192,19 @@ def test_session_restores_a_link(monkeypatch):
         assert st.params["spin"] == "4.5" and st.camera[:3] == (4.0, 1.0, 2.0) and st.overlays == {"axes": False}
 
 
+def test_a_link_to_a_scene_that_does_not_exist_says_so(monkeypatch):
+    """`?s=nonexistent` opened the first scene without a word: the student thought the link was it."""
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: "http://127.0.0.1:1/?s=nonexistent")
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        assert s.spec.name == "free-tumble"
+        assert any(t == "Not allowed: Scene" and "“nonexistent”" in b and s.spec.title in b for t, b in client.notes), \
+            client.notes
+
+
 def test_a_linked_time_is_the_full_runs_frame_after_a_quick_preview(monkeypatch):
     """A link to a heavy scene is first shown on its quick preview, whose frames are not the full
     run's: the link's time fell on the preview's frame, and the full run then showed the frame
