@@ -148,11 +148,12 @@ def cli_signals():
     finally:
         with _lock:
             _state["active"] -= 1
-        if not _state["active"]:
-            _take_pending()
+        pending = _take_pending() if not _state["active"] else None
         for s, h in old.items():
             if h is not None:
                 signal.signal(s, h)
+        if pending is not None:  # deferred and never raised (the block ended first): not lost
+            _raise(pending)
 
 
 @contextlib.contextmanager
