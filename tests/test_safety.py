@@ -677,6 +677,15 @@ def test_progress_is_written_for_a_terminal_only(tmp_path):
     assert b"\r" not in p.stderr and b"%" not in p.stderr, p.stderr.decode()
 
 
+def _as_from_a_terminal() -> None:
+    """In the child before it starts: Ctrl-C and SIGTERM with their default actions, as a shell
+    starts a command (an ignored signal is inherited, and a test run that ignores Ctrl-C, as a
+    background CI job may, would hand that on: the command rightly keeps an ignored signal
+    ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _caught(pid: int) -> int:
     """The signals a process has handlers for (the kernel's SigCgt mask), 0 once it is gone."""
     try:
@@ -696,7 +705,7 @@ def test_a_stop_while_the_command_imports_is_one_line(sig, how):
     script = os.path.join(os.path.dirname(sys.executable), "theoria")
     cmd = [script] if how == "console script" else [sys.executable, "-m", "theoria"]
     p = subprocess.Popen([*cmd, "run", "free-tumble", "--duration", "2"], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, env=ENV, cwd=ROOT)
+                         stderr=subprocess.PIPE, env=ENV, cwd=ROOT, preexec_fn=_as_from_a_terminal)
     try:
         term = 1 << (signal.SIGTERM - 1)
         t0 = time.monotonic()
@@ -728,7 +737,7 @@ def test_the_command_catches_both_signals_before_it_imports_numpy(argv0, caught)
         print(all(getattr(h, "__module__", "") == "theoria._console" for h in seen[0]))
     """
     r = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, env=ENV,
-                       cwd=ROOT, timeout=120)
+                       cwd=ROOT, timeout=120, preexec_fn=_as_from_a_terminal)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == str(caught)
 
@@ -744,7 +753,8 @@ def test_a_stop_after_the_file_is_written_is_one_line_or_none(tmp_path):
     seen = []
     for _ in range(8):
         p = subprocess.Popen([script, "record", "free-tumble", "--duration", "2", "--out", str(out), "--force"],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=ENV, cwd=ROOT)
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=ENV, cwd=ROOT,
+                             preexec_fn=_as_from_a_terminal)
         try:
             assert b"wrote" in p.stdout.readline()
             p.send_signal(signal.SIGTERM)
