@@ -122,7 +122,7 @@ class ClientSession:
                  run=None, sweep=None):
         """`run`: a finished Run to show first (`Run.show()`), with its scenario and parameters.
         `sweep`: a sweep result (app/sweep_map.SweepMaps) shown as a map in a Sweep tab."""
-        self._flags = threading.local()  # _guard and _pguard, one for each thread
+        self._flags = threading.local()  # _guard, _pguard and _sguard, one for each thread
         self.server, self.client = server, client
         self.sweep = sweep
         ClientSession.active += 1
@@ -819,7 +819,7 @@ class ClientSession:
         # by the time since the last tick (one frame, now and then)
         self._set_playing(restore.playing)
         if restore.time is not None and drawing.n_frames > 1:
-            self._set_clock((restore.time - drawing.times[0]) / ((drawing.times[-1] - drawing.times[0]) or 1.0))
+            self._set_clock_at(restore.time, drawing)
         if restore.speed is not None:
             self.speed.value = float(np.clip(restore.speed, 0.1, 10.0))
         if restore.camera is not None:
@@ -865,7 +865,7 @@ class ClientSession:
                 self._linked_time = restore.time if preview else None
             elif self._linked_time is not None and not preview and drawing.n_frames > 1:
                 linked, self._linked_time = self._linked_time, None
-                self._set_clock((linked - drawing.times[0]) / ((drawing.times[-1] - drawing.times[0]) or 1.0))
+                self._set_clock_at(linked, drawing)
             self.view.set_frame(self._frame_index())
             self._follow_camera()
             self._time_gui()
@@ -1028,6 +1028,11 @@ class ClientSession:
         with self._clock_lock:
             self.clock = float(np.clip(fraction, 0.0, 1.0))
             self._last_tick = None
+
+    def _set_clock_at(self, t: float, drawing) -> None:
+        """Put the clock at time `t` of `drawing` (in its time unit)."""
+        t0, t1 = drawing.times[0], drawing.times[-1]
+        self._set_clock((t - t0) / ((t1 - t0) or 1.0))
 
     def tick_hz(self) -> float:
         """At most this many playback ticks a second: a page that plays by itself needs the server
