@@ -19,6 +19,7 @@ from viser import _messages
 #   panel covers, so the point the camera looks at is drawn in the middle of the free part of the
 #   canvas, and orbiting still turns about it. Re-run on resize, on panel changes and every half
 #   second (the panel can be folded).
+# - a number typed into a slider's box: see the code below.
 # - focusout on a text field inside a form submits the form: a typed value is taken on Enter or
 #   when the field loses focus, never per keystroke.
 # - a form's submit waits SUBMIT_AFTER_MS: viser 1.1 sends all of a panel's messages through one
@@ -99,6 +100,58 @@ SETUP = r"""
     if (t && t.getAttribute && t.getAttribute('role') === 'slider'
         && /^(Arrow(Left|Right|Up|Down)|Home|End|Page(Up|Down))$/.test(e.key)) e.stopPropagation();
   });
+  // A number typed into a slider's box is the user's text until Enter or the box loses focus,
+  // then sent as typed, once; the server parses it as a text field's value (exactly, or refused
+  // with the allowed range; app/controls.py). The box is Mantine's NumberInput: it dropped an
+  // exponent's "e" ("1e-2" became -12), clamped to the slider's range, sent every keystroke, and
+  // playback rewrote the time's box between two keys. So none of the box's events reach React
+  // (stopped at the window, before React's root sees them), and while it has the focus the page's
+  // own re-renders do not rewrite its text (the last is kept, and shown when the edit ends).
+  T.sliderOf = (t) => {
+    if (!t || t.tagName !== 'INPUT' || !t.classList.contains('mantine-NumberInput-input')) return null;
+    const box = t.closest('.mantine-NumberInput-root'), s = box && box.previousElementSibling;
+    return s && s.classList.contains('mantine-Slider-root') && s.id ? s : null;
+  };
+  const VALUE = Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, 'value');
+  T.held = (t) => {
+    if (t.__theoria) return t.__theoria;
+    const inner = Object.getOwnPropertyDescriptor(t, 'value') || VALUE;  // React's value tracker's
+    const h = t.__theoria = {editing: false, shown: VALUE.get.call(t)};
+    Object.defineProperty(t, 'value', {configurable: true,
+      get() { return inner.get.call(this); },
+      set(v) { h.shown = v; if (!h.editing) inner.set.call(this, v); }});
+    return h;
+  };
+  T.hold = (t) => { const h = T.held(t); if (!h.editing) { h.editing = true; h.typed = false; } };
+  T.release = (t) => { const h = T.held(t); h.editing = false; t.value = h.shown; };
+  T.commit = (t, s) => {
+    const h = T.held(t), text = VALUE.get.call(t).trim(), typed = h.editing && h.typed;
+    T.release(t);  // the value the server last sent, until it sends the one typed
+    const m = window.__viserMutable;
+    if (typed && text !== '' && m && m.sendMessage)
+      m.sendMessage({type: 'GuiUpdateMessage', uuid: s.id, updates: {value: text}});
+  };
+  for (const type of ['beforeinput', 'input', 'keypress', 'keyup', 'paste', 'cut', 'change',
+                      'compositionstart', 'compositionupdate', 'compositionend'])
+    window.addEventListener(type, (e) => {
+      if (!T.sliderOf(e.target)) return;
+      e.stopImmediatePropagation();
+      if (type === 'input') { T.hold(e.target); T.held(e.target).typed = true; }
+    }, true);
+  // held from focus (a click to select the text, then a key) or from the first key after Enter
+  window.addEventListener('focusin', (e) => { if (T.sliderOf(e.target)) T.hold(e.target); }, true);
+  window.addEventListener('keydown', (e) => {
+    const t = e.target, s = T.sliderOf(t);
+    if (!s) return;
+    e.stopImmediatePropagation();
+    if (e.key === 'Enter') { e.preventDefault(); T.commit(t, s); }
+    else if (e.key === 'Escape') { e.preventDefault(); T.release(t); }
+    else T.hold(t);
+  }, true);
+  window.addEventListener('focusout', (e) => {  // Mantine would clamp the box to the range here
+    const s = T.sliderOf(e.target);
+    if (s) { e.stopImmediatePropagation(); T.commit(e.target, s); }
+  }, true);
   T.SUBMIT_AFTER_MS = 120;
   document.addEventListener('submit', (e) => {
     const f = e.target;

@@ -2,7 +2,8 @@
 
 - A float or int with a finite range that a slider can hold exactly (every default and preset on
   its grid, ≤ MAX_SLIDER_STEPS steps) → a slider. The session debounces it: while it is dragged
-  only the last value is simulated.
+  only the last value is simulated. A number typed into the box beside it reaches the server as
+  text on Enter or blur (app/browser.py) and is taken as a text field's is (`Typed`, `on_typed`).
 - Any other number, and a vec3 ("1, 0.5, 1.5") → a text field in a form of its own. What is typed
   is taken only on Enter or when the field loses focus (never per keystroke), through
   `Param.parse`: "1e9", "2.5e6", "1e-3" and "-0.5" are taken exactly, a value out of range is
@@ -17,8 +18,10 @@ ephemeris) go into a folder kept folded ("More settings").
 """
 from __future__ import annotations
 
+import decimal
 import math
 import threading
+from dataclasses import dataclass
 from typing import Any, Callable
 
 from theoria.physics.errors import ParameterError
@@ -75,6 +78,11 @@ def slider_range(p: Param, presets=()) -> tuple[float, float, float] | None:
     return lo, p.maximum, step
 
 
+def _decimals(v: float) -> int:
+    """Digits after the point that show `v` exactly (its shortest form: 0.1234 → 4, 1e-06 → 6)."""
+    return max(0, -decimal.Decimal(repr(float(v))).as_tuple().exponent)
+
+
 def format_value(p: Param, v: Any) -> str:
     """The text a field shows for value `v`: exact enough that reading it back gives `v`."""
     if p.kind == "choice":
@@ -84,6 +92,32 @@ def format_value(p: Param, v: Any) -> str:
     if p.kind == "int":
         return str(int(v))
     return exact(v)
+
+
+@dataclass
+class Typed:
+    """A number a browser typed into a slider's box, as its text (sent on Enter or when the box
+    lost focus; app/browser.py)."""
+
+    client: Any
+    client_id: int
+    target: Any  # the slider's handle
+    text: str
+
+
+TYPED = "theoria_typed"  # the attribute of a slider's handle that takes a `Typed` (app/server.py's gate)
+
+
+def on_typed(handle, fn: Callable[[Typed], None]) -> None:
+    """What is typed into `handle`'s box goes to `fn` as text, to be parsed by the app: viser would
+    cast it to the slider's type itself (an int slider refused "1e3" and truncated "2.5")."""
+    setattr(handle, TYPED, fn)
+
+
+def number_param(handle) -> Param:
+    """A Param for a slider of the app's own (the time, the playback speed): its label names it,
+    its range is the slider's."""
+    return Param(handle.label, handle.value, float(handle.min), float(handle.max))
 
 
 class PerThread:
@@ -171,6 +205,7 @@ class ParamControls:
             h = gui.add_slider(p.display(), min=lo, max=hi, step=step,
                                initial_value=int(v) if p.kind == "int" else float(v), hint=hint, order=self._next())
             h.on_update(self._wrap(lambda name=name: self._taken(name, self.handles[name].value, True)))
+            on_typed(h, lambda typed, name=name: self._wrap(lambda: self._take_text(name, typed.text))(typed))
             self.kinds[name] = "slider"
             self._keep(h)
         else:
@@ -200,9 +235,15 @@ class ParamControls:
         """Enter in a text field, or the field lost focus: parse what it shows."""
         if self._guard or self._removed:
             return
+        self._take_text(name, self.handles[name].value)
+
+    def _take_text(self, name: str, text) -> None:
+        """A typed value (a text field's, or a number typed into a slider's box), taken exactly,
+        even between a slider's marks, or refused with the allowed range."""
+        if self._removed:
+            return
         p = self.spec.param(name)
-        h = self.handles[name]
-        text = str(h.value).strip()
+        text = str(text).strip()
         try:
             v = p.parse(text)
         except ParameterError as e:
@@ -213,6 +254,8 @@ class ParamControls:
         if v == self._values.get(name):
             return  # unchanged (a blur with nothing typed)
         self._values[name] = v
+        if self.kinds[name] == "slider":
+            self._show(name, v)
         if self.on_change is not None:
             self.on_change(name, False)
 
@@ -248,6 +291,8 @@ class ParamControls:
         guard, self._guard = self._guard, True
         try:
             if self.kinds[name] == "slider":
+                if p.kind != "int" and _decimals(v) > getattr(h, "precision", 99):
+                    h.precision = _decimals(v)  # a typed 0.1234 on a 0.001 slider is shown whole
                 h.value = int(v) if p.kind == "int" else float(v)
             else:
                 h.value = format_value(p, v)

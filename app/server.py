@@ -48,6 +48,7 @@ from theoria.physics.errors import ParameterError
 from theoria.scenarios import all_scenarios, get
 
 from . import page
+from .controls import TYPED, Typed
 from .panel import comparison_markdown, info_markdown  # noqa: F401
 from .session import ClientSession
 from .worker import MAX_TEXT_CHARS, RateLimitedLog, SimPool, shared_pool
@@ -178,7 +179,29 @@ class Gate:
                            "(not something this app offers; logged once)", once_key=("type", typ.__name__))
 
     def _dispatch(self, client_id, message) -> None:
+        if type(message) is vm.GuiUpdateMessage and isinstance(message.updates["value"], str):
+            client = self.door.server._connected_clients.get(client_id)
+            target = client and client.gui._gui_input_handle_from_uuid.get(message.uuid)
+            if target is not None and _number(target.value):  # text typed into a slider's box
+                self._typed(client, target, message.updates["value"])
+                return
         self.door.loop.create_task(self.inner(client_id, message))
+
+    def _typed(self, client, target, text: str) -> None:
+        """A number typed into a slider's box goes, as text, to the app's own parser (the slider's
+        `controls.TYPED`), on viser's callback pool; viser would cast it to the slider's type."""
+        take = getattr(target, TYPED, None)
+        if take is None:
+            self.dropped += 1
+            self.door.log.line(f"theoria: dropped a control update from {self.address}: text for a number",
+                               once_key=("gui", self.address, "text for a number"))
+            return
+        def failed(f) -> None:
+            e = None if f.cancelled() else f.exception()
+            if e is not None:
+                self.door.log.line(f"theoria: error taking a typed number: {e!r}", once_key=("typed", type(e)))
+
+        client.gui._thread_executor.submit(take, Typed(client, self.client_id, target, text)).add_done_callback(failed)
 
     def _pump(self) -> None:
         self.flush_at = None

@@ -40,7 +40,7 @@ from theoria.scenarios.drawing import OVERLAYS, View, palette
 
 from . import browser, gallery, page, playback
 from . import link as linkmod
-from .controls import ParamControls, PerThread
+from .controls import ParamControls, PerThread, number_param, on_typed
 from .export_html import configure_scene
 from .format import capitalised, human_number
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
@@ -236,10 +236,12 @@ class ClientSession:
             self.scrub = gui.add_slider("Time (% of the run)", min=0.0, max=100.0, step=0.1, initial_value=0.0)
             self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)  # made, not moved by a browser
             self.scrub.on_update(self._on(self._on_scrub))
+            on_typed(self.scrub, self._typed_into(self.scrub))
             self.time_md = gui.add_markdown("t = 0")
             self.speed = gui.add_slider("Playback speed", min=0.1, max=10.0, step=0.1, initial_value=1.0,
                                         hint=f"1 = the whole run in {RUN_SECONDS:g} s")
             self.speed.on_update(self._on(self._send_clock))
+            on_typed(self.speed, self._typed_into(self.speed))
             self._controls_order = getattr(self.speed, "order", None)
             self.controls = self._make_controls_here()
             self.draw_folder = gui.add_folder("What is drawn", expand_by_default=False)
@@ -253,6 +255,7 @@ class ClientSession:
                 self.exag = gui.add_slider("Exaggerate the shape", min=1.0, max=20.0, step=0.5, initial_value=1.0,
                                            hint="multiplies the departures of the semi-axes from their mean")
                 self.exag.on_update(self._on(self._on_exaggerate))
+                on_typed(self.exag, self._typed_into(self.exag))
             self._option_handles: list = []
             self._options_key = None
             self.plot_folder = gui.add_folder("Over time")
@@ -467,6 +470,17 @@ class ClientSession:
             else:
                 self._browser_event(fn, *args)
         return callback
+
+    def _typed_into(self, handle):
+        """What a browser typed into the box of one of the app's own sliders: checked against the
+        slider's range (refused with it, named), then set as the slider's value, whose callback
+        acts as for a move of the slider."""
+        param = number_param(handle)
+
+        def take(text: str) -> None:
+            handle.value = param.parse(str(text).strip())
+
+        return lambda typed: self._browser_event(take, typed.text)
 
     def _browser_event(self, fn, *args) -> None:
         """`fn(*args)` for something the browser did, after its earlier events are handled."""

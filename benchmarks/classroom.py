@@ -177,7 +177,8 @@ class ViserProtocolClient:
             content = m["props"].get("_markdown", m["props"].get("content"))
             if isinstance(content, str):
                 self.markdown[m["uuid"]] = content
-            if isinstance(content, str) and content.startswith("*simulat"):
+            # the run's counter; made after a quick preview was shown, it starts with that
+            if isinstance(content, str) and content.startswith(("*simulat", "*quick preview")):
                 self.status_uuid = m["uuid"]
                 self._status(content)
             if "value" in m:

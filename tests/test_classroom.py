@@ -892,6 +892,47 @@ def test_a_refused_slider_value_does_not_stick():
         asyncio.run(go())
 
 
+def test_a_number_typed_into_a_sliders_box_is_parsed_by_the_app():
+    """The page sends what is typed into a slider's box as text (app/browser.py): the app parses
+    it as a text field's value, exactly ("1e-2" is 0.01, "0.1234" is kept between the slider's
+    0.001 marks) or refused naming the control and the allowed range; viser's own cast would have
+    raised on "abc", refused "1e2" for an integer slider and truncated "100.5" to 100. The same for
+    the app's own sliders (the time: "1e1" is 10 % of the run)."""
+    with _server(scenario="tidal-capture") as (srv, sessions, url, log):
+        async def go():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            try:
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                s = next(iter(sessions.values()))
+                refused = lambda: [b for t, b in c.notifications if t.startswith("Not allowed")]
+                steps = c.uuid_of("Integrator steps per orbit")
+                await c.send_gui(steps, "1e2")
+                assert await c.wait_for(lambda: c.values.get(steps) == 100, 30), c.notifications
+                assert s.controls.values()["steps_per_orbit"] == 100
+                for text in ("100.5", "abc", "1e9"):
+                    n = len(refused())
+                    await c.send_gui(steps, text)
+                    assert await c.wait_for(lambda: len(refused()) > n, 30), (text, c.notifications)
+                    assert f"“{text}”" in refused()[-1] and "[16, 512]" in refused()[-1], refused()[-1]
+                assert s.controls.values()["steps_per_orbit"] == 100 and s.controls.handles["steps_per_orbit"].value == 100
+                speed = c.uuid_of("Playback speed")
+                await c.send_gui(speed, "1e-1")  # a whole run in 200 s: the clock moves 0.5 % a second
+                assert await c.wait_for(lambda: s.speed.value == 0.1, 30), c.notifications
+                time_ = c.uuid_of("Time (% of the run)")
+                await c.send_gui(time_, "1e1")
+                assert await c.wait_for(lambda: 0.1 <= s.clock < 0.12, 30), s.clock
+                n = len(refused())
+                await c.send_gui(time_, "150")
+                assert await c.wait_for(lambda: len(refused()) > n, 30)
+                assert "[0, 100]" in refused()[-1] and 0.1 <= s.clock < 0.2, (refused()[-1], s.clock)
+            finally:
+                await c.close()
+
+        asyncio.run(go())
+    assert "Traceback" not in log.getvalue()
+
+
 def test_a_burst_of_scene_switches_leaves_one_panel_of_the_last_scene():
     """Twenty scene switches sent at once (within the burst a browser may send): the panel that
     stays is the last scene's, each of its controls once, none of another scene's; no error."""
