@@ -51,34 +51,35 @@ def percent(rel: float) -> str:
 
 
 def verdict(c) -> tuple[str, str]:
-    """(words, tone) comparing Euler's value with the simulated one: tone "good" (agree to 0.1 %),
-    "close" (within 5 %), "far" (more), or "" when there is nothing to compare."""
+    """(words, tone) comparing Euler's value with the simulated one (without Euler's, the simulated
+    with the modern one): tone "good" (agree to 0.1 %), "close" (within 5 %), "far" (more), or ""
+    when there is nothing to compare or one side is exactly 0 (no percentage of a zero: a residual
+    against DE421's 0, a run's outcome 0 beside a probability)."""
     e, s = c.euler, c.simulated
     if not _finite(e) or not _finite(s):
         if _finite(s) and _finite(c.modern):
-            return _versus("simulated and modern", s, c.modern)
+            return _versus(("the simulation", "the modern value"), s, c.modern)
         return ("Euler gives no value here" if not _finite(e) else "no simulated value"), ""
-    if e == 0 or s == 0:
-        if e == s:
-            return "Euler and the simulation agree exactly", "good"
-        return (f"Euler says exactly 0; the simulation gives {human_number(s)}" if e == 0
-                else f"the simulation gives exactly 0; Euler says {human_number(e)}"), ""
-    return _versus("Euler and the simulation", e, s)
+    return _versus(("Euler", "the simulation"), e, s)
 
 
-def _versus(who: str, a: float, b: float) -> tuple[str, str]:
-    if a == b:  # also both exactly 0 (a run's capture outcome beside a probability of 0)
-        return f"{who} agree exactly", "good"
+def _versus(names: tuple[str, str], a: float, b: float) -> tuple[str, str]:
+    both = f"{names[0]} and {names[1]}"
+    if a == b:
+        return f"{capitalised(both)} agree exactly", "good"
+    if a == 0 or b == 0:
+        zero, other, v = (names[0], names[1], b) if a == 0 else (names[1], names[0], a)
+        return f"{capitalised(zero)}: exactly 0; {other}: {human_number(v)}", ""
     rel = abs(a - b) / max(abs(a), abs(b))
     if rel < 1e-9:
-        return f"{who} agree to 10⁻⁹", "good"
+        return f"{capitalised(both)} agree to 10⁻⁹", "good"
     if rel < 1e-4:
-        return f"{who} agree to {human_number(rel, 2)} (relative)", "good"
+        return f"{capitalised(both)} agree to {human_number(rel, 2)} (relative)", "good"
     if rel < 1e-3:
-        return f"{who} agree to {percent(rel)}", "good"
+        return f"{capitalised(both)} agree to {percent(rel)}", "good"
     if rel < 0.05:
-        return f"{who} are within {percent(rel)}", "close"
-    return f"{who} differ by {percent(rel)}", "far"
+        return f"{capitalised(both)} are within {percent(rel)}", "close"
+    return f"{capitalised(both)} differ by {percent(rel)}", "far"
 
 
 def _finite(x) -> bool:
@@ -96,7 +97,15 @@ _WORDS = {"rel": "relative", "abs": "absolute", "err": "error", "max": "largest"
           "amp": "amplitude", "init": "initial", "nut": "nutation", "prec": "precession", "lon": "longitude",
           "lat": "latitude", "ecc": "eccentricity", "incl": "inclination", "omega": "ω", "zeta": "ζ",
           "eta": "η", "phi": "φ", "theta": "θ", "psi": "ψ", "eps": "ε", "delta": "δ", "alpha": "α",
-          "beta": "β", "gamma": "γ", "L": "L", "gp": "Goldreich–Peale", "k2": "k²"}
+          "beta": "β", "gamma": "γ", "L": "L", "gp": "Goldreich–Peale", "k2": "k²", "mprime": "M′ term",
+          "peale": "Peale's", "de421": "DE421", "iau2000": "IAU 2000", "iau2006": "IAU 2006", "vondrak": "Vondrák",
+          "me": "mean-Earth axes", "plus": "+", "minus": "−"}
+# pieces of a key read as one (before the key is cut at its underscores)
+_FORMS = [(re.compile(r"(?<![a-z0-9])(\d+)_(\d+)(yr|d)(?=_|$)"),  # 18_6yr: the 18.6-year term
+           lambda m: f"{m[1]}.{m[2]}-{'year' if m[3] == 'yr' else 'day'}"),
+          (re.compile(r"(?<![a-z0-9.])([1-9])_([1-9])(?=_|$)"), lambda m: f"{m[1]}:{m[2]}"),  # resonance 3_2
+          (re.compile(r"(?<![a-z])psi_a(?=_|$)"), lambda m: "ψA"), (re.compile(r"(?<=_)p_a(?=_|$)"), lambda m: "pA"),
+          (re.compile(r"zeta_dot"), lambda m: "ζ̇"), (re.compile(r"sub_earth"), lambda m: "sub-Earth")]
 
 
 def metric_label(key: str, unit: str | None = None) -> str:
@@ -113,6 +122,8 @@ def metric_label(key: str, unit: str | None = None) -> str:
                 break
     unit = gallery.pretty_unit(unit or "")
     key = re.sub(r"^d([a-z]+)_dt(?=_|$)", r"\1_rate", key)  # dspin_dt: the rate of the spin
+    for form, words in _FORMS:
+        key = form.sub(words, key)
     words = []
     for w in re.split(r"_+", key):
         if not w:

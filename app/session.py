@@ -97,11 +97,13 @@ def split_notes(notes) -> tuple[list[str], list[str]]:
 
 def series_label(key: str) -> str:
     """A plot series' name in words (a snake_case key of the run becomes "ζ, Euler (rad)")."""
-    if "_" not in key or " " in key:
-        return key
+    if "_" not in key or " " in key:  # written for people already; its unit as the panel writes units
+        return re.sub(r"\((deg|arcsec|arcmin)\b", lambda m: "(" + {"deg": "°", "arcsec": "″", "arcmin": "′"}[m[1]], key)
     words = key.split("_")
     tail = ""
     for w in ("euler", "simulated", "exact", "forced", "free"):
+        if w in words and words.index(w) > 0 and words[words.index(w) - 1] == "from":
+            continue  # "angle from Euler's axis" is not a curve of Euler's
         if w in words[:-1] or (w == words[-1]):
             words.remove(w)
             tail = ", Euler" if w == "euler" else f", {w}"
@@ -951,8 +953,9 @@ class ClientSession:
         t = d.plot_t
         series = dict(d.plot) or {"energy": self.result.trajectory.energy}
         idx = np.unique(np.linspace(0, len(t) - 1, min(UPLOT_POINTS, len(t))).round().astype(int))
-        data = (np.asarray(t)[idx],) + tuple(np.asarray(v, float)[idx] for v in series.values())
-        ser = ({"label": f"t ({d.time_unit})"},) + tuple(
+        c = d.clock
+        data = (np.asarray(t)[idx] * c.scale,) + tuple(np.asarray(v, float)[idx] for v in series.values())
+        ser = ({"label": f"{c.name} ({c.words})" if c.words else c.name},) + tuple(
             {"label": series_label(k), "stroke": "rgb(%d,%d,%d)" % palette(i), "width": 1.5}
             for i, k in enumerate(series))
         key = tuple(s["label"] for s in ser)
@@ -1087,7 +1090,7 @@ class ClientSession:
             self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)
         t = d.times
         now = t[min(self.view.frame, len(t) - 1)]
-        self.time_md.content = f"t = {human_number(now)} of {human_number(t[-1])} {_unit_words(d.time_unit)}"
+        self.time_md.content = d.clock.reading(now, t[-1], human_number)
 
     # ---- the view as a link ------------------------------------------------------------------
     def link_state(self) -> linkmod.LinkState | None:
@@ -1176,10 +1179,3 @@ def _attr(text: str) -> str:
     import html
 
     return html.escape(text, quote=True)
-
-
-_TIME_WORDS = {"s": "s", "yr": "years", "d": "days", "day": "days"}
-
-
-def _unit_words(unit: str) -> str:
-    return _TIME_WORDS.get(unit, unit)

@@ -132,7 +132,7 @@ _UNIT_WORDS = {"deg": "°", "d": "days", "day": "days", "1/yr": "per year", "G=1
                "G=1 units": "units, G = 1", "rad/unit": "rad per time unit", "b": "× the Moon's distance b",
                "n": "× the mean motion n", "arcsec": "″", "arcsec/yr": "″/yr", "arcsec/century": "″/century",
                "deg/yr": "°/yr", "1/orbit": "per orbit", "unit": "time units", "1/unit^2": "per time unit²",
-               "δ": "× δ", "δ^2": "× δ²", "n_sun": "× the Sun's mean motion", "LD": "lunar distances"}
+               "δ": "× δ", "δ^2": "× δ²", "1/δ": "× 1/δ", "1/n": "× 1/n", "rad per 1/δ": "× δ", "n_sun": "× the Sun's mean motion", "LD": "lunar distances"}
 
 
 def pretty_unit(unit: str) -> str:

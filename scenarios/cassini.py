@@ -150,7 +150,7 @@ def _cassini(values, progress=None):
                    "state 2: the ecliptic pole between the spin axis and the orbit normal"),
     ]
     notes_rows = ("Obliquity: simulated is the figure axis's mean angle to the ecliptic pole over whole node cycles; "
-                  "Euler's column is Peale's equation (physics.cassini), modern the IAU mean lunar equator. The axis "
+                  "Euler's column is Peale's equation, modern the IAU mean lunar equator. The axis "
                   "leaves the plane of the other two normals by its monthly nod, the forced physical libration in "
                   "latitude (DE421's own axis nods by ±0.06°).")
     notes = [

@@ -229,6 +229,36 @@ class View:
         return bool(opts[key].default) if key in opts else True
 
 
+@dataclass(frozen=True)
+class Clock:
+    """How a run's time is read out to a class: `name` = t × `scale` `words` ("t = 2.5 of 5 orbits")."""
+
+    scale: float = 1.0
+    words: str = ""
+    name: str = "t"
+
+    def reading(self, now: float, end: float, number: Callable[[float], str]) -> str:
+        last = number(end * self.scale)
+        words = self.words[:-1] if last == "1" and self.words in ("days", "years", "orbits") else self.words
+        return f"{self.name} = {number(now * self.scale)} of {last}{' ' + words if words else ''}"
+
+
+# the trajectory's time unit → (words, name); a time in the unit of an orbital rate is counted in orbits
+_CLOCK_WORDS = {"s": ("s", "t"), "day": ("days", "t"), "d": ("days", "t"), "yr": ("years", "t"),
+                "size/distance": ("", "size/distance"), "G=1 units": ("time units (G = 1)", "t")}
+_PER_ORBITAL_RATE = ("1/n·rad", "1/δ·rad", "1/δ")
+
+
+def clock_of(run) -> Clock:
+    """The read-out of `run`'s time: seconds, days or years as they are; a time measured in the unit
+    of an orbital rate (n or δ, in rad per time unit: `orbital_rate`, else 1) as orbits, t·n/2π."""
+    unit = run.trajectory.time_unit
+    if unit in _PER_ORBITAL_RATE:
+        return Clock(float(run.params.get("orbital_rate", 1.0)) / (2 * np.pi), "orbits")
+    words, name = _CLOCK_WORDS.get(unit, (unit, "t"))
+    return Clock(1.0, words, name)
+
+
 @dataclass
 class Drawing:
     """Everything one run draws (see the module docstring)."""
@@ -247,6 +277,7 @@ class Drawing:
     plot: dict[str, np.ndarray] = field(default_factory=dict)  # series on plot_t, for the live plot
     plot_t: np.ndarray | None = None
     rotation: bool = True
+    clock: Clock = field(default_factory=Clock)  # the time as the panel reads it out
 
     @property
     def n_frames(self) -> int:
@@ -511,7 +542,8 @@ def new_drawing(run, spec, max_frames: int = MAX_FRAMES) -> Drawing:
     return Drawing(frames=frames, times=np.asarray(tr.t, float)[frames], time_unit=tr.time_unit,
                    camera=spec.camera or default_camera(spec), title=spec.title, section=spec.section,
                    summary=spec.summary, formula=spec.euler_formula, overlays=overlays,
-                   plot=dict(run.plot_series), plot_t=np.asarray(tr.t, float), rotation=spec.kind == "rotation")
+                   plot=dict(run.plot_series), plot_t=np.asarray(tr.t, float), rotation=spec.kind == "rotation",
+                   clock=clock_of(run))
 
 
 def default_camera(spec) -> Camera:

@@ -205,7 +205,7 @@ def _earth_long(values, progress=None):
         q = z_to_many(axis)[0]  # the figure axis on the pole (the spin's phase is not followed)
         L = np.tile([0.0, 0.0, EP.SPIN_RAD_DAY], (len(t), 1))  # C = 1: L = ω on the figure axis
         notes.append("Secular model: the torque of the Sun and the Moon averaged over the day, the month, the year "
-                     "and the Moon's 18.6-year node (physics.long_term_precession); the pole is the mean pole "
+                     "and the Moon's 18.6-year node; the pole is the mean pole "
                      f"(no nutation). κ☉ = {tq.kappa_sun / ARCSEC_RAD * YR:.4f}″/yr, κ☾ = "
                      f"{tq.kappa_moon / ARCSEC_RAD * YR:.4f}″/yr, geodesic precession "
                      f"{tq.geodesic / ARCSEC_RAD * YR * 100:.4f}″/cy.")
@@ -266,7 +266,7 @@ def _earth_long(values, progress=None):
                      "integration from the secular pole adds the nutation back (peak to peak "
                      f"{m['zoom_nutation_longitude_range_arcsec']:.1f}″ across and "
                      f"{m['zoom_nutation_obliquity_range_arcsec']:.1f}″ in obliquity).")
-    eclip = ("the ecliptic of date moves as Vondrák et al. (2011) have it (ERFA ltpecl): the planets turn the "
+    eclip = ("the ecliptic of date moves as Vondrák et al. (2011) have it (computed with ERFA): the planets turn the "
              "Earth's orbit plane, the obliquity swings" if values["ecliptic"] == "moving" else
              "the ecliptic is held fixed at J2000 (no planets): the pole drifts from the real one by degrees "
              "over millennia")
@@ -356,9 +356,9 @@ def e10_earth_long_term():
     return dict(euler=float(fixed.max()), simulated=float(sep.max()), modern=0.0, rel_error=float(sep.max()),
                 tolerance=0.1, unit="deg",
                 note=(f"error and tolerance in degrees: the largest angle between the secular model's pole and "
-                      f"Vondrák, Capitaine & Wallace's (2011, ERFA ltpequ) from 11,000 BC to AD 15,000, "
+                      f"Vondrák, Capitaine & Wallace's (2011, computed with ERFA) from 11,000 BC to AD 15,000, "
                       f"{sep.max():.3f}° in {J2000_YEAR + t[j] / YR:.0f}; the ecliptic of date from the same paper "
-                      f"(ERFA ltpecl) drives the Sun's and the Moon's planes, theoria's averaged torque moves the "
+                      f"drives the Sun's and the Moon's planes, theoria's averaged torque moves the "
                       f"equator. Euler's column: the same torque on the fixed J2000 ecliptic ({fixed.max():.2f}°). "
                       f"The obliquity swings between {obl.min():.3f}° and {obl.max():.3f}°. What is left: the model's "
                       f"rate at J2000 on a fixed ecliptic, {rate:.4f}″/yr, against ψ_A + the geodesic term "

@@ -144,7 +144,7 @@ def _simulate(values, progress=None):
                         "where the orbit-averaged tide vanishes"),
              Comparison("probability of capture into 3:2 (Goldreich & Peale 1966)", None, m["captured_3_2"],
                         m["gp_capture_probability_3_2"], "", "one run is captured (1) or not (0); a sweep over the "
-                        "initial angle measures the probability (theoria check tides.capture-3:2)"),
+                        "initial angle measures the probability (as `theoria check` does)"),
              Comparison("probability of ending in 1:1", None, m["captured_1_1"], m["gp_capture_probability_1_1"], "",
                         "passes 3:2 (and 2:1 if above it), then captured if q lies inside the 1:1 zone")]
     notes = [f"This run: {what}.",
@@ -198,7 +198,7 @@ register(Scenario(
         Param("eccentricity", 0.07, 0.0, 0.5, "", "orbital eccentricity e (Mercury 0.2056)", label="Orbital eccentricity"),
         Param("omega0", 0.1, 0.0, 1.0, "", "ω₀ = √(3(B−A)/C), the body's out-of-roundness (Mercury ≈ 0.019)",
               exclusive_min=True, label="Out-of-roundness ω₀ = √(3(B − A)/C)"),
-        Param("tide_rate", 2e-5, 0.0, 1e-3, "n", "tidal rate c in θ̈ = −c (a/r)⁶ (θ̇ − ḟ) (exaggerated; physics.tides)",
+        Param("tide_rate", 2e-5, 0.0, 1e-3, "n", "tidal rate c in θ̈ = −c (a/r)⁶ (θ̇ − ḟ) (exaggerated)",
               exclusive_min=True, label="Tidal rate c (exaggerated)"),
         Param("spin_rate", 1.8, 0.2, 4.0, "n", "initial spin θ̇/n at periapse", label="Starting spin θ̇"),
         Param("initial_angle_deg", 0.0, -180.0, 180.0, "deg", "initial angle of the long axis from the periapse line",

@@ -387,7 +387,7 @@ def test_session_applies_the_moons_camera_and_gives_the_view_back():
             pos = np.asarray(client.camera.position, float)
             assert np.allclose(pos / np.linalg.norm(pos), e / np.linalg.norm(e), atol=1e-9)
             assert client.camera.fov == pytest.approx(np.radians(60.0))
-            assert "ζ, Euler §833 (deg)" in s._plot_key  # the plot shows the drawing's choice
+            assert "ζ, Euler §833 (°)" in s._plot_key  # the plot shows the drawing's choice
         cb = on
         cb.value = False  # the checkbox's callback: option off → the scenario's camera and fov back
         assert client.camera.fov == pytest.approx(np.radians(75.0))

@@ -40,8 +40,12 @@ def test_verdicts_say_how_far_euler_is_from_the_simulation():
     assert tone == "" and "exactly 0" in words  # no percentage of a zero
     # no Euler value: the simulated one against the modern one, also when both are exactly 0 (a
     # tidal run's capture outcome beside a probability of 0 divided by zero)
-    assert verdict(Comparison("x", None, 0.0, 0.0)) == ("simulated and modern agree exactly", "good")
-    assert verdict(Comparison("x", None, 0.0, 0.5))[1] == "far"
+    assert verdict(Comparison("x", None, 0.0, 0.0)) == ("The simulation and the modern value agree exactly", "good")
+    # one side exactly 0: both values, no percentage (the Moon's attitude 1.21″ from DE421's, whose
+    # residual is 0 by definition, "differed by 100 %"; so did a run's outcome 0 beside a probability)
+    assert verdict(Comparison("x", None, 1.2137, 0.0)) == ("The modern value: exactly 0; the simulation: 1.214", "")
+    assert verdict(Comparison("x", None, 0.0, 0.5)) == ("The simulation: exactly 0; the modern value: 0.5", "")
+    assert verdict(Comparison("x", 2.0, 1.0, 9.0))[0] == "Euler and the simulation differ by 50 %"
 
 
 def test_metric_keys_become_words_with_units():
@@ -49,7 +53,10 @@ def test_metric_keys_become_words_with_units():
     assert metric_label("precession_rate_arcsec_per_yr") == "Precession rate (″/yr)"
     assert metric_label("energy_rel_drift") == "Energy relative drift"
     assert metric_label("polhode_period_euler_808_s") == "Polhode period Euler's §808 (s)"
-    assert "_" not in metric_label("nutation_longitude_18_6yr_iau2000_arcsec")
+    assert metric_label("nutation_longitude_18_6yr_iau2000_arcsec") == "Nutation longitude 18.6-year IAU 2000 (″)"
+    assert metric_label("captured_3_2") == "Captured 3:2" and metric_label("resonance_1_1") == "Resonance 1:1"
+    assert metric_label("physical_libration_mprime_arcsec") == "Physical libration M′ term (″)"
+    assert metric_label("precession_rate_iau2006_psi_a_arcsec_per_yr") == "Precession rate IAU 2006 ψA (″/yr)"
 
 
 def test_a_label_that_starts_with_a_greek_letter_keeps_it():
