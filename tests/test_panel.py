@@ -434,3 +434,21 @@ def test_the_loading_line_is_parsed_before_viser_s_client_runs():
     assert all(line < i for i in scripts if i != ours)
     assert line < order.index(("div", "root"))
     assert order.index(("title", None)) < line  # the tab is named before anything else
+
+
+@pytest.mark.parametrize("name, values", [
+    ("libration-eccentric", {"orbital_rate": 2.0, "orbits": 3.0}),
+    ("precession-circular", {"orbits": 7.0}),
+    ("tidal-capture", {"orbits": 40.0}),
+])
+def test_a_time_in_the_unit_of_an_orbital_rate_is_read_out_in_orbits(name, values):
+    """The read-out said "t = 0 of 31.42 1/n·rad". A run asked for a number of orbits (at any
+    mean motion n, in rad per time unit) is read out as that number of orbits, and so is its plot's
+    time axis."""
+    from theoria.app.format import human_number
+
+    spec = get(name)
+    run = spec.simulate(dict(spec.preview, **values))
+    d = spec.drawing(run)
+    assert d.clock.reading(d.times[-1], d.times[-1], human_number) == f"t = {values['orbits']:g} of {values['orbits']:g} orbits"
+    assert d.clock.reading(0.0, d.times[-1], human_number).startswith("t = 0 of ")
