@@ -715,11 +715,19 @@ def _overlap(a, b) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
-def _static_world(d: Drawing, it: Item) -> np.ndarray | None:
-    """The scene position of a label that does not move (its frames static too), else None."""
-    if it.animated():
-        return None
-    pos = np.asarray(it.position, float)
+def _per_frame(v, ks) -> np.ndarray:
+    """An attribute's value at frames `ks` (one value per frame, or one for all)."""
+    v = np.asarray(v, float)
+    return v[ks] if v.ndim == 2 else np.broadcast_to(v, (len(ks),) + v.shape)
+
+
+def _world(d: Drawing, it: Item, ks) -> tuple[np.ndarray, np.ndarray]:
+    """The scene position of a label at frames `ks` (through the frames it hangs on), and whether
+    it is shown there."""
+    from ..physics import quaternion as quat
+
+    pos = _per_frame(it.position, ks)
+    shown = np.ones(len(ks), bool) if it.visible is None else np.asarray(it.visible, bool)[ks]
     parts = it.name.split("/")
     for k in range(len(parts) - 1, 0, -1):
         try:
@@ -728,26 +736,42 @@ def _static_world(d: Drawing, it: Item) -> np.ndarray | None:
             continue
         if not isinstance(fr, Frame):
             continue
-        if fr.animated():
-            return None
-        from ..physics import quaternion as quat
+        pos = quat.rotate(_per_frame(fr.wxyz, ks), pos) + _per_frame(fr.position, ks)
+        if fr.visible is not None:
+            shown &= np.asarray(fr.visible, bool)[ks]
+    return pos, shown
 
-        pos = quat.rotate(np.asarray(fr.wxyz, float), pos) + np.asarray(fr.position, float)
-    return pos
+
+def _moves(d: Drawing, it: Item) -> bool:
+    parts = it.name.split("/")
+    frames = [d.item(n) for n in ("/".join(parts[:k]) for k in range(1, len(parts))) if _has(d, n)]
+    return bool(it.animated()) or any(isinstance(f, Frame) and f.animated() for f in frames)
+
+
+def _has(d: Drawing, name: str) -> bool:
+    return any(x.name == name for x in d.items)
+
+
+SWEPT_FRAMES = 12  # frames at which a moving label's place is taken as taken
 
 
 def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -> int:
     """Labels that stay put are seen from the drawing's camera; one that would cover an earlier
-    one is turned to another side of its point (its `anchor`; the point stays where the physics
-    puts it). Moving labels (on a turning body, a read-out that follows a body) are left as they
-    are. Returns how many labels were turned."""
+    one, or a place a moving label (on a turning body, a read-out that follows a body) passes
+    through, is turned to another side of its point (its `anchor`; the point stays where the
+    physics puts it). Moving labels are left as they are. Returns how many labels were turned."""
+    labels = [it for it in d.items if isinstance(it, Label) and isinstance(it.text, str)]
+    ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
     placed, turned = [], 0
-    for it in d.items:
-        if not isinstance(it, Label) or not isinstance(it.text, str):
+    for it in labels:  # where the moving ones pass
+        if _moves(d, it):
+            pos, shown = _world(d, it, ks)
+            xy, depth = _project(pos, d.camera, width, height)
+            placed += [_box(p, it.text, it.anchor) for p, z, on in zip(xy, depth, shown) if on and z > 0]
+    for it in labels:
+        if _moves(d, it):
             continue
-        pos = _static_world(d, it)
-        if pos is None:
-            continue
+        pos, shown = _world(d, it, ks[:1])
         xy, depth = _project(pos, d.camera, width, height)
         if depth[0] <= 0:
             continue

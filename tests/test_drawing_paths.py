@@ -186,3 +186,30 @@ def test_camera_and_text_travel_with_the_replays(outputs):
     (static, rb), = [b for b in rrd["/world/body"] if not b[0]]
     q = np.asarray(rb.column("Transform3D:quaternion").to_pylist(), float).reshape(-1, 4)
     assert np.allclose(q, to_xyzw(np.asarray(d.item("body").wxyz, float)), atol=1e-6)
+
+
+def test_a_fixed_label_is_turned_off_the_path_of_a_moving_one():
+    """A label that stays put was placed against the other fixed labels only: on the Moon's scene
+    "the Moon in space" sat on the C axis's label, which turns with the body. The places a moving
+    label passes through (its frame turning about the view's axis) count as taken. Checked in
+    pixels of the camera's view, computed here from the geometry (a 75° view from +x)."""
+    from theoria.physics import quaternion as quat
+    from theoria.scenarios.drawing import Camera, Drawing, Frame, Label, declutter_labels
+
+    F = 40
+    angles = np.linspace(0.0, 0.6, F)  # the frame turns about x, the line of sight: its tip sweeps sideways
+    wxyz = np.stack([np.cos(angles / 2), np.sin(angles / 2), 0 * angles, 0 * angles], 1)
+    d = Drawing(frames=np.arange(F), times=np.arange(F, dtype=float), time_unit="s",
+                camera=Camera(position=(10.0, 0.0, 0.0), look_at=(0.0, 0.0, 0.0), fov_deg=75.0))
+    d.add(Frame(name="body", wxyz=wxyz),
+          Label(name="body/tip", text="C = 1", position=(0.0, 0.0, 1.0)),
+          Label(name="caption", text="the body in space", position=(0.0, 0.0, 1.2), anchor="top-left"))
+    # where the tip is drawn, by hand: a point (0, y, z) seen from x = 10 with a 75° vertical view
+    # is at pixel (640 − 640 y / (10 tan 37.5° · 1.6), 400 − 400 z / (10 tan 37.5°))
+    tip = quat.rotate(wxyz, np.array([0.0, 0.0, 1.0]))
+    t = np.tan(np.radians(37.5)) * 10.0
+    px = np.stack([640 - 640 * tip[:, 1] / (t * 1.6), 400 - 400 * tip[:, 2] / t], 1)
+    cap = (640.0, 400 - 400 * 1.2 / t)
+    assert np.any(np.hypot(*(px - cap).T) < 12), "the tip passes over the caption's point"
+    assert declutter_labels(d) == 1
+    assert d.item("caption").anchor != "top-left" and d.item("body/tip").anchor == "top-left"

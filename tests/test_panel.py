@@ -235,7 +235,8 @@ def test_a_linked_time_is_the_full_runs_frame_after_a_quick_preview(monkeypatch)
         _wait(lambda: s.drawing_spec == spec.name and s.result is not None
               and s.result.params["free_zeta0_deg"] == zeta and len(s.result.trajectory.t) == len(run.trajectory.t), 120)
         _wait(lambda: s.updates >= 2, 10)  # its drawing done (the count comes last); a preview came first
-        assert abs(s.drawing.times[s.view.frame] - want) < 1e-6 * want and not s.playing
+        shown = s.drawing.times[s.view.frame]
+        assert abs(shown - want) < 1e-6 * want and not s.playing, (shown, want, s.updates, s.playing, s.clock)
 
 
 def test_a_linked_time_is_the_frame_shown_even_when_the_page_was_playing():
