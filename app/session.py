@@ -862,6 +862,7 @@ class ClientSession:
                         cb.value = overlays.get(k, True)
                     finally:
                         self._guard = False
+                self._offer_toggles(drawing)
             else:
                 overlays = {k: bool(cb.value) for k, cb in self.toggles.items()}
             self.view.show(drawing, overlays)
@@ -917,12 +918,23 @@ class ClientSession:
             old = self.drawing
             self.drawing = drawing_of(self.spec, self.result, self.view_opts)
             self.view.show(self.drawing, {k: bool(cb.value) for k, cb in self.toggles.items()})
+            self._offer_toggles(self.drawing)
             if old is None or old.camera != self.drawing.camera:
                 self._set_camera(self.drawing)
             self._update_plot()
             self.view.set_frame(self._frame_index())
             self._follow_camera()
             self._send_tracks()
+
+    def _offer_toggles(self, drawing) -> None:
+        """Only the overlays this drawing has are offered (a three-body scene has no principal axes,
+        polhode or body shape)."""
+        groups = {it.group for it in drawing.items}
+        for k, cb in self.toggles.items():
+            if cb.visible != (k in groups):
+                cb.visible = k in groups
+        if self.exag.visible != drawing.rotation:  # no body's shape to exaggerate
+            self.exag.visible = drawing.rotation
 
     def _sync_scene_options(self) -> None:
         """Checkboxes for the scenario's own options (Scenario.options)."""

@@ -453,3 +453,22 @@ def test_a_time_in_the_unit_of_an_orbital_rate_is_read_out_in_orbits(name, value
     d = spec.drawing(run)
     assert d.clock.reading(d.times[-1], d.times[-1], human_number) == f"t = {values['orbits']:g} of {values['orbits']:g} orbits"
     assert d.clock.reading(0.0, d.times[-1], human_number).startswith("t = 0 of ")
+
+
+def test_what_is_drawn_offers_only_what_the_scene_draws():
+    """A three-body scene listed the rigid body's overlays (principal axes, polhode, Poinsot's
+    ellipsoid …) and the shape's exaggeration, none of which it draws; a rotation scene offers
+    them again."""
+    from theoria.app import gallery
+    from test_gallery import _session, _wait
+
+    with _session("collinear") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        shown = {k for k, cb in s.toggles.items() if cb.visible}
+        assert shown == {"bodies", "scenario"} and not s.exag.visible
+        n = s.updates
+        s.dd.value = gallery.label(get("free-tumble"))
+        _wait(lambda: s.updates > n and s.drawing_spec == "free-tumble")
+        shown = {k for k, cb in s.toggles.items() if cb.visible}
+        assert {"axes", "vectors", "polhode", "herpolhode", "energy_ellipsoid"} <= shown and s.exag.visible
+        assert "bodies" not in shown  # a free body has no other body
