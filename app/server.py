@@ -143,9 +143,7 @@ class Gate:
         if typ is vm.GuiUpdateMessage:
             why = _bad_update(message)
             if why:
-                self.dropped += 1
-                self.door.log.line(f"theoria: dropped a control update from {self.address}: {why}",
-                                   once_key=("gui", self.address, why))
+                self._drop(why)
                 return
             if message.uuid in self.pending:
                 self.coalesced += 1
@@ -179,22 +177,29 @@ class Gate:
                            "(not something this app offers; logged once)", once_key=("type", typ.__name__))
 
     def _dispatch(self, client_id, message) -> None:
-        if type(message) is vm.GuiUpdateMessage and isinstance(message.updates["value"], str):
+        if type(message) is vm.GuiUpdateMessage and isinstance(message.updates["value"], (str, bool)):
+            value = message.updates["value"]
             client = self.door.server._connected_clients.get(client_id)
             target = client and client.gui._gui_input_handle_from_uuid.get(message.uuid)
-            if target is not None and _number(target.value):  # text typed into a slider's box
-                self._typed(client, target, message.updates["value"])
+            if target is not None and _number(target.value):  # a slider
+                if isinstance(value, str):  # text typed into its box
+                    self._typed(client, target, value)
+                else:  # viser would take True as 1
+                    self._drop("true/false for a number")
                 return
         self.door.loop.create_task(self.inner(client_id, message))
+
+    def _drop(self, why: str) -> None:
+        self.dropped += 1
+        self.door.log.line(f"theoria: dropped a control update from {self.address}: {why}",
+                           once_key=("gui", self.address, why))
 
     def _typed(self, client, target, text: str) -> None:
         """A number typed into a slider's box goes, as text, to the app's own parser (the slider's
         `controls.TYPED`), on viser's callback pool; viser would cast it to the slider's type."""
         take = getattr(target, TYPED, None)
         if take is None:
-            self.dropped += 1
-            self.door.log.line(f"theoria: dropped a control update from {self.address}: text for a number",
-                               once_key=("gui", self.address, "text for a number"))
+            self._drop("text for a number")
             return
         def failed(f) -> None:
             e = None if f.cancelled() else f.exception()

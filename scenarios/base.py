@@ -450,7 +450,8 @@ class Scenario:
         return merged
 
     def sweep(self, grid=None, random=None, samples=None, out=None, cluster=None, resume=False, metrics=None,
-              preset=None, seed=0, chunk=None, workers=None, progress=False, force=False, **values):
+              preset=None, seed=0, chunk=None, workers=None, progress=False, force=False,
+              max_steps: float | None = MAX_STEPS, max_memory: float | None = MAX_MEMORY, **values):
         """Many runs on Dask (a local cluster on this machine's cores, or `cluster="tcp://…"`),
         written chunk by chunk to `out` (.zarr: an xarray Dataset, one dimension per swept
         parameter; .parquet: a flat table) and returned opened.
@@ -459,12 +460,15 @@ class Scenario:
         random: {name: (lo, hi)} with `samples` draws (a `sample` dimension, `seed`); the other
         parameters from `preset` and the keywords. `resume=True` keeps every finished chunk of
         `out`. `metrics`: the metric names to keep (default all). An `out` that holds an earlier
-        sweep needs `resume=True` or `force=True` (replace it). See docs/sweeps.md."""
+        sweep needs `resume=True` or `force=True` (replace it). Each run is held to `max_steps` and
+        `max_memory` as `simulate` is (None lifts a limit); one over them is not run, its status
+        "refused". See docs/sweeps.md."""
         from ..app.sweep import run_sweep
 
         summary, result = run_sweep(self, grid=grid, random=random, samples=samples, out=out, cluster=cluster,
                                     resume=resume, metrics=metrics, fixed=values, preset=preset, seed=seed,
-                                    chunk=chunk, workers=workers, progress=progress, force=force)
+                                    chunk=chunk, workers=workers, progress=progress, force=force,
+                                    limits={"max_steps": max_steps, "max_memory": max_memory})
         if result is None:
             raise KeyboardInterrupt(summary.line())
         return result

@@ -916,6 +916,11 @@ def test_a_number_typed_into_a_sliders_box_is_parsed_by_the_app():
                     assert await c.wait_for(lambda: len(refused()) > n, 30), (text, c.notifications)
                     assert f"“{text}”" in refused()[-1] and "[16, 512]" in refused()[-1], refused()[-1]
                 assert s.controls.values()["steps_per_orbit"] == 100 and s.controls.handles["steps_per_orbit"].value == 100
+                await c.send_gui(steps, True)  # viser would take it as 1
+                await c.enter("Orbits to follow", "60")  # a text field: taken as ever
+                # the run of 60 orbits is made at 100 steps an orbit (at 1 it was refused)
+                assert await c.wait_for(lambda: (s.good_values or {}).get("orbits") == 60, 60), c.notifications
+                assert s.good_values["steps_per_orbit"] == 100
                 speed = c.uuid_of("Playback speed")
                 await c.send_gui(speed, "1e-1")  # a whole run in 200 s: the clock moves 0.5 % a second
                 assert await c.wait_for(lambda: s.speed.value == 0.1, 30), c.notifications

@@ -587,3 +587,18 @@ def test_a_sweep_description_left_empty_is_one_line_on_resume(tmp_path):
     with pytest.raises(th.ParameterError) as e:
         sw.ParquetWriter(out, sw.make_plan(sc, grid={"step": (0.001, 0.01, 2)}), resume=True)
     assert "_sweep.json" in str(e.value) and "--force" in str(e.value)
+
+
+@pytest.mark.slow
+def test_python_sweep_takes_the_budget_as_simulate_does(tmp_path):
+    """`Scenario.sweep` held every run to the default budget with no way to change it (the command
+    has --max-steps): `max_steps` / `max_memory` as `simulate` takes them. Free body at its 0.01 s
+    step: 2 s is 200 steps, 4 s is 400."""
+    from distributed import Client, LocalCluster
+
+    sc = th.scenario("free-tumble")
+    with LocalCluster(n_workers=1, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as lc, Client(lc) as c:
+        df = sc.sweep(grid={"duration": [2.0, 4.0]}, out=tmp_path / "b.parquet", cluster=c, max_steps=300)
+        assert list(df.sort_values("duration")["status"]) == [sw.STATUS["ok"], sw.STATUS["refused"]]
+        df = sc.sweep(grid={"duration": [2.0, 4.0]}, out=tmp_path / "b.parquet", cluster=c, force=True, max_steps=None)
+        assert list(df["status"]) == [sw.STATUS["ok"]] * 2
