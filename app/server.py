@@ -201,6 +201,7 @@ class Gate:
         if take is None:
             self._drop("text for a number")
             return
+
         def failed(f) -> None:
             e = None if f.cancelled() else f.exception()
             if e is not None:

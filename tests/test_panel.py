@@ -234,8 +234,11 @@ def test_a_linked_time_is_the_full_runs_frame_after_a_quick_preview(monkeypatch)
     with _session("free-tumble") as (s, client):
         _wait(lambda: s.drawing_spec == spec.name and s.result is not None
               and s.result.params["free_zeta0_deg"] == zeta and len(s.result.trajectory.t) == len(run.trajectory.t), 120)
-        _wait(lambda: s.updates >= 2, 10)  # its drawing done (the count comes last); a preview came first
-        shown = s.drawing.times[s.view.frame]
+        # the full run's drawing shown (a preview first, unless the full run came back before it),
+        # its frame set: the session does both under the view lock
+        _wait(lambda: s.drawing_spec == spec.name and np.array_equal(s.drawing.times, full), 10)
+        with s._view_lock:
+            shown = s.drawing.times[s.view.frame]
         assert abs(shown - want) < 1e-6 * want and not s.playing, (shown, want, s.updates, s.playing, s.clock)
 
 
