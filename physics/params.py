@@ -6,6 +6,7 @@ allowed range in one line.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -110,7 +111,7 @@ class Param:
         if isinstance(part, (bool, np.bool_)):  # True is 1 to Python, not a number a user meant
             raise ParameterError(self.name, whole, "a number, " + self.allowed())
         try:
-            v = float(part)
+            v = float(plain_number(part) if isinstance(part, str) else part)
         except OverflowError:  # an int beyond float range (10**400): as infinite as "inf"
             raise ParameterError(self.name, whole, "a finite number, " + self.allowed()) from None
         except (TypeError, ValueError):
@@ -127,6 +128,21 @@ class Param:
 
 
 _SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+_FROM_SUPERSCRIPT = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻⁺", "0123456789-+")
+# "2.5 × 10⁶", "2.5×10^6", "1 x 10^-3": a power of ten as people (and the app's own read-outs) write it
+_TIMES_TEN = re.compile(r"(?:([+-]?(?:\d+\.?\d*|\.\d+))\s*[×xX*·]\s*)?10\s*(?:\^\s*([+-]?\d+)|([⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+))")
+
+
+def plain_number(text: str) -> str:
+    """A number as written by a person or copied from the app's panel, in Python's form: the true
+    minus sign "−" as "-", thin spaces dropped, "2.5 × 10⁶" / "2.5×10^6" as "2.5e6", "10⁻³" as
+    "1e-3". Anything
+    else is returned stripped, for float() to take or refuse."""
+    t = text.strip().replace("\u2212", "-").replace("\u2009", "").replace("\u202f", "")
+    m = _TIMES_TEN.fullmatch(t)
+    if m:
+        return f"{m[1] or 1}e{m[2] if m[2] is not None else m[3].translate(_FROM_SUPERSCRIPT)}"
+    return t
 # units whose symbol means little on a panel, in words
 _UNIT_WORDS = {"deg": "°", "d": "days", "day": "days", "1/yr": "per year", "G=1 mass": "mass units, G = 1",
                "G=1 units": "units, G = 1", "rad/unit": "rad per time unit", "b": "× the Moon's distance b",

@@ -241,3 +241,22 @@ def test_values_a_user_did_not_mean_as_numbers_are_refused():
                        ({"duration": False}, "a number"), ({"omega0": (1.0, True, 2.0)}, "a number")):
         with pytest.raises(ParameterError, match=needle):
             sc.resolve(kw)
+
+
+def test_numbers_as_people_and_the_panel_write_them_are_taken():
+    """The panel writes "−0.5" (a true minus) and "2.5 × 10⁶"; copied back into a field, both were
+    refused as not a number. Taken exactly, as the Python literals say; a comma is still not a
+    decimal point (it separates a vector's components)."""
+    from theoria.app.format import human_number
+
+    p = Param("x", 0.0, -1e30, 1e30)
+    for text, want in [("−0.5", -0.5), ("2.5 × 10⁶", 2.5e6), ("2.5×10^6", 2.5e6), ("1 x 10^-3", 1e-3),
+                       ("−2.796 × 10⁻¹¹", -2.796e-11), ("10⁻³", 1e-3), (" 7 ", 7.0), ("1e-3", 1e-3)]:
+        assert p.parse(text) == want, text
+    for v in (2.5e6, -2.796e-11, 0.01477, -0.5, 1.234e-7):  # what the panel shows reads back
+        assert p.parse(human_number(v)) == v
+    assert Param("v", (0, 0, 0), -10, 10, kind="vec3").parse("1, −0.5, 2.5 × 10⁰") == (1.0, -0.5, 2.5)
+    assert p.parse("10") == 10.0  # ten, not a power of it
+    for text in ("1,5", "abc", "2.5 × 10", "× 10⁶"):
+        with pytest.raises(ParameterError):
+            p.parse(text)
