@@ -1,10 +1,13 @@
 """The sweep maps in a real headless Chromium at 1280×800: small versions of the two flagship sweeps
 (Hyperion's chaos map, Mercury's capture into 3:2) served with `--sweep`, a pixel clicked with the
-mouse, that run replayed in the scene; screenshots into docs/screenshots/sweep-*.png.
+mouse, that run replayed in the scene; screenshots sweep-*.png (into docs/screenshots/ with
+THEORIA_SCREENSHOTS=1).
 Run: pytest -m browser tests/test_sweep_map_browser.py
 """
 from __future__ import annotations
 
+import os
+import tempfile
 import time
 from pathlib import Path
 
@@ -18,7 +21,10 @@ pytestmark = [pytest.mark.browser, pytest.mark.slow]
 if not _have_browser():
     pytest.skip("needs Debian's chromium at /usr/bin/chromium and python playwright", allow_module_level=True)
 
-OUT = Path(__file__).resolve().parent.parent / "docs" / "screenshots"
+# docs/screenshots/ is refreshed only on request (THEORIA_SCREENSHOTS=1), as in test_app_browser.py:
+# a test run does not modify the working tree
+OUT = (Path(__file__).resolve().parent.parent / "docs" / "screenshots" if os.environ.get("THEORIA_SCREENSHOTS")
+       else Path(tempfile.gettempdir()) / "theoria-screenshots")
 W, H = 1280, 800
 
 # the flagship sweeps made small (the docs' full ones take a minute and twenty minutes): fewer
