@@ -756,18 +756,31 @@ SWEPT_FRAMES = 12  # frames at which a moving label's place is taken as taken
 
 
 def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -> int:
-    """Labels that stay put are seen from the drawing's camera; one that would cover an earlier
-    one, or a place a moving label (on a turning body, a read-out that follows a body) passes
-    through, is turned to another side of its point (its `anchor`; the point stays where the
-    physics puts it). Moving labels are left as they are. Returns how many labels were turned."""
+    """Labels are seen from the drawing's camera and turned to another side of their point (their
+    `anchor`; the point stays where the physics puts it) so as not to cover one another: a moving
+    label (on a turning body, a read-out that follows a body) to the side where, over the run, it
+    covers the moving labels before it least (the ω and L arrows' tips ride on the C axis's in a
+    libration), a label that stays put off every earlier one and every place a moving label
+    passes through. Returns how many labels were turned."""
     labels = [it for it in d.items if isinstance(it, Label) and isinstance(it.text, str)]
     ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
     placed, turned = [], 0
-    for it in labels:  # where the moving ones pass
+    for it in labels:  # where the moving ones pass, each on the side that covers the others least
         if _moves(d, it):
             pos, shown = _world(d, it, ks)
             xy, depth = _project(pos, d.camera, width, height)
-            placed += [_box(p, it.text, it.anchor) for p, z, on in zip(xy, depth, shown) if on and z > 0]
+            pts = [p for p, z, on in zip(xy, depth, shown) if on and z > 0]
+            best, fewest = it.anchor, None
+            for anchor in (it.anchor,) + tuple(a for a in ANCHOR_TRIES if a != it.anchor):
+                n = sum(_overlap(_box(p, it.text, anchor), b) for p in pts for b in placed)
+                if fewest is None or n < fewest:
+                    best, fewest = anchor, n
+                if n == 0:
+                    break
+            if best != it.anchor:
+                it.anchor = best
+                turned += 1
+            placed += [_box(p, it.text, best) for p in pts]
     for it in labels:
         if _moves(d, it):
             continue

@@ -213,3 +213,32 @@ def test_a_fixed_label_is_turned_off_the_path_of_a_moving_one():
     assert np.any(np.hypot(*(px - cap).T) < 12), "the tip passes over the caption's point"
     assert declutter_labels(d) == 1
     assert d.item("caption").anchor != "top-left" and d.item("body/tip").anchor == "top-left"
+
+
+def test_two_labels_riding_together_are_put_on_different_sides():
+    """Two labels on a turning body a few pixels apart (the tip of the C axis and a mark beside
+    it) covered each other all run long: the second is turned to a side where its box, over the
+    run, meets the first one's none of the time."""
+    from theoria.scenarios.drawing import Camera, Drawing, Frame, Label, _box, _overlap, _project, _world, declutter_labels
+
+    F = 30
+    angles = np.linspace(0.0, 0.5, F)
+    wxyz = np.stack([np.cos(angles / 2), np.sin(angles / 2), 0 * angles, 0 * angles], 1)
+    d = Drawing(frames=np.arange(F), times=np.arange(F, dtype=float), time_unit="s",
+                camera=Camera(position=(10.0, 0.0, 0.0), look_at=(0.0, 0.0, 0.0), fov_deg=75.0))
+    d.add(Frame(name="body", wxyz=wxyz),
+          Label(name="body/c", text="C = 1", position=(0.0, 0.0, 1.0)),
+          Label(name="body/mark", text="the pole", position=(0.0, 0.02, 1.0)))
+    ks = np.arange(F)
+
+    def meetings() -> int:
+        boxes = {}
+        for name in ("body/c", "body/mark"):
+            it = d.item(name)
+            xy, _ = _project(_world(d, it, ks)[0], d.camera)
+            boxes[name] = [_box(p, it.text, it.anchor) for p in xy]
+        return sum(_overlap(a, b) for a, b in zip(boxes["body/c"], boxes["body/mark"]))
+
+    assert meetings() == F  # as made: on top of each other in every frame
+    declutter_labels(d)
+    assert meetings() == 0 and d.item("body/c").anchor == "top-left"
