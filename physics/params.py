@@ -136,19 +136,21 @@ _TIMES_TEN = re.compile(r"(?:([+-]?(?:\d+\.?\d*|\.\d+))\s*[×xX*·]\s*)?10\s*(?:
 def plain_number(text: str) -> str:
     """A number as written by a person or copied from the app's panel, in Python's form: the true
     minus sign "−" as "-", thin spaces dropped, "2.5 × 10⁶" / "2.5×10^6" as "2.5e6", "10⁻³" as
-    "1e-3". Anything
-    else is returned stripped, for float() to take or refuse."""
+    "1e-3". Anything else is returned stripped, for float() to take or refuse."""
     t = text.strip().replace("\u2212", "-").replace("\u2009", "").replace("\u202f", "")
     m = _TIMES_TEN.fullmatch(t)
     if m:
         return f"{m[1] or 1}e{m[2] if m[2] is not None else m[3].translate(_FROM_SUPERSCRIPT)}"
     return t
+
+
 # units whose symbol means little on a panel, in words
 _UNIT_WORDS = {"deg": "°", "d": "days", "day": "days", "1/yr": "per year", "G=1 mass": "mass units, G = 1",
                "G=1 units": "units, G = 1", "rad/unit": "rad per time unit", "b": "× the Moon's distance b",
                "n": "× the mean motion n", "arcsec": "″", "arcsec/yr": "″/yr", "arcsec/century": "″/century",
                "deg/yr": "°/yr", "1/orbit": "per orbit", "unit": "time units", "1/unit^2": "per time unit²",
-               "δ": "× δ", "δ^2": "× δ²", "1/δ": "× 1/δ", "1/n": "× 1/n", "rad per 1/δ": "× δ", "n_sun": "× the Sun's mean motion", "LD": "lunar distances"}
+               "δ": "× δ", "δ^2": "× δ²", "1/δ": "× 1/δ", "1/n": "× 1/n", "rad per 1/δ": "× δ",
+               "n_sun": "× the Sun's mean motion", "LD": "lunar distances"}
 
 
 def pretty_unit(unit: str) -> str:

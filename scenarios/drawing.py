@@ -758,10 +758,10 @@ SWEPT_FRAMES = 12  # frames at which a moving label's place is taken as taken
 def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -> int:
     """Labels are seen from the drawing's camera and turned to another side of their point (their
     `anchor`; the point stays where the physics puts it) so as not to cover one another: a moving
-    label (on a turning body, a read-out that follows a body) to the side where, over the run, it
-    covers the moving labels before it least (the ω and L arrows' tips ride on the C axis's in a
-    libration), a label that stays put off every earlier one and every place a moving label
-    passes through. Returns how many labels were turned."""
+    label (on a turning body, a read-out that follows a body) to the side where its box, at
+    SWEPT_FRAMES frames of the run, meets the places the moving labels before it pass through
+    least; a label that stays put off every earlier one and every place a moving label passes
+    through. Returns how many labels were turned."""
     labels = [it for it in d.items if isinstance(it, Label) and isinstance(it.text, str)]
     ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
     placed, turned = [], 0
