@@ -5,6 +5,7 @@ presenter mode with its keys. Run: pytest -m browser tests/test_teacher_browser.
 """
 from __future__ import annotations
 
+import contextlib
 import re
 import time
 from urllib.parse import urlencode
@@ -75,6 +76,18 @@ def _session_for(sessions, before: set, name: str | None = None, timeout: float 
             return new[-1]
         time.sleep(0.2)
     raise AssertionError(f"no session showed {name}")
+
+
+@contextlib.contextmanager
+def _scene(browser, app, spec):
+    """A fresh page showing `spec` (with its quick preview values) and its session; closed after."""
+    base, sessions = app
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(spec))
+    try:
+        yield page, _session_for(sessions, before, spec.name)
+    finally:
+        ctx.close()
 
 
 def _query(spec, **extra) -> str:
@@ -155,12 +168,8 @@ def test_every_panel_is_in_words_and_fits_two_screens(browser, app):
 def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
     from theoria.scenarios import get
 
-    base, sessions = app
     flip, pull = get("middle-axis-flip"), get("gravity-start")
-    before = set(sessions)
-    ctx, page = _open(browser, base + "?" + _query(flip))
-    try:
-        s = _session_for(sessions, before, flip.name)
+    with _scene(browser, app, flip) as (page, s):
         field = _field(page, flip.param("perturbation").display())
         n = s.updates
         field.click()
@@ -175,12 +184,7 @@ def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
             assert time.time() - t0 < WAIT_MS / 1000
             time.sleep(0.1)
         assert s.result.params["perturbation"] == 1e-3
-    finally:
-        ctx.close()
-    before = set(sessions)
-    ctx, page = _open(browser, base + "?" + _query(pull))
-    try:
-        s = _session_for(sessions, before, pull.name)
+    with _scene(browser, app, pull) as (page, s):
         field = _field(page, pull.param("gm").display())
         field.fill("2.5e6")
         field.press("Enter")
@@ -200,8 +204,6 @@ def test_typed_numbers_are_taken_exactly_on_enter_or_blur(browser, app):
         time.sleep(0.5)
         assert s.updates == n and s.good_values["distance"] == 10.0
         assert page.evaluate("(e) => e.value", field) == "10"
-    finally:
-        ctx.close()
 
 
 def test_a_number_typed_into_a_sliders_box_is_taken_exactly_or_refused(browser, app):
@@ -211,13 +213,9 @@ def test_a_number_typed_into_a_sliders_box_is_taken_exactly_or_refused(browser, 
     value back on the last good one; an emptied box shows the value again."""
     from theoria.scenarios import get
 
-    base, sessions = app
     ecc = get("libration-eccentric")
     label = ecc.param("eccentricity").display()
-    before = set(sessions)
-    ctx, page = _open(browser, base + "?" + _query(ecc))
-    try:
-        s = _session_for(sessions, before, ecc.name)
+    with _scene(browser, app, ecc) as (page, s):
         page.wait_for_function(f"(l) => !!({NEAR_LABEL_JS})([l, 'input.mantine-NumberInput-input'])", arg=label,
                                timeout=WAIT_MS)
         box = _near(page, label, "input.mantine-NumberInput-input")
@@ -250,19 +248,14 @@ def test_a_number_typed_into_a_sliders_box_is_taken_exactly_or_refused(browser, 
         box.press("Backspace")
         box.press("Enter")
         assert _wait_for(lambda: box.input_value() == "0.1234") and s.controls.values()["eccentricity"] == 0.1234
-    finally:
-        ctx.close()
 
 
 def test_a_copied_link_restores_scenario_parameters_time_and_camera(browser, app):
     from theoria.scenarios import get
 
-    base, sessions = app
+    sessions = app[1]
     flip = get("middle-axis-flip")
-    before = set(sessions)
-    ctx, page = _open(browser, base + "?" + _query(flip))
-    try:
-        s = _session_for(sessions, before, flip.name)
+    with _scene(browser, app, flip) as (page, s):
         field = _field(page, flip.param("perturbation").display())
         field.fill("0.002")
         field.press("Enter")
@@ -291,8 +284,6 @@ def test_a_copied_link_restores_scenario_parameters_time_and_camera(browser, app
             assert time.time() < t_end, (url, s.playing, s.drawing.times[s.view.frame])
             time.sleep(0.2)
         want_cam = [float(x) for x in re.search(r"[?&]cam=([^&]+)", url).group(1).split(",")]
-    finally:
-        ctx.close()
     before = set(sessions)
     ctx, page = _open(browser, url)  # a fresh browser context: nothing shared but the address
     try:
@@ -353,12 +344,8 @@ def test_an_arrow_key_on_a_focused_slider_moves_the_slider_only(browser, app):
     key moved the slider and stepped the clock, two actions at once."""
     from theoria.scenarios import get
 
-    base, sessions = app
     flip = get("middle-axis-flip")
-    before = set(sessions)
-    ctx, page = _open(browser, base + "?" + _query(flip))
-    try:
-        s = _session_for(sessions, before, flip.name)
+    with _scene(browser, app, flip) as (page, s):
         page.get_by_role("button", name="Pause").click()
         assert _wait_for(lambda: not s.playing)
         time.sleep(0.5)
@@ -372,8 +359,6 @@ def test_an_arrow_key_on_a_focused_slider_moves_the_slider_only(browser, app):
         page.mouse.click(300, 500)  # away from the panel, the key steps the clock again
         page.keyboard.press("ArrowRight")
         assert _wait_for(lambda: s.clock > clock, limit=10.0)
-    finally:
-        ctx.close()
 
 
 # the body's orientation on the page, each animation frame for `seconds`: frames drawn, poses seen
@@ -415,12 +400,8 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
     tests/test_classroom.py); paused or stepped, the page shows exactly the server's frame."""
     from theoria.scenarios import get
 
-    base, sessions = app
     spec = get("free-tumble")
-    before = set(sessions)
-    ctx, page = _open(browser, base + "?" + _query(spec))
-    try:
-        s = _session_for(sessions, before, spec.name)
+    with _scene(browser, app, spec) as (page, s):
         assert s.page_plays and s.tick_hz() < 10  # the server ticks only for the time read-out
         _page_plays(page)
         seen = page.evaluate(POSES_JS, 2)
@@ -459,8 +440,6 @@ def test_the_page_plays_by_itself_and_stops_where_the_server_does(browser, app):
         field.type("70.5", delay=600)
         field.press("Enter")
         assert _wait_for(lambda: 0.7 <= s.clock < 0.8, limit=3.0), (s.clock, field.input_value())
-    finally:
-        ctx.close()
 
 
 # the points of a line-segments node as the page draws them (its three.js geometry)
@@ -483,12 +462,8 @@ def test_the_page_plays_label_text_and_segments_and_stops_where_the_server_does(
 
     from theoria.scenarios import get
 
-    base, sessions = app
     spec = get("libration-circular")
-    before = set(sessions)
-    ctx, page = _open(browser, base + "?" + _query(spec))
-    try:
-        s = _session_for(sessions, before, spec.name)
+    with _scene(browser, app, spec) as (page, s):
         assert s.page_plays and s.tick_hz() < 10  # nothing for the server to move
         _page_plays(page)
         server_line = np.array(s.view._h["/world/f_direction"].points, float).ravel()
@@ -525,8 +500,6 @@ def test_the_page_plays_label_text_and_segments_and_stops_where_the_server_does(
         line = np.array(page.evaluate(SEGMENT_JS, "/world/f_direction"))
         want = np.asarray(next(it for it in s.drawing.items if it.name == "f_direction").points[k], float).ravel()
         assert np.abs(line - want).max() < 1e-5, (line, want)
-    finally:
-        ctx.close()
 
 
 def _wait_for(cond, limit: float = 20.0) -> bool:
