@@ -5,7 +5,9 @@ What the server refuses, whoever asks (a student's browser or a script speaking 
 
 - **Nothing leaves the machine.** viser answers a `ShareUrlRequest` from any peer by opening a
   public tunnel (two child processes and a look-up of the share host); the server drops that
-  message, and every message type the app does not use, before viser sees it (each logged once).
+  message, and every message type the app does not use, before viser sees it (each logged once);
+  a frame that is not a viser message at all is ignored the same way (`Malformed`), where viser's
+  reading loop ended the connection.
   The server binds 127.0.0.1 unless `--host` says otherwise, opens no browser, sends no
   analytics, and stops when its parent process dies.
 - **A browser's messages are bounded**: its socket is read at most READ_RATE messages a second
@@ -170,6 +172,12 @@ class Gate:
             self._pump()
             return
         if typ in IGNORED_QUIETLY:
+            return
+        if typ is Malformed:
+            self.dropped += 1
+            self.door.refused["malformed"] = self.door.refused.get("malformed", 0) + 1
+            self.door.log.line(f"theoria: ignored a frame from {self.address} that is not viser's protocol "
+                               f"({message.why}; logged once)", once_key=("malformed", self.address))
             return
         self.dropped += 1
         self.door.refused[typ.__name__] = self.door.refused.get(typ.__name__, 0) + 1
@@ -436,11 +444,45 @@ def _read_with_backpressure() -> None:
                 tokens, last = 1.0, time.monotonic()
             tokens -= 1.0
             if not isinstance(raw, bytes):  # viser's client sends binary frames only
+                handle_message(Malformed("a text frame"))
                 continue
-            handle_message(message_class.deserialize(raw))
+            try:
+                message = message_class.deserialize(raw)
+            except Exception as e:  # noqa: BLE001 — whatever a peer sends must not end its handler
+                handle_message(Malformed(_undecodable(raw, e, message_class)))
+                continue
+            handle_message(message)
 
     consumer._theoria = True
     _infra._message_consumer = consumer
+
+
+@dataclass
+class Malformed:
+    """A websocket frame that is not one of viser's messages (not msgpack, not a dict, no known
+    `type`, fields missing): handed to the browser's gate instead of ending its connection."""
+
+    why: str
+
+
+def _undecodable(raw: bytes, e: Exception, message_class) -> str:
+    """What was wrong with a frame, in a few words (never the peer's own bytes)."""
+    import msgspec
+
+    try:
+        mapping = msgspec.msgpack.decode(raw)
+    except Exception:  # noqa: BLE001
+        return "not msgpack"
+    if not isinstance(mapping, dict):
+        return f"a msgpack {type(mapping).__name__}, not a message"
+    if not isinstance(mapping.get("type"), str):
+        return "a message without a type"
+    try:
+        if mapping["type"] not in message_class._subclass_from_type_string():
+            return "a message of a type viser does not have"
+    except Exception:  # noqa: BLE001 — a viser without the registry: the generic words below
+        pass
+    return f"a message viser cannot read ({type(e).__name__})"
 
 
 def _refuse_share(server: viser.ViserServer, log: RateLimitedLog) -> None:

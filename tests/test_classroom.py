@@ -1151,6 +1151,43 @@ def test_a_short_run_asked_later_goes_before_a_long_run_asked_earlier():
         pool.close()
 
 
+def test_frames_that_are_not_viser_messages_are_ignored_and_the_browser_stays_served():
+    """What a peer can put in a websocket frame besides a message of viser's protocol: bytes that
+    are not msgpack, msgpack that is not a dict, a dict without a type or of a type viser does not
+    have, a message with its fields missing, a text frame, an empty frame. viser's reading loop
+    raised on each and closed the connection with 1011 (an internal error) and a traceback line;
+    now each is ignored and counted, one line names the address, and the same browser is still
+    served."""
+    import msgspec
+
+    frames = [b"\x93\xff\x00garbage", msgspec.msgpack.encode(5), msgspec.msgpack.encode([1, 2]),
+              msgspec.msgpack.encode({"a": 1}), msgspec.msgpack.encode({"type": 7}),
+              msgspec.msgpack.encode({"type": "NoSuchMessage"}), msgspec.msgpack.encode({"type": "GuiUpdateMessage"}),
+              msgspec.msgpack.encode({"type": "ViewerCameraMessage", "wxyz": "x"}), "a text frame", b""]
+    with _server() as (srv, sessions, url, log):
+        async def go():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            try:
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                for f in frames:
+                    await c.ws.send(f)
+                await asyncio.sleep(1.0)
+                spin = c.uuid_of("Spin rate")
+                first, _ = await c.act(spin, float(c.values[spin]) + 0.5)
+                return c.closed_code, first
+            finally:
+                await c.close()
+
+        code, first = asyncio.run(go())
+        refused = dict(srv._theoria_door.refused)
+    assert code is None and first is not None, (code, first)  # still open, and its slider redraws
+    assert refused.get("malformed") == len(frames), refused
+    text = log.getvalue()
+    assert "not viser's protocol" in text and "127.0.0.1" in text, text
+    assert "connection handler failed" not in text and len(text.splitlines()) <= 3, text
+
+
 @pytest.mark.parametrize("frame", ["text", "binary"])
 def test_a_message_of_megabytes_closes_its_socket_unread(frame):
     """A page sends messages of well under a kilobyte; viser let 50 MB in, and 40-MB frames were
