@@ -357,12 +357,19 @@ def cmd_serve(args) -> int:
 def _write_command(args, suffixes, write, what: str, how: str) -> int:
     """record / export: the values, the limits and the target checked before the run; then the
     file written whole or not at all (app/files.py), and where it went said."""
-    from theoria.app.files import check_out
+    from theoria.app.files import check_out, written_whole
+    from theoria.app.interrupt import finishing
 
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     sc.check_budget(values, **_limits(args))
     check_out(args.out, suffixes, force=args.force)
-    write(sc.name, args.out, values)
+    try:
+        write(sc.name, args.out, values)
+    except (KeyboardInterrupt, Terminated):
+        if not written_whole(args.out):
+            raise
+    # the new file is in place, whole: a stop from here on changes nothing, so none is reported
+    finishing()
     _wrote(args.out, f"{what} of {sc.name}", how)
     return 0
 
@@ -544,7 +551,7 @@ def main(argv: list[str] | None = None) -> int:
 def _main(argv: list[str] | None) -> int:
     import errno
 
-    with cli_signals():
+    with cli_signals(process=argv is None):  # argv None: the `theoria` command itself
         try:
             args = build_parser().parse_args(argv)
             code = args.fn(args)

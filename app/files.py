@@ -6,7 +6,9 @@ is replaced only when asked). `write_whole` writes the bytes to a temporary file
 target (`.NAME.XXXX.part`: same directory, so the rename cannot cross file systems), flushes it
 to disk, checks its size and renames it over the target. Until that rename the target is
 untouched: an older file stays as it was. On a full disk, any other write error, Ctrl-C or
-SIGTERM the temporary file is removed and the error raised (`WriteError`: one line). The bytes
+SIGTERM the temporary file is removed and the error raised (`WriteError`: one line). A stop that
+comes during the rename waits for it; one that comes after it finds the file in place and whole,
+and the command line reports it written (`written_whole`), not as a stop that changed nothing. The bytes
 are produced in memory before the write, so no library's own file sink is involved (rerun's
 blocks forever in its flush on a full disk).
 """
@@ -17,9 +19,12 @@ import tempfile
 from pathlib import Path
 
 from ..physics.errors import ParameterError
-from .interrupt import sigterm_raises
+from .interrupt import signals_held, sigterm_raises
 
 CHUNK = 1 << 20  # bytes per write call
+# the targets this process has put in place whole: a command stopped after the rename reports the
+# file as written (it is, and whole), not as an interruption that changed nothing
+_WRITTEN: set[str] = set()
 
 
 class WriteError(Exception):
@@ -79,6 +84,14 @@ def _write_all(fd: int, data: bytes) -> None:
         view = view[n:]
 
 
+def written_whole(path: str | os.PathLike) -> bool:
+    """Whether this process has put a whole file in place at `path` (`write_whole`)."""
+    target = Path(os.fspath(path)).expanduser()
+    if target.is_symlink():
+        target = target.resolve()
+    return str(target.absolute()) in _WRITTEN
+
+
 def write_whole(path: str | os.PathLike, data: bytes) -> int:
     """Write `data` to `path` whole or not at all (see the module). Returns the bytes written."""
     target = Path(os.fspath(path)).expanduser()
@@ -97,8 +110,10 @@ def write_whole(path: str | os.PathLike, data: bytes) -> int:
             os.fchmod(fd, mode)
             os.close(fd)
             fd = -1
-            os.replace(tmp, target)
-            tmp = None
+            with signals_held():  # the rename and the note that it happened are not cut apart
+                os.replace(tmp, target)
+                tmp = None
+                _WRITTEN.add(str(target.absolute()))
         except BaseException as e:
             if fd >= 0:
                 os.close(fd)

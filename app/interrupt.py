@@ -39,7 +39,7 @@ class Terminated(BaseException):
     `except Exception` swallows it)."""
 
 
-_state = {"active": 0, "pending": None, "previous_trace": None, "traced": [], "backstop": None}
+_state = {"active": 0, "pending": None, "previous_trace": None, "traced": [], "backstop": None, "finishing": False}
 BACKSTOP_S = 0.5
 # the backstop's look at the pending signal and its delivery, against the main thread taking it:
 # between the two, the main thread could raise the signal, print "interrupted" and put Python's
@@ -132,10 +132,11 @@ def _handler(signum, frame):
 
 
 @contextlib.contextmanager
-def cli_signals():
+def cli_signals(process: bool = False):
     """While the block runs (main thread only): Ctrl-C raises KeyboardInterrupt and SIGTERM
     raises Terminated, each only where the exception can propagate. The previous handlers are
-    restored after."""
+    restored after, unless the command is `finishing` and the block is the whole `process` (the
+    `theoria` command itself, which exits right after: there a late Ctrl-C stays ignored)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -149,11 +150,26 @@ def cli_signals():
         with _lock:
             _state["active"] -= 1
         pending = _take_pending() if not _state["active"] else None
-        for s, h in old.items():
-            if h is not None:
-                signal.signal(s, h)
-        if pending is not None:  # deferred and never raised (the block ended first): not lost
-            _raise(pending)
+        if not (process and _state["finishing"]):
+            _state["finishing"] = False
+            for s, h in old.items():
+                if h is not None:
+                    signal.signal(s, h)
+            if pending is not None:  # deferred and never raised (the block ended first): not lost
+                _raise(pending)
+
+
+def finishing() -> None:
+    """The command's work is done and cannot be undone (its file is in place): Ctrl-C and SIGTERM
+    are ignored from here to the end of the process, so that a stop in its last lines is not
+    reported as one that changed nothing (exit 130 beside a new file). Main thread, inside
+    `cli_signals`, which puts the handlers back at its end (unless it is the whole process)."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+    _state["finishing"] = True
+    for s in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(s, signal.SIG_IGN)
+    _take_pending()
 
 
 @contextlib.contextmanager
