@@ -580,9 +580,10 @@ class SceneView:
                 f"{name}/arrow", np.zeros((1, 2, 3), np.float32), col, **style), sig=tuple(style.values()))
             label = None
             if it.labels:
-                scale = float(self.label_scale)
+                scale, anchor = float(self.label_scale), it.label_anchor(0)
                 label = self._node(f"{name}/label", lambda: self.scene.add_label(
-                    f"{name}/label", str(it.labels[0]), font_screen_scale=scale), sig=(scale,), text=str(it.labels[0]))
+                    f"{name}/label", str(it.labels[0]), font_screen_scale=scale, anchor=anchor), sig=(scale, anchor),
+                    text=str(it.labels[0]))
             self._vectors[it.name] = [frame, arrow, label, -1.0, poses]
             return [frame, arrow, label]
         vec = _f32(self._static_value(it.vectors, "vectors" in anim))
@@ -591,10 +592,10 @@ class SceneView:
                           points=pts)]
         for j, text in enumerate(it.labels):
             pos = _tuple(1.08 * pts[j, 1])
-            scale = float(self.label_scale)
-            out.append(self._node(f"{name}/label_{j}", lambda text=text, pos=pos, j=j: self.scene.add_label(
-                f"{name}/label_{j}", str(text), position=pos, font_screen_scale=scale), sig=(scale,), text=str(text),
-                position=pos))
+            scale, anchor = float(self.label_scale), it.label_anchor(j)
+            out.append(self._node(f"{name}/label_{j}", lambda text=text, pos=pos, anchor=anchor: self.scene.add_label(
+                f"{name}/label_{j}", str(text), position=pos, font_screen_scale=scale, anchor=anchor),
+                sig=(scale, anchor), text=str(text), position=pos))
         return out
 
     def _draw_path(self, it: Path, name, anim):

@@ -151,7 +151,13 @@ class Arrows(Item):
     head_radius: float = 0.05
     head_length: float = 0.1
     labels: Sequence[str] = ()  # written at the arrow tips
+    # the side of its tip each letter sits on (LABEL_ANCHORS; "top-left" when not given), chosen by
+    # declutter_labels with the labels
+    label_anchors: Sequence[str] = ()
     STATIC_NDIM: ClassVar[dict] = {"vectors": 2}
+
+    def label_anchor(self, j: int) -> str:
+        return self.label_anchors[j] if j < len(self.label_anchors) else "top-left"
 
 
 LABEL_ANCHORS = ("top-left", "top-center", "top-right", "center-left", "center-center", "center-right",
@@ -721,12 +727,13 @@ def _per_frame(v, ks) -> np.ndarray:
     return v[ks] if v.ndim == 2 else np.broadcast_to(v, (len(ks),) + v.shape)
 
 
-def _world(d: Drawing, it: Item, ks) -> tuple[np.ndarray, np.ndarray]:
+def _world(d: Drawing, it: Item, ks, position=None) -> tuple[np.ndarray, np.ndarray]:
     """The scene position of a label at frames `ks` (through the frames it hangs on), and whether
-    it is shown there."""
+    it is shown there. `position`: a point of the item other than its own `position` (per frame
+    or fixed, in the item's frame)."""
     from ..physics import quaternion as quat
 
-    pos = _per_frame(it.position, ks)
+    pos = _per_frame(it.position if position is None else position, ks)
     shown = np.ones(len(ks), bool) if it.visible is None else np.asarray(it.visible, bool)[ks]
     parts = it.name.split("/")
     for k in range(len(parts) - 1, 0, -1):
@@ -740,6 +747,45 @@ def _world(d: Drawing, it: Item, ks) -> tuple[np.ndarray, np.ndarray]:
         if fr.visible is not None:
             shown &= np.asarray(fr.visible, bool)[ks]
     return pos, shown
+
+
+@dataclass
+class _Text:
+    """A text the scene writes at a point: a label, or the letter at an arrow's tip."""
+
+    text: str
+    pos: np.ndarray  # scene positions at the frames looked at
+    shown: np.ndarray
+    moves: bool
+    anchor: str
+    turn: Callable[[str], None]
+
+
+def _texts(d: Drawing, ks) -> list[_Text]:
+    """Every fixed-text label and arrow letter of the drawing, in the drawing's order."""
+    out = []
+    for it in d.items:
+        if isinstance(it, Label) and isinstance(it.text, str):
+            pos, shown = _world(d, it, ks)
+            out.append(_Text(it.text, pos, shown, _moves(d, it), it.anchor,
+                             lambda a, it=it: setattr(it, "anchor", a)))
+        elif isinstance(it, Arrows) and len(it.labels):
+            origins = np.asarray(it.origins, float).reshape(-1, 3)
+            vectors = np.asarray(it.vectors, float)
+            vectors = vectors.reshape(-1, len(origins), 3) if vectors.ndim == 3 else vectors.reshape(len(origins), 3)
+
+            def turn(a, j, it=it):
+                anchors = [it.label_anchor(i) for i in range(len(it.labels))]
+                anchors[j] = a
+                it.label_anchors = tuple(anchors)
+
+            for j, text in enumerate(it.labels):
+                # where the scene writes it: just beyond the tip (app/scene.py)
+                tip = origins[j] + 1.1 * (vectors[:, j] if vectors.ndim == 3 else vectors[j])
+                pos, shown = _world(d, it, ks, position=tip)
+                out.append(_Text(str(text), pos, shown, _moves(d, it), it.label_anchor(j),
+                                 lambda a, j=j, turn=turn: turn(a, j)))
+    return out
 
 
 def _moves(d: Drawing, it: Item) -> bool:
@@ -756,48 +802,49 @@ SWEPT_FRAMES = 12  # frames at which a moving label's place is taken as taken
 
 
 def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -> int:
-    """Labels are seen from the drawing's camera and turned to another side of their point (their
-    `anchor`; the point stays where the physics puts it) so as not to cover one another: a moving
-    label (on a turning body, a read-out that follows a body) to the side where its box, at
-    SWEPT_FRAMES frames of the run, meets the places the moving labels before it pass through
-    least; a label that stays put off every earlier one and every place a moving label passes
-    through. Returns how many labels were turned."""
-    labels = [it for it in d.items if isinstance(it, Label) and isinstance(it.text, str)]
+    """Labels and the letters at arrow tips are seen from the drawing's camera and turned to
+    another side of their point (their `anchor`; the point stays where the physics puts it) so as
+    not to cover one another: a moving one (on a turning body, a read-out that follows a body, the
+    letter of a turning ω or L) to the side where its box, at SWEPT_FRAMES frames of the run,
+    meets the places the moving ones before it pass through least; one that stays put off every
+    earlier one and every place a moving one passes through, or, where no side is free, on the side
+    that covers fewest. Returns how many were turned."""
     ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
+    texts = _texts(d, ks)
     placed, turned = [], 0
-    for it in labels:  # where the moving ones pass, each on the side that covers the others least
-        if _moves(d, it):
-            pos, shown = _world(d, it, ks)
-            xy, depth = _project(pos, d.camera, width, height)
-            pts = [p for p, z, on in zip(xy, depth, shown) if on and z > 0]
-            best, fewest = it.anchor, None
-            for anchor in (it.anchor,) + tuple(a for a in ANCHOR_TRIES if a != it.anchor):
-                n = sum(_overlap(_box(p, it.text, anchor), b) for p in pts for b in placed)
-                if fewest is None or n < fewest:
-                    best, fewest = anchor, n
-                if n == 0:
-                    break
-            if best != it.anchor:
-                it.anchor = best
-                turned += 1
-            placed += [_box(p, it.text, best) for p in pts]
-    for it in labels:
-        if _moves(d, it):
+    for t in texts:  # where the moving ones pass, each on the side that covers the others least
+        if not t.moves:
             continue
-        pos, shown = _world(d, it, ks[:1])
-        xy, depth = _project(pos, d.camera, width, height)
+        xy, depth = _project(t.pos, d.camera, width, height)
+        pts = [p for p, z, on in zip(xy, depth, t.shown) if on and z > 0]
+        best, fewest = t.anchor, None
+        for anchor in (t.anchor,) + tuple(a for a in ANCHOR_TRIES if a != t.anchor):
+            n = sum(_overlap(_box(p, t.text, anchor), b) for p in pts for b in placed)
+            if fewest is None or n < fewest:
+                best, fewest = anchor, n
+            if n == 0:
+                break
+        if best != t.anchor:
+            t.turn(best)
+            turned += 1
+        placed += [_box(p, t.text, best) for p in pts]
+    for t in texts:
+        if t.moves:
+            continue
+        xy, depth = _project(t.pos[:1], d.camera, width, height)
         if depth[0] <= 0:
             continue
-        for anchor in (it.anchor,) + tuple(a for a in ANCHOR_TRIES if a != it.anchor):
-            box = _box(xy[0], it.text, anchor)
-            if not any(_overlap(box, b) for b in placed):
-                if anchor != it.anchor:
-                    it.anchor = anchor
-                    turned += 1
+        best, fewest = t.anchor, None  # no side free: the one that covers the fewest
+        for anchor in (t.anchor,) + tuple(a for a in ANCHOR_TRIES if a != t.anchor):
+            n = sum(_overlap(_box(xy[0], t.text, anchor), b) for b in placed)
+            if fewest is None or n < fewest:
+                best, fewest = anchor, n
+            if n == 0:
                 break
-        else:
-            box = _box(xy[0], it.text, it.anchor)
-        placed.append(box)
+        if best != t.anchor:
+            t.turn(best)
+            turned += 1
+        placed.append(_box(xy[0], t.text, best))
     return turned
 
 

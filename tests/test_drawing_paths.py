@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import base64
 import re
+import types
 import warnings
 
 import msgspec
@@ -213,6 +214,61 @@ def test_a_fixed_label_is_turned_off_the_path_of_a_moving_one():
     assert np.any(np.hypot(*(px - cap).T) < 12), "the tip passes over the caption's point"
     assert declutter_labels(d) == 1
     assert d.item("caption").anchor != "top-left" and d.item("body/tip").anchor == "top-left"
+
+
+def _apart_at_one_point(a: str, b: str) -> bool:
+    """Two text boxes hung on the same point by anchors a and b cannot meet: one is above and the
+    other below it, or one left and the other right (whatever the boxes' sizes)."""
+    (va, ha), (vb, hb) = a.split("-"), b.split("-")
+    return ({va, vb} == {"top", "bottom"}) or ({ha, hb} == {"left", "right"})
+
+
+def _letter_and_label_on_one_point():
+    from theoria.scenarios.drawing import Arrows, Camera, Drawing, Label
+
+    F = 20
+    d = Drawing(frames=np.arange(F), times=np.arange(F, dtype=float), time_unit="s",
+                camera=Camera(position=(10.0, 0.0, 0.0), look_at=(0.0, 0.0, 0.0), fov_deg=75.0))
+    # ω along C, its letter written at 1.1 of its length: where the C axis's label is
+    d.add(Arrows(name="omega", origins=np.zeros((1, 3)), vectors=np.array([[0.0, 0.0, 1.0]]), colors=(200, 0, 200),
+                 labels=("ω",)),
+          Label(name="c_axis", text="C = 1", position=(0.0, 0.0, 1.1)))
+    return d
+
+
+def test_an_arrows_letter_and_a_label_on_one_point_are_put_on_different_sides():
+    """The letters at arrow tips (ω, L) were left out of the label placement: with ω along C, its
+    letter and "C = 1" sat on one point, one over the other (the libration scenes, seen down C).
+    Now the letters are placed with the labels."""
+    from theoria.scenarios.drawing import declutter_labels
+
+    d = _letter_and_label_on_one_point()
+    assert d.item("omega").label_anchor(0) == d.item("c_axis").anchor == "top-left"  # as made: on each other
+    assert declutter_labels(d) == 1
+    assert _apart_at_one_point(d.item("omega").label_anchor(0), d.item("c_axis").anchor)
+
+
+def test_the_scene_writes_an_arrows_letter_on_the_side_chosen_for_it():
+    """What the placement chose reaches the page: the letter's label is made with its anchor."""
+    from theoria.app.scene import SceneView
+    from theoria.scenarios.drawing import declutter_labels
+
+    made = {}
+
+    class Scene:
+        def __getattr__(self, method):
+            def add(name, *args, **kw):
+                if method == "add_label":
+                    made[name] = (args[0], kw.get("anchor", "top-left"))
+                return types.SimpleNamespace(name=name, visible=True, remove=lambda: None)
+            return add
+
+    d = _letter_and_label_on_one_point()
+    d.item("omega").label_anchors = ("bottom-right",)
+    declutter_labels(d)
+    SceneView(Scene()).show(d)
+    assert made["/world/omega/label_0"] == ("ω", "bottom-right")
+    assert made["/world/c_axis"] == ("C = 1", "top-left")
 
 
 def test_two_labels_riding_together_are_put_on_different_sides():
