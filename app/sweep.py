@@ -40,6 +40,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..physics.errors import ParameterError, show_value
+from ..physics.params import plain_number
 from .files import WriteError, write_whole
 from .interrupt import signals_held
 
@@ -175,12 +176,15 @@ def parse_grid(sc, spec: str) -> Axis:
     if p.kind == "vec3":
         raise ParameterError(p.name, rhs, "a vector parameter cannot be swept; sweep a number parameter")
     if ":" in rhs:
-        parts = rhs.split(":")
-        if len(parts) != 3 or not all(re.fullmatch(_NUM, x.strip()) for x in parts[:2]):
+        parts = [plain_number(x) for x in rhs.split(":")]  # as a person writes them: "−0.5", "10⁴"
+        if len(parts) != 3 or not all(re.fullmatch(_NUM, x) for x in parts[:2]):
             raise ParameterError("--grid", spec, form)
-        try:
-            count = int(parts[2])
-        except ValueError:
+        try:  # "1000", "1e3"
+            c = float(parts[2])
+            count = int(c)
+            if count != c:
+                raise ValueError(parts[2])
+        except (ValueError, OverflowError):
             raise ParameterError("--grid", spec, f"count must be a whole number ≥ 1; {form}") from None
         if count < 1:
             raise ParameterError("--grid", spec, f"count must be at least 1; {form}")
@@ -211,8 +215,8 @@ def parse_random(sc, spec: str, samples: int, rng) -> Axis:
         raise ParameterError("--random", spec, form)
     name, rhs = (s.strip() for s in spec.split("=", 1))
     p = _match_param(sc, name, "--random", spec)
-    parts = rhs.split(":")
-    if len(parts) != 2 or not all(re.fullmatch(_NUM, x.strip()) for x in parts):
+    parts = [plain_number(x) for x in rhs.split(":")]
+    if len(parts) != 2 or not all(re.fullmatch(_NUM, x) for x in parts):
         raise ParameterError("--random", spec, form)
     if p.kind not in ("float", "int"):
         raise ParameterError(p.name, rhs, "random sampling needs a number parameter")

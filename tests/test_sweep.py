@@ -53,6 +53,28 @@ def test_bad_grid_exits_2_with_one_line_before_any_work(tmp_path, spec, names):
     assert not out.exists()  # nothing was written: no work began
 
 
+def test_grid_and_random_bounds_are_read_as_a_person_writes_them():
+    """A count written "1e1" was refused as not a whole number, and bounds copied from the panel
+    ("−0.5" with a true minus, "2.5 × 10⁻¹") as not matching the form; they are the same numbers
+    as "10", "-0.5" and "0.25" (numpy's own linspace and the parameter's range decide the rest)."""
+    from theoria.app.sweep import parse_grid, parse_random
+    from theoria.physics.errors import ParameterError
+    from theoria.scenarios import get
+
+    sc = get("libration-eccentric")
+    a = parse_grid(sc, "eccentricity=0:2.5 × 10⁻¹:1e1")
+    assert np.array_equal(a.values, np.linspace(0.0, 0.25, 10))
+    b = parse_grid(sc, "free_zeta0_deg=−0.5:0.5:3")
+    assert np.array_equal(b.values, [-0.5, 0.0, 0.5])
+    assert len(parse_grid(sc, "eccentricity=0:0.5:1.5e1").values) == 15
+    r = parse_random(sc, "free_zeta0_deg=−0.5:0.5", 200, np.random.default_rng(0))
+    assert r.values.min() >= -0.5 and r.values.max() <= 0.5 and r.values.min() < 0
+    for bad in ("eccentricity=0:0.5:1e9", "eccentricity=0:0.5:1.25e1", "eccentricity=0:0.5:2.5"):
+        with pytest.raises(ParameterError) as e:
+            parse_grid(sc, bad)
+        assert "--grid" in str(e.value)
+
+
 @pytest.mark.slow  # a local cluster starts before the first runs say which metrics there are
 @pytest.mark.parametrize("suffix", ["zarr", "parquet"])
 def test_a_metric_no_run_reports_names_the_metrics_and_leaves_nothing(tmp_path, suffix):
