@@ -302,6 +302,8 @@ def cmd_bench(args) -> int:
 
 
 def cmd_sweep(args) -> int:
+    from theoria.app.files import written_whole
+    from theoria.app.interrupt import finishing
     from theoria.app.sweep import SWEEP_PRESETS, SweepError, preset_kwargs, run_sweep
     from theoria.scenarios import get
 
@@ -319,6 +321,14 @@ def cmd_sweep(args) -> int:
     except SweepError as e:
         sys.stderr.write(f"theoria: error: {e}\n")
         return 1
+    except (KeyboardInterrupt, Terminated):
+        if not written_whole(args.out):
+            raise
+        finishing()  # stopped on its way out, with the whole result in place
+        sys.stderr.write(f"sweep: done → {args.out}\n")
+        return 0
+    if not summary.interrupted:
+        finishing()  # the result is in place: a stop from here changes nothing, so none is reported
     sys.stderr.write(summary.line() + "\n")
     if args.json:
         import dataclasses

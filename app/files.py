@@ -84,12 +84,20 @@ def _write_all(fd: int, data: bytes) -> None:
         view = view[n:]
 
 
+def _written_key(path: str | os.PathLike) -> str:
+    target = Path(os.fspath(path).rstrip("/" + os.sep) or os.sep).expanduser()
+    return str((target.resolve() if target.is_symlink() else target).absolute())
+
+
+def mark_written(path: str | os.PathLike) -> None:
+    """Note that this process has put a whole result in place at `path` (a file by `write_whole`,
+    a sweep's store or table by its writer)."""
+    _WRITTEN.add(_written_key(path))
+
+
 def written_whole(path: str | os.PathLike) -> bool:
-    """Whether this process has put a whole file in place at `path` (`write_whole`)."""
-    target = Path(os.fspath(path)).expanduser()
-    if target.is_symlink():
-        target = target.resolve()
-    return str(target.absolute()) in _WRITTEN
+    """Whether this process has put a whole result in place at `path` (`mark_written`)."""
+    return _written_key(path) in _WRITTEN
 
 
 def write_whole(path: str | os.PathLike, data: bytes) -> int:
@@ -113,7 +121,7 @@ def write_whole(path: str | os.PathLike, data: bytes) -> int:
             with signals_held():  # the rename and the note that it happened are not cut apart
                 os.replace(tmp, target)
                 tmp = None
-                _WRITTEN.add(str(target.absolute()))
+                mark_written(target)
         except BaseException as e:
             if fd >= 0:
                 os.close(fd)

@@ -213,6 +213,11 @@ class Held:
         if self.signals:
             raise _Stopped
 
+    def drop(self) -> None:
+        """Forget the signals held so far: the block's work is done and cannot be undone (a new
+        result is in place), so a stop that came during it is too late, and is not raised."""
+        self.signals.clear()
+
 
 @contextlib.contextmanager
 def signals_held():

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..physics.errors import ParameterError, show_value
 from ..physics.params import plain_number
-from .files import WriteError, write_whole
+from .files import WriteError, mark_written, write_whole
 from .interrupt import signals_held
 
 class SweepError(RuntimeError):
@@ -705,8 +705,16 @@ class ParquetWriter:
                 "sessions": json.dumps(getattr(self, "sessions", []))}
         table = table.replace_schema_metadata({**(table.schema.metadata or {}), **{k.encode(): v.encode() for k, v in meta.items()}})
         tmp = self.path + ".tmp"
-        pq.write_table(table, tmp)
-        os.replace(tmp, self.path)
+        try:
+            pq.write_table(table, tmp)
+            os.replace(tmp, self.path)
+        except BaseException as e:  # a full disk, a second Ctrl-C: no half table beside the parts
+            with contextlib.suppress(OSError):
+                os.remove(tmp)
+            if isinstance(e, OSError):
+                raise WriteError(f"{self.path}: cannot write ({e.strerror or e}); the finished chunks are kept in "
+                                 f"{self.parts}, --resume joins them") from None
+            raise
         shutil.rmtree(self.parts)
 
     def open(self):
@@ -1001,8 +1009,14 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
                     "where": summary.cluster})
     if interrupted:
         return summary, None
-    writer.finish()
-    return summary, writer.open()
+    # the finished result takes the place of OUT and is opened: one Ctrl-C or SIGTERM waits for it
+    # and is then too late to undo it (the sweep is reported done); a second one still stops it
+    with signals_held() as held:
+        writer.finish()
+        mark_written(out)
+        result = writer.open()
+        held.drop()
+    return summary, result
 
 
 @contextlib.contextmanager

@@ -436,6 +436,53 @@ def test_an_interrupted_sweep_with_force_leaves_the_older_result_as_it_was(tmp_p
     assert not kept.exists() and sorted(q.name for q in tmp_path.iterdir()) == [out.name]
 
 
+@pytest.mark.slow  # a sweep per case, each with its local cluster
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("kind,moment", [("parquet", "in place"), ("zarr", "in place"), ("parquet", "saying so")])
+def test_a_stop_once_the_sweep_is_in_place_reports_it_done(tmp_path, sig, kind, moment):
+    """Ctrl-C or SIGTERM once the finished sweep has taken the place of --out (replacing an older
+    one), or while its last line is written: the result is whole and new, so the sweep says so and
+    exits 0. It said "interrupted" (130, 143: the status of a stop that changed nothing) beside the
+    new result; a stop in the middle of the parquet join left a half table beside the parts."""
+    out = tmp_path / f"a.{kind}"
+    r = cli("sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    patch = ("import theoria.app.sweep as S\n"
+             f"cls = S.{'ParquetWriter' if kind == 'parquet' else 'ZarrWriter'}\n"
+             "real = cls.finish\n"
+             "def finish(self):\n"
+             "    real(self)\n"
+             "    print('ready', flush=True)\n"
+             "    time.sleep(2)\n"
+             "cls.finish = finish\n") if moment == "in place" else (
+             "import theoria.app.sweep as S\n"
+             "real = S.Summary.line\n"
+             "def line(self):\n"
+             "    print('ready', flush=True)\n"
+             "    time.sleep(2)\n"
+             "    return real(self)\n"
+             "S.Summary.line = line\n")
+    code = ("import sys, time\n" + patch + "from theoria.app.cli import main\n"
+            f"sys.exit(main(['sweep', 'free-tumble', '--grid', 'step=0.01:0.02:3', '--out', {str(out)!r}, "
+            "'--force', '--workers', '1', '--quiet']))\n")
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         cwd=ROOT, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert p.stdout.readline().strip() == "ready"
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=300)
+    assert p.returncode == 0 and "3 ok" in err and "interrupted" not in err, (p.returncode, err[-500:])
+    if kind == "parquet":
+        import pandas as pd
+
+        assert len(pd.read_parquet(out)) == 3
+    else:
+        import xarray as xr
+
+        with xr.open_zarr(out, consolidated=False) as ds:
+            assert ds.sizes["step"] == 3 and bool((ds["status"] != 0).all())
+    assert sorted(q.name for q in tmp_path.iterdir()) == [out.name]
+
+
 @pytest.mark.parametrize("out,why", [("d.parquet", "a file name: this is a directory"),
                                      ("a" * 300 + ".zarr", "a path this system takes (File name too long)")])
 def test_an_out_path_the_sweep_cannot_write_is_refused_before_it_runs(tmp_path, out, why):
@@ -609,6 +656,36 @@ def test_a_sweep_description_left_empty_is_one_line_on_resume(tmp_path):
     with pytest.raises(th.ParameterError) as e:
         sw.ParquetWriter(out, sw.make_plan(sc, grid={"step": (0.001, 0.01, 2)}), resume=True)
     assert "_sweep.json" in str(e.value) and "--force" in str(e.value)
+
+
+def test_a_table_that_cannot_be_joined_leaves_no_half_file_and_keeps_the_chunks(tmp_path, monkeypatch):
+    """The last step of a Parquet sweep joins its finished chunks into one table; on a full disk it
+    left a half-written OUT.tmp beside them, and a traceback. Now: one line naming the file, no
+    OUT.tmp, the chunks kept for --resume."""
+    import errno
+
+    import pyarrow.parquet as pq
+
+    sc = th.scenario("free-tumble")
+    out = str(tmp_path / "s.parquet")
+    plan = sw.make_plan(sc, grid={"step": (0.01, 0.02, 2)})
+    writer = sw.ParquetWriter(out, plan, resume=False)
+    regions = plan.chunk_regions()
+    for i, reg in enumerate(regions):
+        writer.write(i, reg, sw.run_chunk({"scenario": sc.name, "fixed": plan.fixed, "points": plan.points(reg),
+                                           "metrics": None, "batched": plan.batched, "threads": 1, "limits": {}}))
+
+    def full_disk(table, where, **kw):
+        with open(where, "wb") as f:
+            f.write(b"PAR1 half a table")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(pq, "write_table", full_disk)
+    with pytest.raises(sw.WriteError) as e:
+        writer.finish()
+    assert "s.parquet" in str(e.value) and "No space left" in str(e.value) and "\n" not in str(e.value)
+    assert sorted(q.name for q in tmp_path.iterdir()) == ["s.parquet.parts"]
+    assert len(list((tmp_path / "s.parquet.parts").glob("part-*.parquet"))) == len(regions)
 
 
 @pytest.mark.slow
