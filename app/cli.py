@@ -221,8 +221,8 @@ def cmd_run(args) -> int:
     result = sc.simulate_fn(values, progress=prog)
     prog.done()
     if table_out is not None:
-        n = write_table(result, table_out)
-        sys.stderr.write(f"wrote {n} samples × {len(result.columns())} columns to {table_out}\n")
+        n = _put_in_place(table_out, lambda: write_table(result, table_out))
+        sys.stderr.write(f"wrote {'the' if n is None else n} samples × {len(result.columns())} columns to {table_out}\n")
     out = result.to_json()
     if args.json:
         print(json.dumps(out, indent=2))
@@ -367,21 +367,31 @@ def cmd_serve(args) -> int:
 def _write_command(args, suffixes, write, what: str, how: str) -> int:
     """record / export: the values, the limits and the target checked before the run; then the
     file written whole or not at all (app/files.py), and where it went said."""
-    from theoria.app.files import check_out, written_whole
-    from theoria.app.interrupt import finishing
+    from theoria.app.files import check_out
 
     sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
     sc.check_budget(values, **_limits(args))
     check_out(args.out, suffixes, force=args.force)
-    try:
-        write(sc.name, args.out, values)
-    except (KeyboardInterrupt, Terminated):
-        if not written_whole(args.out):
-            raise
-    # the new file is in place, whole: a stop from here on changes nothing, so none is reported
-    finishing()
+    _put_in_place(args.out, lambda: write(sc.name, args.out, values))
     _wrote(args.out, f"{what} of {sc.name}", how)
     return 0
+
+
+def _put_in_place(path: str, write):
+    """`write()`, which puts a whole file at `path` (app/files.py); once the file is there, a stop
+    is too late to undo it: it is not reported as one (exit 130 beside a new file), the command
+    goes on to say what it wrote. Returns what `write` returns (None if it was stopped after)."""
+    from theoria.app.files import written_whole
+    from theoria.app.interrupt import finishing
+
+    try:
+        out = write()
+    except (KeyboardInterrupt, Terminated):
+        if not written_whole(path):
+            raise
+        out = None
+    finishing()
+    return out
 
 
 def cmd_record(args) -> int:

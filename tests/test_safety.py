@@ -220,6 +220,30 @@ def test_a_stop_once_the_new_file_is_in_place_reports_it_written(tmp_path, sig, 
     assert [f.name for f in tmp_path.iterdir()] == [target.name]
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_once_a_runs_table_is_in_place_reports_it_written(tmp_path, sig):
+    """The same for `theoria run --out TABLE`: stopped once the table has replaced the old one,
+    the run says it wrote it, prints its results and exits 0."""
+    import pandas as pd
+
+    target = tmp_path / "old.parquet"
+    target.write_bytes(b"an older file")
+    p = _python(f"""
+        import sys, time
+        {textwrap.indent(textwrap.dedent(AFTER_RENAME), "        ").strip()}
+        from theoria.app.cli import main
+        sys.exit(main(["run", "free-tumble", "--duration", "2", "--out", {str(target)!r}, "--force"]))
+    """)
+    assert p.stdout.readline().strip() == b"ready"
+    p.send_signal(sig)
+    out, err = (x.decode() for x in p.communicate(timeout=WAIT_S))
+    assert p.returncode == 0 and "interrupted" not in err and "terminated" not in err, (p.returncode, err)
+    assert "samples × " in err and "free-tumble" in out  # the line, then the run's results
+    assert len(pd.read_parquet(target)) > 10
+    assert [f.name for f in tmp_path.iterdir()] == [target.name]
+
+
 @pytest.mark.slow  # some twenty recordings
 def test_ctrl_c_anywhere_in_a_recording_is_one_line(tmp_path):
     """Ctrl-C while rerun builds and encodes the recording (the layout, the chunks, the flush): it
