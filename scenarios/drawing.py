@@ -759,6 +759,7 @@ class _Text:
     moves: bool
     anchor: str
     turn: Callable[[str], None]
+    shown_first: bool = True  # its overlay is on when the scene opens
 
 
 def _texts(d: Drawing, ks) -> list[_Text]:
@@ -768,7 +769,7 @@ def _texts(d: Drawing, ks) -> list[_Text]:
         if isinstance(it, Label) and isinstance(it.text, str):
             pos, shown = _world(d, it, ks)
             out.append(_Text(it.text, pos, shown, _moves(d, it), it.anchor,
-                             lambda a, it=it: setattr(it, "anchor", a)))
+                             lambda a, it=it: setattr(it, "anchor", a), d.overlays.get(it.group, True)))
         elif isinstance(it, Arrows) and len(it.labels):
             origins = np.asarray(it.origins, float).reshape(-1, 3)
             vectors = np.asarray(it.vectors, float)
@@ -784,8 +785,9 @@ def _texts(d: Drawing, ks) -> list[_Text]:
                 tip = origins[j] + 1.1 * (vectors[:, j] if vectors.ndim == 3 else vectors[j])
                 pos, shown = _world(d, it, ks, position=tip)
                 out.append(_Text(str(text), pos, shown, _moves(d, it), it.label_anchor(j),
-                                 lambda a, j=j, turn=turn: turn(a, j)))
-    return out
+                                 lambda a, j=j, turn=turn: turn(a, j), d.overlays.get(it.group, True)))
+    # what the scene shows when it opens is placed first; an overlay switched on later fits around it
+    return sorted(out, key=lambda t: not t.shown_first)
 
 
 def _moves(d: Drawing, it: Item) -> bool:
@@ -808,7 +810,8 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -
     letter of a turning ω or L) to the side where its box, at SWEPT_FRAMES frames of the run,
     meets the places the moving ones before it pass through least; one that stays put off every
     earlier one and every place a moving one passes through, or, where no side is free, on the side
-    that covers fewest. Returns how many were turned."""
+    that covers fewest. The texts of overlays that are off when the scene opens come last. Returns
+    how many were turned."""
     ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
     texts = _texts(d, ks)
     placed, turned = [], 0

@@ -200,7 +200,9 @@ register(Scenario(
               label="Integrator steps per turn", advanced=True),
     ),
     camera=Camera((4.6, 1.6, 1.4), (0.8, 0.0, 0.0)),  # nearly down the spin axis A (body x): the pole path beyond it face-on
-    overlays={'celestial': False, 'axis_trail': False, 'polhode': False},
+    # ω and L lie within a fraction of a degree of A here: drawn true, their arrows and letters sit
+    # on the A axis and hide the magnified path of the pole O, which is ω's direction in the body
+    overlays={'celestial': False, 'axis_trail': False, 'polhode': False, 'vectors': False},
     simulate_fn=_pole_near_axis,
     draw=_draw,
     options={"pole_path": Option("path of the rotation pole O in the body, magnified"),

@@ -248,6 +248,20 @@ def test_an_arrows_letter_and_a_label_on_one_point_are_put_on_different_sides():
     assert _apart_at_one_point(d.item("omega").label_anchor(0), d.item("c_axis").anchor)
 
 
+def test_what_the_scene_shows_when_it_opens_is_placed_before_what_is_switched_off():
+    """A letter of an overlay that is off when the scene opens (ω's, with the arrows off) took the
+    side a shown label then had to leave: what is shown keeps its side, and the letter, if switched
+    on, fits around it."""
+    from theoria.scenarios.drawing import declutter_labels
+
+    d = _letter_and_label_on_one_point()
+    d.item("omega").group = "vectors"
+    d.overlays["vectors"] = False
+    assert declutter_labels(d) == 1
+    assert d.item("c_axis").anchor == "top-left"  # shown: kept where it was made
+    assert _apart_at_one_point(d.item("omega").label_anchor(0), d.item("c_axis").anchor)
+
+
 def test_the_scene_writes_an_arrows_letter_on_the_side_chosen_for_it():
     """What the placement chose reaches the page: the letter's label is made with its anchor."""
     from theoria.app.scene import SceneView
