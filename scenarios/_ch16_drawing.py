@@ -24,7 +24,8 @@ import numpy as np
 from ..physics import quaternion as quat
 from ..physics.precession import pole_angles
 from .drawing import (CELESTIAL_RADIUS, ORBIT_RADIUS, Camera, Drawing, Follow, Label, Option, Path, Points, Segments,
-                      Sphere, View, frame_indices, mesh_parts, new_drawing, other_bodies, rigid_body, segments, sphere_grid, unit)
+                      Sphere, View, _project, frame_indices, mesh_parts, new_drawing, other_bodies, rigid_body, segments,
+                      sphere_grid, unit)
 
 F_COLOR = (200, 40, 160)
 ZETA_COLOR = (230, 120, 0)
@@ -274,11 +275,22 @@ def pole_cone(d: Drawing, run, axis, radius: float = CELESTIAL_RADIUS, wiggle: b
     path, k = magnified_wiggle(run.trajectory.t, axis)
     path = 1.01 * radius * path
     idx, at = path_samples(d, n)
-    mid = path[n // 2]
     d.add(Path(name="wiggle", points=path[idx], color=WIGGLE_COLOR, thickness=0.02, at=at),
           Sphere(name="wiggle_now", radius=0.04, color=WIGGLE_COLOR, position=path[d.frames]),
-          Label(name="wiggle_label", text=f"nutation ×{k:g}", position=mid * 1.08 + np.array([0.0, 0.0, 0.15])))
+          Label(name="wiggle_label", text=f"nutation ×{k:g}", position=_far_from_the_pole(d, path, radius)))
     return k
+
+
+def _far_from_the_pole(d: Drawing, path, radius: float) -> np.ndarray:
+    """Where the magnified path's factor is written: just outside the path, at the point of its
+    first half (drawn by the time the run is half played) that the camera sees farthest from the
+    orbit pole's label (at the path's middle it sat on that label when the cone is narrow, e.g. at
+    an obliquity of 23°)."""
+    cands = 1.08 * path[np.linspace(0, (len(path) - 1) // 2, 7).round().astype(int)]
+    pole, _ = _project(np.array([[0.0, 0.0, 1.1 * radius]]), d.camera)
+    xy, depth = _project(cands, d.camera)
+    away = np.where(depth > 0, np.hypot(*(xy - pole[0]).T), -1.0)
+    return cands[int(np.argmax(away))]
 
 
 # ---- the Moon's near side --------------------------------------------------------------------------

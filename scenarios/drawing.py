@@ -814,7 +814,7 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -
     how many were turned."""
     ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
     texts = _texts(d, ks)
-    placed, turned = [], 0
+    placed, fixed, turned = [], [], 0
     for t in texts:  # where the moving ones pass, each on the side that covers the others least
         if not t.moves:
             continue
@@ -837,9 +837,10 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -
         xy, depth = _project(t.pos[:1], d.camera, width, height)
         if depth[0] <= 0:
             continue
-        best, fewest = t.anchor, None  # no side free: the one that covers the fewest
+        best, fewest = t.anchor, None  # no side free: the one that covers the fewest frames
         for anchor in (t.anchor,) + tuple(a for a in ANCHOR_TRIES if a != t.anchor):
-            n = sum(_overlap(_box(xy[0], t.text, anchor), b) for b in placed)
+            box = _box(xy[0], t.text, anchor)
+            n = sum(_overlap(box, b) for b in placed) + len(ks) * sum(_overlap(box, b) for b in fixed)
             if fewest is None or n < fewest:
                 best, fewest = anchor, n
             if n == 0:
@@ -847,7 +848,7 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -
         if best != t.anchor:
             t.turn(best)
             turned += 1
-        placed.append(_box(xy[0], t.text, best))
+        fixed.append(_box(xy[0], t.text, best))  # covered in every frame, where a moving box is in one
     return turned
 
 

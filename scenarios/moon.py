@@ -674,6 +674,8 @@ register(Scenario(
               "with the mantle (DE421: 0.0007; 0: rigid)", label="Fluid core's share of C", advanced=True),
     ),
     camera=Camera((4.2, -3.6, 2.4), (0.0, 0.0, 0.0)),
+    # the spin about C is fast: ω and L lie on the C axis, where drawn they only cover its label
+    overlays={'vectors': False},
     preview={'years': 1.0},
     simulate_fn=_moon,
     draw=_draw,

@@ -292,6 +292,8 @@ register(Scenario(
               label="Table toward the resonance", choice_labels=("on", "off"), advanced=True),
     ),
     camera=Camera((4.6, -4.0, 3.0), (0.0, 0.0, 0.4)),
+    # the spin about C is fast: ω and L lie on the C axis, where drawn they only cover its label
+    overlays={'vectors': False},
     preview={'orbits': 20.0, 'resonance_table': 'off'},
     simulate_fn=_precession_circular,
     draw=_draw,

@@ -281,6 +281,34 @@ def test_precession_cone_and_wiggle(runs):
     assert "wiggle" not in _own(off) and "cone/now" in _own(off) and "centre_direction" not in _own(off)
 
 
+def test_the_nutations_factor_is_written_on_its_path_away_from_the_orbit_pole(runs):
+    """At an obliquity of 23° the magnified path runs close to the orbit pole on the screen, and its
+    factor, written above the path's middle, sat on the "orbit pole" label (24 px apart). It is
+    written just outside a point of the path's first half, the one farthest from that label, and
+    a camera projection computed here by hand (pinhole, 75° vertical view, 1280×800) puts them more
+    than the width of "orbit pole" (~70 px) apart."""
+    run = get("precession-circular").simulate(resonance_table="off")  # its 100 orbits: the cone's path half done
+    d = get("precession-circular").drawing(run)
+    own = _own(d)
+    cam = d.camera
+    P, L, up = (np.asarray(v, float) for v in (cam.position, cam.look_at, cam.up))
+    f = _unit(L - P)
+    r = _unit(np.cross(f, up))
+    u = np.cross(r, f)
+    t = np.tan(np.radians(75.0 / 2))
+
+    def pixel(x):
+        v = np.asarray(x, float) - P
+        return np.array([640 * (1 + (v @ r) / (v @ f) / (t * 1.6)), 400 * (1 - (v @ u) / (v @ f) / t)])
+
+    apart = np.linalg.norm(pixel(own["wiggle_label"].position) - pixel(own["cone/orbit_pole_label"].position))
+    assert apart > 80, apart  # 24 px before; now 94
+    path = np.asarray(own["wiggle"].points, float)
+    first_half = path[: len(path) // 2 + 1]
+    near = np.min(np.linalg.norm(1.08 * first_half - np.asarray(own["wiggle_label"].position), axis=1))
+    assert near < 0.05 * np.linalg.norm(path[0]), near  # beside a point of the path drawn by half-way
+
+
 def test_earth_stars_and_frame(runs):
     from theoria.app.bright_stars import load_bright_stars
 
