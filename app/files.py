@@ -8,9 +8,9 @@ to disk, checks its size and renames it over the target. Until that rename the t
 untouched: an older file stays as it was. On a full disk, any other write error, Ctrl-C or
 SIGTERM the temporary file is removed and the error raised (`WriteError`: one line). A stop that
 comes during the rename waits for it; one that comes after it finds the file in place and whole,
-and the command line reports it written (`written_whole`), not as a stop that changed nothing. The bytes
-are produced in memory before the write, so no library's own file sink is involved (rerun's
-blocks forever in its flush on a full disk).
+and the command line reports it written (`written_whole`), not as a stop that changed nothing.
+The bytes are produced in memory before the write, so no library's own file sink is involved
+(rerun's blocks forever in its flush on a full disk).
 """
 from __future__ import annotations
 

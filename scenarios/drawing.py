@@ -763,7 +763,8 @@ class _Text:
 
 
 def _texts(d: Drawing, ks) -> list[_Text]:
-    """Every fixed-text label and arrow letter of the drawing, in the drawing's order."""
+    """Every fixed-text label and arrow letter of the drawing, in the drawing's order, those of
+    overlays that are on when the scene opens first."""
     out = []
     for it in d.items:
         if isinstance(it, Label) and isinstance(it.text, str):
