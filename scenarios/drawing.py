@@ -821,13 +821,7 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -
             continue
         xy, depth = _project(t.pos, d.camera, width, height)
         pts = [p for p, z, on in zip(xy, depth, t.shown) if on and z > 0]
-        best, fewest = t.anchor, None
-        for anchor in (t.anchor,) + tuple(a for a in ANCHOR_TRIES if a != t.anchor):
-            n = sum(_overlap(_box(p, t.text, anchor), b) for p in pts for b in placed)
-            if fewest is None or n < fewest:
-                best, fewest = anchor, n
-            if n == 0:
-                break
+        best = _side(t, lambda a: sum(_overlap(_box(p, t.text, a), b) for p in pts for b in placed))
         if best != t.anchor:
             t.turn(best)
             turned += 1
@@ -838,19 +832,27 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -
         xy, depth = _project(t.pos[:1], d.camera, width, height)
         if depth[0] <= 0:
             continue
-        best, fewest = t.anchor, None  # no side free: the one that covers the fewest frames
-        for anchor in (t.anchor,) + tuple(a for a in ANCHOR_TRIES if a != t.anchor):
-            box = _box(xy[0], t.text, anchor)
-            n = sum(_overlap(box, b) for b in placed) + len(ks) * sum(_overlap(box, b) for b in fixed)
-            if fewest is None or n < fewest:
-                best, fewest = anchor, n
-            if n == 0:
-                break
+        # frames it covers: a box that stays put is there in every frame, a moving one's in one
+        best = _side(t, lambda a: sum(_overlap(_box(xy[0], t.text, a), b) for b in placed)
+                     + len(ks) * sum(_overlap(_box(xy[0], t.text, a), b) for b in fixed))
         if best != t.anchor:
             t.turn(best)
             turned += 1
-        fixed.append(_box(xy[0], t.text, best))  # covered in every frame, where a moving box is in one
+        fixed.append(_box(xy[0], t.text, best))
     return turned
+
+
+def _side(t: _Text, covers: Callable[[str], int]) -> str:
+    """The side of its point `t` is written on: its own if there it covers nothing, else the first
+    free one of ANCHOR_TRIES, else the one where it covers least (`covers(anchor)`)."""
+    best, fewest = t.anchor, None
+    for anchor in (t.anchor,) + tuple(a for a in ANCHOR_TRIES if a != t.anchor):
+        n = covers(anchor)
+        if fewest is None or n < fewest:
+            best, fewest = anchor, n
+        if n == 0:
+            break
+    return best
 
 
 def standard(run, spec, view: View, shape: str = "ellipsoid") -> Drawing:

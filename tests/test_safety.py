@@ -198,6 +198,22 @@ WHILE_SAYING_SO = """
 """
 
 
+def _stopped_when_ready(cmd: str, target, patch: str, sig):
+    """`theoria CMD free-tumble --out TARGET --force` over an older TARGET, with `patch` applied;
+    `sig` sent once it prints "ready". Returns the process, its stdout and stderr."""
+    target.write_bytes(b"an older file")
+    p = _python(f"""
+        import sys, time
+        {textwrap.indent(textwrap.dedent(patch), "        ").strip()}
+        from theoria.app.cli import main
+        sys.exit(main([{cmd!r}, "free-tumble", "--duration", "2", "--out", {str(target)!r}, "--force"]))
+    """)
+    assert p.stdout.readline().strip() == b"ready"
+    p.send_signal(sig)
+    out, err = (x.decode() for x in p.communicate(timeout=WAIT_S))
+    return p, out, err
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 @pytest.mark.parametrize("moment", ["after the rename", "while saying so"])
@@ -206,17 +222,8 @@ def test_a_stop_once_the_new_file_is_in_place_reports_it_written(tmp_path, sig, 
     whole and new, so the command says where it went and exits 0. It said "interrupted" (130, 143:
     the status of a stop that changed nothing) beside a file it had replaced."""
     target = tmp_path / "old.rrd"
-    target.write_bytes(b"an older file")
     patch = AFTER_RENAME if moment == "after the rename" else WHILE_SAYING_SO
-    p = _python(f"""
-        import sys, time
-        {textwrap.indent(textwrap.dedent(patch), "        ").strip()}
-        from theoria.app.cli import main
-        sys.exit(main(["record", "free-tumble", "--duration", "2", "--out", {str(target)!r}, "--force"]))
-    """)
-    assert p.stdout.readline().strip() == b"ready"
-    p.send_signal(sig)
-    out, err = (x.decode() for x in p.communicate(timeout=WAIT_S))
+    p, out, err = _stopped_when_ready("record", target, patch, sig)
     assert p.returncode == 0 and err == "" and "theoria: wrote a rerun recording" in out, (p.returncode, out, err)
     assert check(str(target))["digest"]  # the new recording, whole
     assert [f.name for f in tmp_path.iterdir()] == [target.name]
@@ -230,16 +237,7 @@ def test_a_stop_once_a_runs_table_is_in_place_reports_it_written(tmp_path, sig):
     import pandas as pd
 
     target = tmp_path / "old.parquet"
-    target.write_bytes(b"an older file")
-    p = _python(f"""
-        import sys, time
-        {textwrap.indent(textwrap.dedent(AFTER_RENAME), "        ").strip()}
-        from theoria.app.cli import main
-        sys.exit(main(["run", "free-tumble", "--duration", "2", "--out", {str(target)!r}, "--force"]))
-    """)
-    assert p.stdout.readline().strip() == b"ready"
-    p.send_signal(sig)
-    out, err = (x.decode() for x in p.communicate(timeout=WAIT_S))
+    p, out, err = _stopped_when_ready("run", target, AFTER_RENAME, sig)
     assert p.returncode == 0 and "interrupted" not in err and "terminated" not in err, (p.returncode, err)
     assert "samples × " in err and "free-tumble" in out  # the line, then the run's results
     assert len(pd.read_parquet(target)) > 10
