@@ -658,7 +658,7 @@ def test_slow_children_give_way_to_everything_and_quick_ones_to_the_server():
     work are in SCHED_IDLE (any other process, a quick run or the server, takes their core at once),
     the quick ones at CHILD_NICE above the server's own nice, the tiny one at CHILD_NICE_TINY. A
     hundred browsers' p95 was 0.70-0.88 s with the quick children at nice 5 or the slow ones only
-    niced, 0.38-0.51 s with both (docs/classroom.md)."""
+    niced, 0.38-0.51 s with both (docs/capacity.md)."""
     pool = worker_mod.SimPool(slots=2, store=False, tiny=True)
     try:
         assert _wait(lambda: all(s.ready and s.proc is not None for s in pool.slots), 120)
