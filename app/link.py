@@ -11,6 +11,7 @@ students can open and `qr_svg_uri` its QR code (segno).
 from __future__ import annotations
 
 import ipaddress
+import math
 import socket
 from dataclasses import dataclass, field
 from typing import Any
@@ -31,6 +32,15 @@ class LinkState:
     overlays: dict[str, bool] = field(default_factory=dict)
     present: bool = False
     speed: float | None = None
+
+
+def _finite(text: str) -> float:
+    """A number of the link, or ValueError: "nan" and "inf" are words float() reads, not numbers a
+    view can be at (a clock at NaN would never move again)."""
+    x = float(text)
+    if not math.isfinite(x):
+        raise ValueError(text)
+    return x
 
 
 def _num(x: float, digits: int = 6) -> str:
@@ -91,13 +101,13 @@ def from_address(address: str | None) -> LinkState:
             elif k.startswith("p."):
                 st.params[k[2:]] = v
             elif k == "t":
-                st.time = float(v)
+                st.time = _finite(v)
             elif k == "play":
                 st.playing = v not in ("0", "false", "no")
             elif k == "speed":
-                st.speed = float(v)
+                st.speed = _finite(v)
             elif k == "cam":
-                c = tuple(float(x) for x in v.split(","))
+                c = tuple(_finite(x) for x in v.split(","))
                 if len(c) in (6, 9) and all(abs(x) < 1e9 for x in c):
                     st.camera = c
             elif k.startswith("o."):

@@ -116,6 +116,19 @@ def client_root() -> Path:
         return src.parent
 
 
+class _Served(type(Path())):
+    """The page's directory as viser's HTTP server reads it. viser asks `is_file()` of the path a
+    request names; a name longer than the filesystem holds (a 300-character URL path) raised
+    ENAMETOOLONG there, which the server answered with 500 Internal Server Error. Here it is a
+    file that is not there: 404, as for any other name."""
+
+    def is_file(self) -> bool:
+        try:
+            return super().is_file()
+        except OSError:
+            return False
+
+
 _build_lock = threading.Lock()
 
 
@@ -129,7 +142,7 @@ def themed_client():
 
         def init(self, *args, **kwargs):
             if kwargs.get("http_server_root") is not None:
-                kwargs["http_server_root"] = root
+                kwargs["http_server_root"] = _Served(root)
             original(self, *args, **kwargs)
 
         cls.__init__ = init

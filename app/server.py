@@ -185,17 +185,44 @@ class Gate:
                            "(not something this app offers; logged once)", once_key=("type", typ.__name__))
 
     def _dispatch(self, client_id, message) -> None:
-        if type(message) is vm.GuiUpdateMessage and isinstance(message.updates["value"], (str, bool)):
-            value = message.updates["value"]
+        if type(message) is vm.GuiUpdateMessage:
             client = self.door.server._connected_clients.get(client_id)
             target = client and client.gui._gui_input_handle_from_uuid.get(message.uuid)
-            if target is not None and _number(target.value):  # a slider
-                if isinstance(value, str):  # text typed into its box
-                    self._typed(client, target, value)
-                else:  # viser would take True as 1
-                    self._drop("true/false for a number")
+            if target is not None and not self._fits(client, target, message.updates["value"]):
                 return
         self.door.loop.create_task(self.inner(client_id, message))
+
+    def _fits(self, client, target, value) -> bool:
+        """Whether a value goes on to its control as viser would set it. A slider takes a finite
+        number within its range; text typed into its box, and any other number (NaN, infinite, out
+        of range: its page never sends one), go to the app's parser instead, which refuses them
+        naming the range; the slider keeps its value and is shown it again. A checkbox takes true or false, a menu or
+        a text box text; anything else is dropped (viser would set it as it came)."""
+        current = target.value
+        if _number(current):  # a slider
+            if isinstance(value, str):  # text typed into its box
+                self._typed(client, target, value)
+                return False
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                self._drop(f"{'true/false' if isinstance(value, bool) else type(value).__name__} for a number")
+                return False
+            lo, hi = getattr(target, "min", None), getattr(target, "max", None)
+            # a dragged slider's value may miss its end by a rounding of its step
+            slack = 1e-9 * abs(hi - lo) if _number(lo) and _number(hi) else 0.0
+            if not _number(value) or (_number(lo) and value < lo - slack) or (_number(hi) and value > hi + slack):
+                self._typed(client, target, repr(float(value)))
+                # the sender's slider shows the value it keeps (viser sends a value only when it changes)
+                target._impl.gui_api._websock_interface.queue_message(
+                    vm.GuiUpdateMessage(target._impl.uuid, {"value": target.value}))
+                return False
+            return True
+        if isinstance(current, bool) and not isinstance(value, bool):
+            self._drop(f"{type(value).__name__} for true/false")
+            return False
+        if isinstance(current, str) and not isinstance(value, str):
+            self._drop(f"{type(value).__name__} for text")
+            return False
+        return True
 
     def _drop(self, why: str) -> None:
         self.dropped += 1

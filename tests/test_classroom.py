@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import io
+import math
 import os
 import random
 import socket
@@ -936,6 +937,64 @@ def test_a_number_typed_into_a_sliders_box_is_parsed_by_the_app():
 
         asyncio.run(go())
     assert "Traceback" not in log.getvalue()
+
+
+def test_numbers_a_page_never_sends_are_refused_for_the_apps_own_sliders():
+    """The panel's own sliders (playback speed, time, the shape's exaggeration) took any number a
+    script sent: NaN for the speed put the page's clock at NaN for good (playback stood still, a
+    valid speed after it did not help), ±inf for the exaggeration drew the body at a NaN scale,
+    -1e308 and 2**64-1 played at those rates, and a list raised inside viser. A number outside a
+    slider's range goes to the app's parser, as a typed one does (refused naming the range, the
+    slider as it was); a list, true/false or text for a checkbox is dropped."""
+    with _server(scenario="free-tumble") as (srv, sessions, url, log):
+        async def go():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            try:
+                assert await c.wait_for(lambda: c.update_no >= 1, 120)
+                s = next(iter(sessions.values()))
+                refused = lambda: [b for t, b in c.notifications if t.startswith("Not allowed")]
+                speed, time_ = c.uuid_of("Playback speed"), c.uuid_of("Time (% of the run)")
+                exag = c.uuid_of("Exaggerate the shape")
+                cases = [(speed, float("nan"), "[0.1, 10]"), (speed, -1e308, "[0.1, 10]"),
+                         (speed, 2 ** 64 - 1, "[0.1, 10]"), (speed, -0.0, "[0.1, 10]"),
+                         (time_, float("nan"), "[0, 100]"), (time_, float("inf"), "[0, 100]"),
+                         (exag, float("inf"), "[1, 20]"), (exag, float("-inf"), "[1, 20]"), (exag, 0.5, "[1, 20]")]
+                for uuid, value, allowed in cases:
+                    n = len(refused())
+                    await c.send_gui(uuid, value)
+                    assert await c.wait_for(lambda: len(refused()) > n, 30), (value, c.notifications)
+                    assert allowed in refused()[-1], (value, refused()[-1])
+                for value in ([1.0, 2.0], True):
+                    await c.send_gui(speed, value)
+                await c.send_gui(c.uuid_of("Presenter mode"), 5)  # a checkbox
+                await c.send_gui(speed, 2.0)  # a value in range: taken
+                assert await c.wait_for(lambda: s.speed.value == 2.0, 30), s.speed.value
+                assert s.view_opts.exaggerate == 1.0 and s.exag.value == 1.0 and s.present_cb.value is False
+                assert math.isfinite(s.clock)
+                start = s.clock
+                assert await c.wait_for(lambda: math.isfinite(s.clock) and s.clock != start, 30), s.clock
+            finally:
+                await c.close()
+
+        asyncio.run(go())
+    assert "Traceback" not in log.getvalue() and "exception" not in log.getvalue(), log.getvalue()
+
+
+def test_a_path_longer_than_a_file_name_is_not_found():
+    """A URL path naming a file the filesystem cannot hold (a name over 255 bytes) raised
+    ENAMETOOLONG in viser's page server: 500 Internal Server Error. It is a name that is not there."""
+    import urllib.error
+    import urllib.request
+
+    with _server() as (srv, sessions, url, log):
+        base = url.replace("ws://", "http://")
+        for path in ("/" + "a" * 300, "/" + "b" * 4000 + ".js"):
+            with pytest.raises(urllib.error.HTTPError) as e:
+                urllib.request.urlopen(base + path, timeout=10)
+            assert e.value.code == 404, (len(path), e.value.code)
+        with urllib.request.urlopen(base + "/", timeout=10) as page:  # the page itself still served
+            assert page.status == 200 and b"<title>theoria" in page.read()
 
 
 def test_a_burst_of_scene_switches_leaves_one_panel_of_the_last_scene():

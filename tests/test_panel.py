@@ -142,6 +142,31 @@ def test_a_bad_link_keeps_the_defaults_and_says_which_value():
         math.isfinite(x) for x in linkmod.from_address("?cam=1,2,nan").camera) is False
 
 
+def test_words_for_numbers_in_a_link_are_dropped():
+    """float() reads "nan" and "inf": a link's time, speed and camera take finite numbers only."""
+    for word in ("nan", "NaN", "inf", "-inf", "infinity"):
+        st = linkmod.from_address(f"?s=free-tumble&t={word}&speed={word}&cam=1,2,3,0,0,{word}")
+        assert st.scenario == "free-tumble" and st.time is None and st.speed is None and st.camera is None, (word, st)
+    st = linkmod.from_address("?t=12.5&speed=2&cam=1,2,3,0,0,0")
+    assert (st.time, st.speed, st.camera) == (12.5, 2.0, (1.0, 2.0, 3.0, 0.0, 0.0, 0.0))
+
+
+def test_a_link_with_nan_for_the_time_and_speed_leaves_the_clock_moving(monkeypatch):
+    """A shared link (or its QR code) with t=nan&speed=nan put the page's clock at NaN: playback
+    stood on the last frame for everyone who opened it, until Reset."""
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    monkeypatch.setattr(browser, "read_address",
+                        lambda client, timeout=3.0: "http://127.0.0.1:1/?s=free-tumble&t=nan&speed=nan")
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        assert s.playing and s.speed.value == 1.0
+        start = s.clock
+        assert math.isfinite(start)
+        _wait(lambda: math.isfinite(s.clock) and s.clock != start, 30)
+
+
 def test_the_class_link_only_on_a_network_address():
     assert linkmod.class_link("127.0.0.1", 8080) is None
     assert linkmod.class_link("192.168.1.5", 8080) == "http://192.168.1.5:8080/"
