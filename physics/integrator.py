@@ -188,20 +188,28 @@ def integrate(
     done = 0
     consts = None
     while done < n_steps:
-        n = min(chunk_steps - chunk_steps % stride or stride, n_steps - done)
+        if stride <= chunk_steps:  # whole strides a chunk: every kept state of the chunk returned
+            n = min(chunk_steps - chunk_steps % stride, n_steps - done)
+            every = stride
+        else:
+            # kept states further apart than a chunk (a long run at a fine step): pieces of at most
+            # a chunk, each ending at or before the next kept state, so that the progress line and
+            # a stop (Ctrl-C) are honoured every chunk_steps steps, not once per kept state
+            n = min(chunk_steps, stride - done % stride, n_steps - done)
+            every = n
         if masses:
             tk = t0 + h * (done + np.arange(n)[:, None] + sch["at"][None, :])
             pos = np.stack([np.asarray(m.position(tk.ravel()), float).reshape(n, len(sch["at"]), 3) for m in masses], axis=2)
         else:
             pos = np.zeros((n, len(sch["at"]), 0, 3))  # no mass: an empty axis, indexable at every step
-        rows = n // stride
+        rows = n // every
         oL = np.empty((rows + 1, 3))
         oq = np.empty((rows + 1, 4))
         last = np.empty(7)
         try:
             if consts is None:
                 consts = prepare(L, I, h)  # the free orbit's constants, from the first state, once
-            _run(L, q, I, h, n, stride, sch["kick"], sch["drift"], tq, has_tq, pos, gm, c3, k3, oL, oq, last, *consts)
+            _run(L, q, I, h, n, every, sch["kick"], sch["drift"], tq, has_tq, pos, gm, c3, k3, oL, oq, last, *consts)
             L, q = last[:3].copy(), last[3:].copy()
         except ZeroDivisionError:  # found by tests/test_fuzz.py: spin 1e-155 with moments ~1e-6 underflows
             raise ParameterError("parameters", "these values", "rates so small that their squares underflow "
@@ -209,11 +217,12 @@ def integrate(
         except StepTooLarge:  # free_flow.prepare refuses a step far too large for the spin reached
             raise ParameterError("step", step, f"too large for the spin this run reaches near t={t0 + h * done:.4g} "
                                  "(thousands of turns per step); use a smaller step, torque or spread of moments") from None
-        t_out.append(t0 + h * (done + stride * np.arange(1, rows + 1)))
-        L_out.append(oL[1:])
-        q_out.append(oq[1:])
+        if every == stride or (done + n) % stride == 0:
+            t_out.append(t0 + h * (done + every * np.arange(1, rows + 1)))
+            L_out.append(oL[1:])
+            q_out.append(oq[1:])
         done += n
-        if n % stride:  # the last, unaligned state
+        if done == n_steps and done % stride:  # the last, unaligned state
             t_out.append(np.array([t0 + h * done]))
             L_out.append(L[None])
             q_out.append(q[None])

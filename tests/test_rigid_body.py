@@ -146,6 +146,23 @@ def test_output_stride_and_times():
     assert np.allclose(np.diff(t)[:-1], 0.07)
 
 
+@pytest.mark.parametrize("stride, masses", [(70_000, ()), (25_000, (PointMass(3.0, lambda t: np.stack(
+    [10 * np.cos(0.01 * t), 10 * np.sin(0.01 * t), 0 * t], axis=-1)),))])
+def test_kept_states_further_apart_than_a_chunk_report_progress_every_chunk(stride, masses):
+    """With kept states further apart than a chunk (a long run at a fine step: 1e15 steps keep one
+    state in ~3e11), the compiled loop ran a whole stride between two returns to Python, so neither
+    the progress line nor Ctrl-C was seen for hours. It returns every chunk; the states are the
+    same bits as one long chunk's."""
+    seen = []
+    args = ((1, 2, 3), (0.3, 1, 0.2), 2.0, 1e-5)
+    t, L, q = integrate(*args, stride=stride, masses=masses, chunk_steps=20_000, progress=seen.append)
+    t1, L1, q1 = integrate(*args, stride=stride, masses=masses, chunk_steps=10 ** 9)
+    assert len(seen) >= 200_000 // 20_000 and np.all(np.diff(seen) <= 20_000 / 200_000 + 1e-12), seen
+    assert np.array_equal(t, t1) and np.array_equal(L, L1) and np.array_equal(q, q1)
+    assert len(t) == 200_000 // stride + 1 + (200_000 % stride > 0) and t[-1] == pytest.approx(2.0)
+    assert np.allclose(np.diff(t)[:200_000 // stride], stride * 1e-5)
+
+
 def test_prepare_drift_reuse_equals_fresh_steps():
     I = np.array([1.0, 2.0, 3.0])
     L = I * np.array([0.3, 1.0, 0.2])

@@ -594,6 +594,17 @@ def test_ctrl_c_during_a_long_run(name, delay):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("sig, last", [(signal.SIGINT, "theoria: interrupted"), (signal.SIGTERM, "theoria: terminated")])
+def test_a_stop_during_a_run_of_1e15_steps(sig, last):
+    """With every limit lifted, a run of 1e15 steps keeps one state in ~3e11 steps: the compiled
+    loop ran that far between two returns to Python, and Ctrl-C and SIGTERM waited for it (minutes,
+    in an outside probe). Its progress shows and a stop ends it as any other run's."""
+    code, err = _run_and_interrupt(["run", "free-tumble", "--set", "step=1e-9", "--duration", "1e6",
+                                    "--max-steps", "none", "--max-memory", "none"], "%", sig=sig, delay=0.5)
+    assert code == 128 + sig and _last_line(err) == last and "Traceback" not in err, err
+
+
+@pytest.mark.slow
 def test_sigterm_during_a_long_run():
     code, err = _run_and_interrupt(["run", "free-tumble", "--set", "step=1e-5", "--duration", "1e4",
                                     "--max-steps", "none"], "%", sig=signal.SIGTERM)
