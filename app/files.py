@@ -25,6 +25,9 @@ CHUNK = 1 << 20  # bytes per write call
 # the targets this process has put in place whole: a command stopped after the rename reports the
 # file as written (it is, and whole), not as an interruption that changed nothing
 _WRITTEN: set[str] = set()
+# the targets `check_out` found absent without being told to replace them: put in place only while
+# still absent (a file made there during a run of hours is not replaced without --force either)
+_NEW_ONLY: dict[str, str] = {}  # key → how to ask for the replacement
 
 
 class WriteError(Exception):
@@ -59,6 +62,10 @@ def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = 
     if p.exists() and not force:
         raise ParameterError(what, str(path), "a new file: it exists; " +
                              ("add --force to replace it" if what.startswith("--") else "force=True replaces it"))
+    if force:
+        _NEW_ONLY.pop(_written_key(p), None)
+    else:
+        _NEW_ONLY[_written_key(p)] = "add --force to replace it" if what.startswith("--") else "force=True replaces it"
     try:  # the only sure test that the directory takes a new file (read-only mounts, permissions, ACLs)
         with tempfile.NamedTemporaryFile(dir=parent, prefix=f".{p.name}.", suffix=".probe"):
             pass
@@ -100,6 +107,30 @@ def written_whole(path: str | os.PathLike) -> bool:
     return _written_key(path) in _WRITTEN
 
 
+class AppearedMeanwhile(FileExistsError):
+    pass
+
+
+def _put(tmp: str, target: Path, new_only: str | None) -> None:
+    """The temporary file becomes `target`. With `new_only` (how to ask for a replacement), only
+    while no file is there: a hard link makes the name or fails if it exists, in one step (where
+    the file system has no hard links, the name is looked at just before the rename)."""
+    if new_only is None:
+        os.replace(tmp, target)
+        return
+    appeared = AppearedMeanwhile(0, f"a file appeared there during the run; it was left as it is ({new_only})")
+    try:
+        os.link(tmp, target)
+    except FileExistsError:
+        raise appeared from None
+    except OSError:
+        if os.path.lexists(target):
+            raise appeared from None
+        os.replace(tmp, target)
+        return
+    os.unlink(tmp)
+
+
 def write_whole(path: str | os.PathLike, data: bytes) -> int:
     """Write `data` to `path` whole or not at all (see the module). Returns the bytes written."""
     target = Path(os.fspath(path)).expanduser()
@@ -119,9 +150,10 @@ def write_whole(path: str | os.PathLike, data: bytes) -> int:
             os.close(fd)
             fd = -1
             with signals_held():  # the rename and the note that it happened are not cut apart
-                os.replace(tmp, target)
+                _put(tmp, target, _NEW_ONLY.get(_written_key(path)))
                 tmp = None
                 mark_written(target)
+                _NEW_ONLY.pop(_written_key(path), None)
         except BaseException as e:
             if fd >= 0:
                 os.close(fd)
@@ -130,6 +162,8 @@ def write_whole(path: str | os.PathLike, data: bytes) -> int:
                     os.unlink(tmp)
                 except OSError:
                     pass
+            if isinstance(e, AppearedMeanwhile):
+                raise WriteError(f"{path}: {e.strerror}; the new result was not written") from None
             if isinstance(e, OSError):
                 reason = e.strerror or str(e) or type(e).__name__
                 raise WriteError(f"{path}: cannot write ({reason}); nothing was changed") from None

@@ -124,6 +124,30 @@ def test_cli_refuses_to_overwrite_without_force(tmp_path, capsys):
     assert main(["replay", str(target), "--check"]) == 0
 
 
+@pytest.mark.parametrize("cmd, suffix", [("record", ".rrd"), ("export", ".html"), ("run", ".csv")])
+def test_a_file_made_at_out_during_the_run_is_not_replaced_without_force(tmp_path, monkeypatch, capsys, cmd, suffix):
+    """--out is checked before the run (it must not exist, without --force); a file someone made
+    there while the run went on (hours, for some) was replaced all the same, silently."""
+    import theoria.app.files as files
+
+    target = tmp_path / ("x" + suffix)
+    mkstemp = files.tempfile.mkstemp
+
+    def someone_writes_first(*a, **kw):  # just before the new file is written beside the target
+        if not target.exists():
+            target.write_bytes(b"precious")
+        return mkstemp(*a, **kw)
+
+    monkeypatch.setattr(files.tempfile, "mkstemp", someone_writes_first)
+    assert main([cmd, "free-tumble", "--duration", "1", "--out", str(target)]) == 1
+    err = capsys.readouterr().err
+    assert target.read_bytes() == b"precious" and "appeared" in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [target.name]  # no temporary file left
+    target.unlink()
+    assert main([cmd, "free-tumble", "--duration", "1", "--out", str(target), "--force"]) == 0
+    assert target.read_bytes() != b"precious"
+
+
 # ---- SIGINT / SIGTERM to a recording subprocess mid-write ----------------------------------------
 
 # encoding that goes on after the drawing is logged, with a check between its steps as
