@@ -39,7 +39,12 @@ def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = 
     """The target path, validated before a run: ParameterError naming `what` when its directory
     is missing or does not take a new file, when it is a directory, has another suffix than
     `suffixes`, or exists and `force` is not given."""
-    raw = os.fspath(path)
+    try:
+        raw = os.fspath(path)
+    except TypeError:
+        raw = None
+    if not isinstance(raw, str):
+        raise ParameterError(what, repr(path), "a file name: text or a pathlib.Path")
     if not raw or raw.endswith(os.sep) or (os.altsep and raw.endswith(os.altsep)):
         raise ParameterError(what, str(path), "a file name, not a directory")
     p = Path(raw).expanduser()

@@ -108,6 +108,18 @@ class Run:
     warnings: list[str] = field(default_factory=list)
     spec: "Scenario | None" = field(default=None, repr=False, compare=False)  # set by Scenario.simulate
 
+    def __repr__(self) -> str:
+        """One line a notebook can show: the scenario, its status, the size of the trajectory and
+        how many metrics, rows and warnings there are (the arrays themselves are in the fields)."""
+        def count(k: int, what: str) -> str:
+            return f"{k:,} {what}{'' if k == 1 else 's'}"
+
+        parts = ["no trajectory" if self.trajectory is None else count(len(self.trajectory.t), "state"),
+                 count(len(self.metrics), "metric"), count(len(self.comparisons), "comparison")]
+        if self.warnings:
+            parts.append(count(len(self.warnings), "warning"))
+        return f"<theoria run of {self.scenario!r}, {self.status}: {', '.join(parts)}>"
+
     @property
     def metric_units(self) -> dict[str, str | None]:
         """name → the unit of each metric ("" for a pure number), as `Param.unit` writes units."""
@@ -442,6 +454,9 @@ class Scenario:
         return check_budget(self, values, max_steps, max_memory)
 
     def _merge(self, given, preset, values) -> dict[str, Any]:
+        if given is not None and not isinstance(given, Mapping):
+            raise ParameterError("given", given, "a mapping of parameter names to values (or keywords: "
+                                 f"simulate({self.params[0].name}=...))" if self.params else "a mapping")
         merged: dict[str, Any] = {}
         if preset is not None:
             merged.update(self.presets.get(self.preset_name(preset), {}))
@@ -536,7 +551,9 @@ def load_all() -> None:
 
 def get(name: str) -> Scenario:
     load_all()
-    if name not in REGISTRY:
+    if isinstance(name, Scenario):  # already one (th.scenario(sc))
+        return name
+    if not isinstance(name, str) or name not in REGISTRY:
         raise ParameterError("scenario", name, "one of " + ", ".join(s.name for s in all_scenarios()))
     return REGISTRY[name]
 

@@ -72,6 +72,31 @@ def test_unknown_scenario_and_preset_name_what_there_is():
         th.scenario("middle-axis-flip").simulate(preset="no such preset")
 
 
+def test_wrong_kinds_of_argument_name_the_argument_and_what_is_allowed(tmp_path):
+    """What a notebook user mistypes raised TypeError or AttributeError from deep inside (a
+    scenario passed where its name goes, a number for the values, bytes for a path)."""
+    sc = th.scenario("middle-axis-flip")
+    assert th.scenario(sc) is sc
+    with pytest.raises(th.ParameterError, match=r"^scenario=3: one of free-tumble"):
+        th.scenario(3)
+    with pytest.raises(th.ParameterError, match=r"^given=1: a mapping"):
+        sc.simulate(1)
+    run = sc.simulate(duration=2)
+    with pytest.raises(th.ParameterError, match=r"^path=b'x.rrd': a file name"):
+        run.record(b"x.rrd")
+    assert not list(tmp_path.iterdir())
+    assert th.WriteError.__module__.startswith("theoria")
+
+
+def test_a_run_is_one_line_in_a_notebook():
+    """repr(run) was every array of the trajectory (~37 KB for a 2-s run)."""
+    run = th.scenario("middle-axis-flip").simulate(duration=2)
+    text = repr(run)
+    assert "\n" not in text and len(text) < 200, text
+    assert text == (f"<theoria run of 'middle-axis-flip', ok: {len(run.trajectory.t):,} states, "
+                    f"{len(run.metrics)} metrics, 1 comparison>"), text
+
+
 def test_the_run_carries_its_trajectory_and_a_table_per_sample():
     run = th.scenario("free-tumble").simulate(duration=5)
     tr = run.trajectory

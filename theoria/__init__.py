@@ -17,7 +17,8 @@ A bad value raises `th.ParameterError` (a ValueError) naming the parameter, the 
 allowed range: the same line the command line prints with exit status 2. A run beyond the step
 or memory limit (`sc.cost(**values)` says what it would take; `th.MAX_STEPS`, `th.MAX_MEMORY`) is
 refused before it starts with `th.BudgetExceeded`; `simulate(..., max_steps=None,
-max_memory=None)` lifts the limits. The physics
+max_memory=None)` lifts the limits. A file that cannot be written (a full disk) raises
+`th.WriteError`, and the target is as it was. The physics
 (`theoria.physics`), the scenarios (`theoria.scenarios`) and the app (`theoria.app`) are
 reachable but not needed.
 """
@@ -34,6 +35,7 @@ from .physics.params import Param  # noqa: E402
 from .physics.trajectory import Trajectory  # noqa: E402
 from .scenarios.base import Comparison, Run, Scenario  # noqa: E402
 from .scenarios.budget import MAX_MEMORY, MAX_STEPS, Cost  # noqa: E402
+from .app.files import WriteError  # noqa: E402
 
 try:
     __version__ = _metadata.version("theoria-motus")
@@ -41,7 +43,7 @@ except _metadata.PackageNotFoundError:  # imported from a checkout that was neve
     __version__ = "0+unknown"
 
 __all__ = ["scenarios", "scenario", "check", "Scenario", "Run", "Comparison", "Param", "Trajectory", "Cost",
-           "ParameterError", "Diverged", "Cancelled", "BudgetExceeded", "MAX_STEPS", "MAX_MEMORY", "__version__"]
+           "ParameterError", "Diverged", "Cancelled", "BudgetExceeded", "WriteError", "MAX_STEPS", "MAX_MEMORY", "__version__"]
 
 
 def scenarios() -> list[str]:
