@@ -17,6 +17,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import pytest
 
@@ -633,6 +634,31 @@ def test_sigterm_during_a_long_run():
     code, err = _run_and_interrupt(["run", "free-tumble", "--set", "step=1e-5", "--duration", "1e4",
                                     "--max-steps", "none"], "%", sig=signal.SIGTERM)
     assert code == 143 and _last_line(err) == "theoria: terminated" and err.count("\n") == 1, err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, group", [(signal.SIGINT, True), (signal.SIGTERM, False)])
+def test_a_stopped_sweep_says_so_once(tmp_path, sig, group):
+    """The `theoria` command (its console script, as a user starts it) stopped during a sweep: a
+    terminal's Ctrl-C goes to the whole process group, SIGTERM to the command. Its Dask workers
+    re-import the script with its arguments and took themselves for the command: each printed
+    "theoria: terminated" when the sweep stopped them (three to five lines, "terminated" for a
+    Ctrl-C). One line: the sweep's summary, which says it was interrupted and what it kept."""
+    script = Path(sys.executable).parent / "theoria"
+    out = tmp_path / "s.zarr"
+    p = subprocess.Popen([str(script), "sweep", "free-tumble", "--grid", "step=0.001:0.002:40", "--set", "duration=600",
+                          "--chunk", "1", "--workers", "2", "--out", str(out), "--quiet"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, start_new_session=True)
+    t_end = time.monotonic() + 300
+    while time.monotonic() < t_end and p.poll() is None and not [
+            f for f in (out / "status").rglob("*") if f.is_file() and f.name != "zarr.json"]:
+        time.sleep(0.1)  # until the first chunk is written: the workers are running
+    assert p.poll() is None, p.stderr.read()
+    os.killpg(p.pid, sig) if group else p.send_signal(sig)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 128 + sig, err
+    lines = [x for x in err.splitlines() if x.strip()]
+    assert len(lines) == 1 and "interrupted, finished chunks kept" in lines[0], err  # the sweep's own summary
 
 
 @pytest.mark.slow

@@ -23,7 +23,11 @@ def _stop(signum, frame):
 
 
 def _is_the_command() -> bool:
-    """The `theoria` console script, or `python -m theoria` (not a notebook importing theoria)."""
+    """The `theoria` console script, or `python -m theoria` (not a notebook importing theoria, and
+    not a process multiprocessing started for it: a sweep's Dask workers re-import the script with
+    its argv, and each printed "theoria: terminated" when the sweep stopped them)."""
+    if "--multiprocessing-fork" in getattr(sys, "orig_argv", ()):  # how multiprocessing starts a child
+        return False
     argv = getattr(sys, "argv", None) or [""]
     orig = list(getattr(sys, "orig_argv", ()))
     by_m = any(a == "-m" and b in ("theoria", "theoria.app.cli") for a, b in zip(orig, orig[1:]))
