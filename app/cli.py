@@ -78,9 +78,9 @@ def _max_steps(text: str) -> float | None:
     try:
         v = float(text)
     except ValueError:
-        raise ParameterError("--max-steps", text, "a number of integrator steps ≥ 1, or none") from None
-    if not (math.isfinite(v) and v >= 1):  # a run takes at least one step
-        raise ParameterError("--max-steps", text, "a number of integrator steps ≥ 1, or none")
+        raise ParameterError("--max-steps", text, "a whole number of integrator steps ≥ 1, or none") from None
+    if not (math.isfinite(v) and v >= 1 and v == int(v)):  # a run takes at least one step, and whole ones
+        raise ParameterError("--max-steps", text, "a whole number of integrator steps ≥ 1, or none")
     return v
 
 
@@ -92,8 +92,8 @@ def _max_memory(text: str) -> float | None:
     if m is None or m.group(2) not in _UNITS:
         raise ParameterError("--max-memory", text, "bytes with an optional unit (e.g. 4GB, 500MB, 2GiB), or none")
     v = float(m.group(1)) * _UNITS[m.group(2)]
-    if not (math.isfinite(v) and v > 0):
-        raise ParameterError("--max-memory", text, "a size > 0 (e.g. 4GB), or none")
+    if not (math.isfinite(v) and v >= 1):  # "0.5" (bytes) was taken, and shown as a limit of 0 bytes
+        raise ParameterError("--max-memory", text, "a size of at least one byte (e.g. 4GB), or none")
     return v
 
 

@@ -191,8 +191,11 @@ def test_cli_refuses_naming_the_steps(capsys, no_integration):
     (["--max-steps", "none", "--max-memory", "none"], 0, ""),
     (["--max-steps", "abc"], 2, "--max-steps=abc"),
     (["--max-memory=-3GB"], 2, "--max-memory=-3GB"),
-    (["--max-memory", "0"], 2, "a size > 0"),
-    (["--max-steps", "0.5"], 2, "--max-steps=0.5: a number of integrator steps ≥ 1"),
+    (["--max-memory", "0"], 2, "a size of at least one byte"),
+    (["--max-memory", "0.5"], 2, "--max-memory=0.5: a size of at least one byte"),  # was a limit of "0 bytes"
+    (["--max-steps", "0.5"], 2, "--max-steps=0.5: a whole number of integrator steps ≥ 1"),
+    (["--max-steps", "1.5"], 2, "--max-steps=1.5: a whole number of integrator steps ≥ 1"),
+    (["--max-steps", "3e3"], 0, ""),
     (["--max-steps", "1e-300"], 2, "--max-steps=1e-300"),
 ])
 def test_cli_limits_override(args, code, needle, capsys):
