@@ -528,7 +528,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=cmd_sweep)
 
     s = sub.add_parser("check", help="every result of Euler's: Euler / simulated / modern")
-    s.add_argument("ids", nargs="*", help="rows to check, e.g. E1 E7 (default: every row; `theoria check` lists them)")
+    s.add_argument("ids", nargs="*", help="rows to check, e.g. E1 E7 (default: every row, each printed with its id)")
     s.add_argument("--json", action="store_true", help="the rows as JSON on stdout")
     s.set_defaults(fn=cmd_check)
 
