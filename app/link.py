@@ -43,6 +43,10 @@ def _finite(text: str) -> float:
     return x
 
 
+def _apart(a, b) -> bool:
+    return math.dist(a, b) > 1e-9
+
+
 def _num(x: float, digits: int = 6) -> str:
     text = f"{float(x):.{digits}g}"
     return text
@@ -108,7 +112,9 @@ def from_address(address: str | None) -> LinkState:
                 st.speed = _finite(v)
             elif k == "cam":
                 c = tuple(_finite(x) for x in v.split(","))
-                if len(c) in (6, 9) and all(abs(x) < 1e9 for x in c):
+                # a camera the view can take: apart from where it looks, and an up that is a direction
+                if len(c) in (6, 9) and all(abs(x) < 1e9 for x in c) and _apart(c[0:3], c[3:6]) \
+                        and (len(c) == 6 or _apart(c[6:9], (0.0, 0.0, 0.0))):
                     st.camera = c
             elif k.startswith("o."):
                 st.options[k[2:]] = v not in ("0", "false", "no")

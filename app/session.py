@@ -347,10 +347,13 @@ class ClientSession:
 
     def _set_camera_from_link(self, c: tuple) -> None:
         cam = self.client.camera
-        if len(c) == 9:
-            cam.up_direction = tuple(c[6:9])
-        cam.position = tuple(c[0:3])
-        cam.look_at = tuple(c[3:6])
+        try:  # a camera viser does not take (up along the line of sight) leaves the scene's own
+            if len(c) == 9:
+                cam.up_direction = tuple(c[6:9])
+            cam.position = tuple(c[0:3])
+            cam.look_at = tuple(c[3:6])
+        except (ValueError, AssertionError):
+            pass
 
     # ---- presets -----------------------------------------------------------------------------
     @staticmethod

@@ -147,6 +147,8 @@ def test_words_for_numbers_in_a_link_are_dropped():
     for word in ("nan", "NaN", "inf", "-inf", "infinity"):
         st = linkmod.from_address(f"?s=free-tumble&t={word}&speed={word}&cam=1,2,3,0,0,{word}")
         assert st.scenario == "free-tumble" and st.time is None and st.speed is None and st.camera is None, (word, st)
+    for cam in ("0,0,0,0,0,0", "1,2,3,1,2,3", "3,2,1,0,0,0,0,0,0"):  # no distance, no up: viser raised
+        assert linkmod.from_address(f"?cam={cam}").camera is None, cam
     st = linkmod.from_address("?t=12.5&speed=2&cam=1,2,3,0,0,0")
     assert (st.time, st.speed, st.camera) == (12.5, 2.0, (1.0, 2.0, 3.0, 0.0, 0.0, 0.0))
 
@@ -165,6 +167,21 @@ def test_a_link_with_nan_for_the_time_and_speed_leaves_the_clock_moving(monkeypa
         start = s.clock
         assert math.isfinite(start)
         _wait(lambda: math.isfinite(s.clock) and s.clock != start, 30)
+
+
+@pytest.mark.parametrize("cam", ["0,0,0,0,0,0", "3,2,1,0,0,0,0,0,0"])
+def test_a_link_with_a_camera_the_view_cannot_take_still_shows_the_scene(monkeypatch, cam):
+    """A camera at the point it looks at, or with no up direction: viser raised while the link was
+    restored, and the page stayed on "preparing…" with an empty panel."""
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    monkeypatch.setattr(browser, "read_address",
+                        lambda client, timeout=3.0: f"http://127.0.0.1:1/?s=middle-axis-flip&play=0&cam={cam}")
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        assert s.spec.name == "middle-axis-flip" and not s.playing
+        assert np.linalg.norm(np.subtract(client.camera.position, client.camera.look_at)) > 0.1
 
 
 def test_the_class_link_only_on_a_network_address():
