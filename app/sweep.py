@@ -437,7 +437,7 @@ class ZarrWriter:
     older one (--force) is written beside it, in OUT.new/, and takes its place only once whole
     (`finish`): interrupted, it leaves the older store as it was and its own chunks for --resume."""
 
-    def __init__(self, path: str, plan: Plan, resume: bool):
+    def __init__(self, path: str, plan: Plan, resume: bool, make: bool = True):
         import xarray as xr
         import zarr
 
@@ -465,18 +465,33 @@ class ZarrWriter:
                 raise ParameterError("--resume", shown, "was written by a different sweep (it differs in: "
                                      + ", ".join(diff) + "); give another --out, or --force to replace it")
             self.group = g
+            self.new = False
         else:
             if os.path.exists(path) and not _is_sweep_store(path):
                 raise ParameterError("--out", path, "exists and is not a theoria sweep: choose a new name")
             self.store = staging if os.path.exists(path) else path
+            self.new, self.group, self._spec = True, None, spec  # made by `create`, once the sweep can run
+        self.kept = self.store
+        if make or not self.new:
+            self.create()
+
+    @property
+    def in_place(self) -> bool:
+        """The store resumed is OUT itself (not a replacing OUT.new/): once every chunk is done, it is
+        the finished sweep, left as it is."""
+        return not self.new and self.store == self.path
+
+    def create(self):
+        """A new sweep's store, made once everything is checked and the cluster answers."""
+        if self.new and self.group is None:
+            staging = self.path.rstrip("/" + os.sep) + ".new"
             if os.path.exists(staging):  # an earlier replacing sweep, not resumed
                 shutil.rmtree(staging)
-            self._create(spec)
+            self._create(self._spec)
             with signals_held():
-                self.group = zarr.open_group(self.store, mode="r+")
+                self.group = self._zarr.open_group(self.store, mode="r+")
         self.metric_names = [k for k in self.group.array_keys() if k not in ("status",) and k not in
-                             (set(plan.dims) | {a.name for a in plan.random})]
-        self.kept = self.store
+                             (set(self.plan.dims) | {a.name for a in self.plan.random})]
 
     def _create(self, spec):
         xr, plan = self._xr, self.plan
@@ -595,8 +610,11 @@ class ZarrWriter:
         self.group = self._zarr.open_group(self.store, mode="r+")
 
     def discard(self):
-        """A new sweep refused after it began (a --metrics name no run reports): nothing of it stays."""
-        shutil.rmtree(self.store, ignore_errors=True)
+        """A new sweep refused or failed before any chunk of it finished (a --metrics name no run
+        reports, a full disk, a cluster that fell over): nothing of it stays, and an older store
+        it was to replace is left as it was."""
+        if self.new:
+            shutil.rmtree(self.store, ignore_errors=True)
 
     @_held
     def open(self):
@@ -607,7 +625,7 @@ class ParquetWriter:
     """Chunks as parquet parts in OUT.parts/ (each written whole, then renamed); joined into the
     one flat table OUT when every chunk is there."""
 
-    def __init__(self, path: str, plan: Plan, resume: bool):
+    def __init__(self, path: str, plan: Plan, resume: bool, make: bool = True):
         self.path, self.plan = path, plan
         self.parts = path + ".parts"
         self.complete = False  # resumed over its own finished table: nothing to run, nothing to write
@@ -634,13 +652,29 @@ class ParquetWriter:
                 raise ParameterError("--resume", path, "was written by a different sweep (it differs in: "
                                      + ", ".join(diff) + "); give another --out, or --force to replace it")
             self.complete = True
-        else:
-            if os.path.exists(self.parts):
-                shutil.rmtree(self.parts)
-            os.makedirs(self.parts)
-            write_whole(specfile, json.dumps(spec).encode())  # a full disk leaves none, not an empty one
+        self.new = not self.complete and not (resume and os.path.exists(specfile))
+        self._spec = spec
         self.sessions_file = os.path.join(self.parts, "_sessions.json")
         self.kept = self.parts
+        if make:
+            self.create()
+
+    @property
+    def in_place(self) -> bool:
+        return self.complete
+
+    def create(self):
+        """A new sweep's OUT.parts/, made once everything is checked and the cluster answers."""
+        if not self.new:
+            return
+        if os.path.exists(self.parts):
+            shutil.rmtree(self.parts)
+        os.makedirs(self.parts)
+        try:
+            write_whole(os.path.join(self.parts, "_sweep.json"), json.dumps(self._spec).encode())
+        except BaseException:  # a full disk: no empty OUT.parts/ that a next sweep would take for a sweep
+            shutil.rmtree(self.parts, ignore_errors=True)
+            raise
 
     def _part(self, i):
         return os.path.join(self.parts, f"part-{i:07d}.parquet")
@@ -682,8 +716,9 @@ class ParquetWriter:
         self.sessions = sessions
 
     def discard(self):
-        """A new sweep refused after it began (a --metrics name no run reports): nothing of it stays."""
-        if not self.complete:
+        """A new sweep refused or failed before any chunk of it finished (a --metrics name no run
+        reports, a full disk, a cluster that fell over): nothing of it stays."""
+        if self.new:
             shutil.rmtree(self.parts, ignore_errors=True)
 
     def finish(self):
@@ -757,8 +792,12 @@ class Summary:
     signal: str = ""
     cluster: str = ""
     kept: str = ""  # where an interrupted sweep's finished chunks are (OUT itself, OUT.parts/, OUT.new/)
+    complete: bool = False  # resumed, and found already finished: nothing was run or written
 
     def line(self) -> str:
+        if self.complete:
+            return (f"sweep: {self.runs} runs in {self.chunks} chunks; computed 0 chunks now, "
+                    f"{self.chunks_done_before} were done before: the sweep is complete, left as it is → {self.out}")
         st = ", ".join(f"{v} {k}" for k, v in self.statuses.items() if v)
         where = self.kept or self.out
         return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); computed {self.chunks_computed} chunks "
@@ -878,6 +917,19 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     """Plan, check, run and write a sweep. Returns (Summary, the opened result). `limits`:
     {"max_steps": …, "max_memory": …} for each run (default the app's; a run over them is not run,
     its status 'refused' with the budget's message)."""
+    import multiprocessing
+
+    if (getattr(sys.modules.get("__main__"), "__name__", None) == "__mp_main__"
+            or getattr(multiprocessing.current_process(), "_inheriting", False)):
+        # a worker process of the local cluster re-running the user's script on its way in (the
+        # script is its __mp_main__): were it to sweep too, every worker would start a cluster of
+        # its own on the same OUT
+        raise RuntimeError("a sweep was started while a local Dask worker re-imported the script that "
+                           "started it: put the sweep under `if __name__ == \"__main__\":` in that script, "
+                           "so that it runs once, in the process you started")
+    if resume and force:
+        raise ParameterError("--resume", "--force", "one of the two: --resume completes the sweep at --out, "
+                             "--force replaces it")
     if out is None:
         raise ParameterError("--out", None, "a file name ending in .zarr or .parquet")
     out = os.fspath(out)
@@ -965,15 +1017,25 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
                              "--force to replace it")
     # an older table or store at `out` stays as it is until the new one replaces it whole
     # (`finish`): an interrupted sweep leaves it, and its own finished chunks (OUT.parts/, OUT.new/)
-    # for --resume
-    writer = ZarrWriter(out, plan, resume) if kind == "zarr" else ParquetWriter(out, plan, resume)
+    # for --resume. The writer only checks here; a new sweep's store is made (`create`) once the
+    # cluster answers, so that a sweep refused (a wrong --cluster) writes nothing.
+    writer = (ZarrWriter if kind == "zarr" else ParquetWriter)(out, plan, resume, make=False)
     regions = plan.chunk_regions()
-    done = writer.done_regions(regions) if resume else set()
+    done = writer.done_regions(regions) if not writer.new else set()
     todo = [i for i in range(len(regions)) if i not in done]
     t0 = time.perf_counter()
     summary = Summary(out, plan.size, len(regions), len(done), 0, "batched" if plan.batched else "single runs", 0.0)
     counts = {k: 0 for k in STATUS if k != "not run"}
     interrupted = False
+    if not todo and writer.in_place:
+        # a finished sweep resumed: it is complete, and left byte for byte as it is
+        summary.seconds = time.perf_counter() - t0
+        summary.complete = True
+        with signals_held() as held:
+            mark_written(out)
+            result = writer.open()
+            held.drop()
+        return summary, result
     if todo:
         interrupted = False
         client, local, where, owned = _client(cluster, workers)
@@ -981,12 +1043,13 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
         threads = 1 if local is not None else None
         with _quiet_distributed(local is not None):  # to the cluster's last line
             try:
+                writer.create()
                 with _Stop() as stop, _progress(progress, plan.size, sum(_nruns(regions[i]) for i in done), sc.name) as bar:
                     interrupted = _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, threads, on_chunk)
                     if interrupted:
                         summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
-            except ParameterError:
-                if not resume:
+            except BaseException:
+                if summary.chunks_computed == 0:  # a new sweep that failed with nothing finished leaves nothing
                     writer.discard()
                 raise
             finally:
@@ -1079,6 +1142,9 @@ def _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, thre
             try:
                 res = fut.result()
             except Exception as e:  # noqa: BLE001 — a task that failed as a whole (a worker died, an import failed)
+                if summary.chunks_computed == 0 and writer.new:
+                    raise SweepError(f"chunk {i} failed on a worker ({type(e).__name__}: {e}); no chunk had "
+                                     f"finished, nothing was written") from None
                 raise SweepError(f"chunk {i} failed on a worker ({type(e).__name__}: {e}); the finished chunks "
                                  f"are kept in {writer.kept}, --resume continues") from None
             if not checked_metrics:

@@ -701,3 +701,166 @@ def test_python_sweep_takes_the_budget_as_simulate_does(tmp_path):
         assert list(df.sort_values("duration")["status"]) == [sw.STATUS["ok"], sw.STATUS["refused"]]
         df = sc.sweep(grid={"duration": [2.0, 4.0]}, out=tmp_path / "b.parquet", cluster=c, force=True, max_steps=None)
         assert list(df["status"]) == [sw.STATUS["ok"]] * 2
+
+
+# ------------------------------------------------- a refused or failed sweep leaves --out as it was
+
+TINY = {"grid": ["step=0.01:0.02:2"], "fixed": {"duration": 2.0}}
+
+
+@pytest.fixture(scope="module")
+def in_process_client():
+    """One Dask worker thread in this process: the sweeps below need a cluster, not its start-up."""
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as lc, \
+            Client(lc) as c:
+        yield c
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("suffix", ["zarr", "parquet"])
+def test_a_sweep_refused_for_its_cluster_writes_nothing_at_out(tmp_path, suffix):
+    """`--cluster nonsense` was refused (exit 2, the right line) only after the store was made:
+    OUT/zarr.json (or OUT.parts/_sweep.json) stayed, and the corrected command was then refused
+    as "it holds a sweep"; with --force over a finished sweep, an OUT.new/ stayed beside it."""
+    sc = th.scenario("free-tumble")
+    out = tmp_path / f"e.{suffix}"
+    with pytest.raises(th.ParameterError) as e:
+        sw.run_sweep(sc, out=out, cluster="nonsense", progress=False, **TINY)
+    assert "--cluster" in str(e.value) and "tcp://" in str(e.value)
+    assert list(tmp_path.iterdir()) == []
+    # a finished sweep there, replaced with --force through the same wrong --cluster: left as it was
+    plan = sw.make_plan(sc, **TINY)
+    (sw.ZarrWriter if suffix == "zarr" else sw.ParquetWriter)(str(out), plan, resume=False)
+    before = _files(tmp_path)
+    with pytest.raises(th.ParameterError):
+        sw.run_sweep(sc, out=out, cluster="nonsense", force=True, progress=False, **TINY)
+    assert _files(tmp_path) == before
+
+
+@pytest.mark.slow  # a theoria process waiting on a port nobody answers, then a sweep on a local cluster
+def test_a_sweep_whose_scheduler_does_not_answer_leaves_nothing_and_the_corrected_command_runs(tmp_path):
+    out = tmp_path / "e.zarr"
+    args = ["sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--set", "duration=2", "--quiet", "--out", str(out)]
+    r = cli(*args, "--cluster", "tcp://127.0.0.1:1", timeout=120)
+    assert r.returncode == 2 and "--cluster" in r.stderr and "no Dask scheduler answers" in r.stderr, r.stderr
+    assert list(tmp_path.iterdir()) == []
+    r = cli(*args, "--workers", "1", timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["e.zarr"]
+
+
+@pytest.mark.parametrize("suffix, where", [("parquet", "description"), ("parquet", "chunk"), ("zarr", "chunk")])
+def test_a_new_sweep_that_fails_on_a_full_disk_leaves_nothing_behind(tmp_path, monkeypatch, in_process_client,
+                                                                      suffix, where):
+    """A new sweep on a full disk said it could not write, and left an empty OUT.parts/ (or a store
+    of no finished chunk) that made the next sweep on the same --out "hold a sweep"."""
+    import errno
+
+    def full(*a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    if where == "description":
+        monkeypatch.setattr(sw, "write_whole", full)
+    else:
+        monkeypatch.setattr(sw.ZarrWriter if suffix == "zarr" else sw.ParquetWriter, "write", full)
+    with pytest.raises(OSError) as e:
+        sw.run_sweep(th.scenario("free-tumble"), out=tmp_path / f"b.{suffix}", cluster=in_process_client,
+                     progress=False, **TINY)
+    assert e.value.errno == errno.ENOSPC
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("suffix", ["zarr", "parquet"])
+def test_resuming_a_finished_sweep_leaves_it_byte_for_byte_and_says_it_is_complete(tmp_path, in_process_client,
+                                                                                    suffix):
+    """--resume of a finished Zarr sweep rewrote it: a new `sessions` entry in zarr.json each time."""
+    sc = th.scenario("free-tumble")
+    out = tmp_path / f"f.{suffix}"
+    sw.run_sweep(sc, out=out, cluster=in_process_client, progress=False, **TINY)
+    before = _files(tmp_path)
+    for _ in range(2):
+        summary, result = sw.run_sweep(sc, out=out, cluster=in_process_client, resume=True, progress=False, **TINY)
+        assert summary.complete and summary.chunks_computed == 0
+        assert "complete" in summary.line() and "left as it is" in summary.line()
+        assert len(result["status"]) == 2 if suffix == "parquet" else result.sizes["step"] == 2
+        del result
+        assert _files(tmp_path) == before
+
+
+def test_resume_and_force_together_are_refused_naming_both(tmp_path, capsys):
+    """`--resume --force` was taken, and silently resumed."""
+    from theoria.app.cli import main
+
+    out = tmp_path / "r.zarr"
+    plan = sw.make_plan(th.scenario("free-tumble"), **TINY)
+    sw.ZarrWriter(str(out), plan, resume=False)
+    before = _files(tmp_path)
+    code = main(["sweep", "free-tumble", "--grid", "step=0.01:0.02:2", "--set", "duration=2", "--out", str(out),
+                 "--resume", "--force", "--cluster", "nonsense", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--resume" in err and "--force" in err and err.count("\n") == 1, err
+    assert _files(tmp_path) == before
+    with pytest.raises(th.ParameterError) as e:
+        th.scenario("free-tumble").sweep(grid={"step": (0.01, 0.02, 2)}, out=out, resume=True, force=True)
+    assert "--resume" in str(e.value) and "--force" in str(e.value)
+
+
+def test_a_finished_store_opened_as_the_docs_show_it_warns_nothing(tmp_path, in_process_client):
+    """`xarray.open_zarr("F.zarr")` as the docs showed it warned, on every store, that it found no
+    consolidated metadata (a multi-line RuntimeWarning)."""
+    import re
+    import warnings
+
+    import xarray
+
+    doc = (ROOT / "docs" / "sweeps.md").read_text()
+    shown = re.search(r"open with `(xarray\.open_zarr\(\"F\.zarr\"[^`]*\))`", doc)
+    assert shown, "docs/sweeps.md shows how to open a sweep's Zarr store"
+    out = tmp_path / "F.zarr"
+    sw.run_sweep(th.scenario("free-tumble"), out=out, cluster=in_process_client, progress=False, **TINY)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ds = eval(shown.group(1).replace('"F.zarr"', repr(str(out))), {"xarray": xarray})
+        assert ds.sizes["step"] == 2 and bool((ds["status"] == sw.STATUS["ok"]).all())
+        ds.close()
+        m = sw.open_map(out, "final_energy_J" if "final_energy_J" in ds.data_vars else
+                        next(v for v in ds.data_vars if v != "status"), x="step", y=False)
+        assert m.values.size == 2
+
+
+GUARDLESS = """\
+import theoria as th
+th.scenario("free-tumble").sweep(grid={{"step": (0.01, 0.02, 2)}}, duration=2.0, out={out!r}, workers=1)
+print("swept")
+"""
+
+
+@pytest.mark.slow  # a script and its local cluster's worker, in processes of their own
+def test_a_script_without_the_main_guard_is_told_to_add_it_and_leaves_no_half_store(tmp_path):
+    """The documented `sc.sweep(...)` saved as a script and run with `python script.py`: the local
+    cluster's worker process re-imports the script (as __mp_main__) and started a sweep of its
+    own (RuntimeError: Nanny failed to start; SweepBusy), leaving a half-made store."""
+    out = tmp_path / "g.zarr"
+    script = tmp_path / "guardless.py"
+    script.write_text(GUARDLESS.format(out=str(out)))
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert 'if __name__ == "__main__":' in r.stderr, r.stderr[-3000:]
+    # whole (every chunk done, the sweep complete) or absent: never a store that blocks the next run
+    if out.exists():
+        import xarray as xr
+
+        with xr.open_zarr(out, consolidated=False) as ds:
+            assert bool((ds["status"] != 0).all())
+    assert not (tmp_path / "g.zarr.new").exists()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name != "g.zarr") == ["guardless.py"]
+    # the script put right runs
+    guarded = "if __name__ == \"__main__\":\n" + "".join("    " + ln + "\n" for ln in GUARDLESS.format(
+        out=str(tmp_path / "h.zarr")).splitlines()[1:])
+    script.write_text("import theoria as th\n" + guarded)
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert r.returncode == 0 and "swept" in r.stdout, r.stderr[-3000:]
