@@ -196,8 +196,9 @@ class Gate:
         """Whether a value goes on to its control as viser would set it. A slider takes a finite
         number within its range; text typed into its box, and any other number (NaN, infinite, out
         of range: its page never sends one), go to the app's parser instead, which refuses them
-        naming the range; the slider keeps its value and is shown it again. A checkbox takes true or false, a menu or
-        a text box text; anything else is dropped (viser would set it as it came)."""
+        naming the range; the slider keeps its value and is shown it again. A checkbox takes true
+        or false, a menu or a text box text; anything else is dropped (viser would set it as it
+        came)."""
         current = target.value
         if _number(current):  # a slider
             if isinstance(value, str):  # text typed into its box
