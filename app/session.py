@@ -1049,10 +1049,14 @@ class ClientSession:
             if not (self.playing and self.result is not None):
                 self._last_tick = None
                 return False
-            last, self._last_tick = self._last_tick, now
+            last = self._last_tick
             if last is None:
+                self._last_tick = now
                 return False
-            self.clock = (self.clock + (now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
+            # a time read on another thread before the last one (a pause, a tick's pass begun
+            # meanwhile) moves nothing: the clock of a playing run never runs backward
+            self._last_tick = max(last, now)
+            self.clock = (self.clock + max(0.0, now - last) * float(self.speed.value) / RUN_SECONDS) % 1.0
         return True
 
     def _set_clock(self, fraction: float) -> None:

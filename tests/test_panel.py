@@ -357,6 +357,15 @@ def _raised_on_another_thread(owner):
         other.join()
 
 
+def _ticked_by_hand_only(s):
+    """Take a session from the playback thread, whose ticks at the real time would move the clock
+    of a test that ticks it at times of its own; a pass of that thread begun before is let end."""
+    from theoria.app import playback
+
+    playback.ticker().remove(s)
+    time.sleep(1.5 / playback.PLAY_HZ_MIN)
+
+
 def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile():
     """viser sets a browser's value as its message arrives and runs the callback later, on a
     thread of its pool. Playback moving the scrubber to its own time in between (twice a second)
@@ -367,6 +376,7 @@ def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile(
 
     with _session("middle-axis-flip") as (s, client):
         _wait(lambda: s.updates >= 1, 300)
+        _ticked_by_hand_only(s)
         s._set_playing(True)
         s._set_clock(0.7)
         object.__setattr__(s.scrub, "value", 20.0)  # the browser's value, as viser sets it
@@ -394,6 +404,30 @@ def test_a_browsers_scrub_is_taken_though_playback_moved_the_scrubber_meanwhile(
             object.__setattr__(s.scrub, "update_timestamp", time.time() + 2.0)
             s._browser_event(s._on_scrub)
             assert s.clock == pytest.approx(0.5, abs=0.01)
+
+
+def test_a_playing_clock_never_runs_backward_for_a_time_read_earlier_on_another_thread():
+    """The playback thread reads the time once for a pass over every browser; a pause on a
+    browser's thread meanwhile brings the clock up to a later time. The pass's older time then
+    moved the clock back by the difference (a frame shown twice, a jump back of the read-out)."""
+    from theoria.app.session import RUN_SECONDS
+    from test_gallery import _session, _wait
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        _ticked_by_hand_only(s)
+        s._set_playing(True)
+        s._set_clock(0.25)
+        t0 = time.perf_counter() + 100.0
+        rate = float(s.speed.value) / RUN_SECONDS  # run fraction per second of real time
+        s._advance(t0)
+        assert s.clock == pytest.approx(0.25, abs=1e-12)
+        s._advance(t0 + 0.5)
+        assert s.clock == pytest.approx(0.25 + 0.5 * rate, abs=1e-12)
+        s._advance(t0 + 0.3)  # read before the last one
+        assert s.clock == pytest.approx(0.25 + 0.5 * rate, abs=1e-12)
+        s._advance(t0 + 0.6)  # real time only counted once
+        assert s.clock == pytest.approx(0.25 + 0.6 * rate, abs=1e-12)
 
 
 def test_a_drawing_thread_setting_the_scrubber_never_waits_for_a_browsers_event():
