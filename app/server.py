@@ -12,7 +12,8 @@ What the server refuses, whoever asks (a student's browser or a script speaking 
   analytics, and stops when its parent process dies.
 - **A browser's messages are bounded**: its socket is read at most READ_RATE messages a second
   (beyond, TCP holds the sender back: `_read_with_backpressure`). GUI updates (`Gate`) carry only
-  a `value` of a plain type (text at most MAX_TEXT_CHARS); with the panel's form submits, key
+  a `value` of a plain type (longer text than MAX_TEXT_CHARS is cut there, still too long to be
+  taken: its control refuses it and says so); with the panel's form submits, key
   commands and localStorage answers, at most GUI_RATE a second reach the app, the rest are
   coalesced (the newest value per control wins, so a slider flood ends at its last value and
   costs the other students nothing); camera updates at most CAMERA_RATE a second.
@@ -143,6 +144,11 @@ class Gate:
         if typ is vm.ViewerCameraMessage:
             return self._camera(client_id, message)
         if typ is vm.GuiUpdateMessage:
+            v = message.updates.get("value") if isinstance(message.updates, dict) else None
+            if isinstance(v, str) and len(v) > MAX_TEXT_CHARS + 1:
+                # kept too long to be taken (its control refuses it by its length, and says so),
+                # not whole: a pasted megabyte is not held or passed on
+                message = vm.GuiUpdateMessage(message.uuid, {**message.updates, "value": v[:MAX_TEXT_CHARS + 1]})
             why = _bad_update(message)
             if why:
                 self._drop(why)
@@ -311,9 +317,7 @@ def _bad_update(message) -> str | None:
     if not isinstance(up, dict) or set(up) != {"value"}:
         return "changes something other than a value"
     v = up["value"]
-    if isinstance(v, str):
-        return None if len(v) <= MAX_TEXT_CHARS else f"a text value longer than {MAX_TEXT_CHARS} characters"
-    if isinstance(v, (bool, int, float)) or v is None:
+    if isinstance(v, (str, bool, int, float)) or v is None:
         return None
     if isinstance(v, (list, tuple)):
         if len(v) <= MAX_LIST and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):

@@ -40,7 +40,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..physics.errors import ParameterError, show_value
-from ..physics.params import plain_number
+from ..physics.params import plain_number, read_number
 from .files import WriteError, mark_written, write_whole
 from .interrupt import signals_held
 
@@ -180,7 +180,7 @@ def parse_grid(sc, spec: str) -> Axis:
         if len(parts) != 3 or not all(re.fullmatch(_NUM, x) for x in parts[:2]):
             raise ParameterError("--grid", spec, form)
         try:  # "1000", "1e3"
-            c = float(parts[2])
+            c = read_number(parts[2])
             count = int(c)
             if count != c:
                 raise ValueError(parts[2])
@@ -205,6 +205,13 @@ def parse_grid(sc, spec: str) -> Axis:
         vals = np.array(vals, dtype=object if p.kind == "choice" else (np.int64 if p.kind == "int" else float))
     for v in np.unique(vals) if vals.dtype != object else vals:  # every value in range
         p.parse(v.item() if hasattr(v, "item") else v)
+    # the same run twice is no more knowledge, and a coordinate with a repeated value cannot be
+    # selected by that value (xarray's .sel)
+    seen = [str(v) for v in vals] if vals.dtype == object else vals
+    if len(np.unique(seen)) < len(vals):
+        twice = sorted({v for v, k in zip(*np.unique(seen, return_counts=True)) if k > 1}, key=str)
+        raise ParameterError("--grid", spec, "start and stop that differ, for a count above 1" if ":" in rhs else
+                             f"each value once ({', '.join(map(str, twice[:3]))} given more than once)")
     return Axis(p.name, vals, p.unit, p.help, spec=spec)
 
 

@@ -63,6 +63,7 @@ import numpy as np
 
 from theoria.physics import kept
 from theoria.physics.errors import Cancelled, ParameterError, show_value
+from theoria.physics.params import MAX_TEXT_CHARS
 
 from .playback import showing
 
@@ -94,7 +95,6 @@ PREVIEW_AFTER_S = 0.08
 # of them waited 0.5-1.8 s at the 95th percentile.
 TINY_JOB_S = 0.03
 CACHE_BYTES = 1e9  # finished runs and their drawings kept in memory by the server (LRU)
-MAX_TEXT_CHARS = 200  # a parameter value given as longer text is refused before it is parsed
 # Children run below the server: its event loop and its drawing threads (one interpreter lock) are
 # what every browser waits for. With a hundred browsers the server's threads spent nearly as long
 # waiting for a core as running (0.4-0.5 against 0.5 of a core, /proc schedstat). 150-s soaks of a

@@ -14,6 +14,7 @@ import numpy as np
 
 from .errors import ParameterError
 
+MAX_TEXT_CHARS = 200  # a value given as longer text is refused before it is parsed (a pasted paragraph)
 
 @dataclass(frozen=True)
 class Param:
@@ -79,6 +80,8 @@ class Param:
 
     def parse(self, text: Any) -> Any:
         """Parse a string (or a value) and check it against the range."""
+        if isinstance(text, str) and len(text) > MAX_TEXT_CHARS:
+            raise ParameterError(self.name, text, f"a value of at most {MAX_TEXT_CHARS} characters")
         if self.kind == "choice":
             if str(text) not in map(str, self.choices):
                 raise ParameterError(self.name, text, self.allowed())
@@ -111,7 +114,7 @@ class Param:
         if isinstance(part, (bool, np.bool_)):  # True is 1 to Python, not a number a user meant
             raise ParameterError(self.name, whole, "a number, " + self.allowed())
         try:
-            v = float(plain_number(part) if isinstance(part, str) else part)
+            v = read_number(part) if isinstance(part, str) else float(part)
         except OverflowError:  # an int beyond float range (10**400): as infinite as "inf"
             raise ParameterError(self.name, whole, "a finite number, " + self.allowed()) from None
         except (TypeError, ValueError):
@@ -142,6 +145,19 @@ def plain_number(text: str) -> str:
     if m:
         return f"{m[1] or 1}e{m[2] if m[2] is not None else m[3].translate(_FROM_SUPERSCRIPT)}"
     return t
+
+
+# a number as written with ASCII digits: Python's float() also reads "1_0" as 10 and other scripts'
+# digits ("١٠", "１０"), which no one types meaning that number
+NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:inf|infinity|nan)", re.ASCII | re.IGNORECASE)
+
+
+def read_number(text: str) -> float:
+    """The number a person wrote (`plain_number`'s forms); ValueError for anything else."""
+    t = plain_number(text)
+    if not NUMBER.fullmatch(t):
+        raise ValueError(f"not a number: {text!r}")
+    return float(t)
 
 
 # units whose symbol means little on a panel, in words

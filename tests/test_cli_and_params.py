@@ -49,6 +49,11 @@ def test_param_parse_errors():
     # --duration as typed, not as a float made it (400 nines were reported as inf)
     (["run", "free-tumble", "--duration", "9" * 400], "duration=" + "9" * 20),
     (["run", "free-tumble", "--duration", "abc"], "duration=abc: a number, allowed range (0, 1e+06] s"),
+    # what Python's float() reads and no one types meaning that number
+    (["run", "free-tumble", "--set", "duration=1_0"], "duration=1_0: a number, allowed range"),
+    (["run", "free-tumble", "--duration", "١٠"], "duration=١٠: a number, allowed range"),
+    (["run", "free-tumble", "--set", "omega0=0,１,2"], "omega0=0,１,2: a number"),
+    (["run", "free-tumble", "--duration", "0." + "0" * 300 + "1"], "a value of at most 200 characters"),
     (["run", "no-such-scenario"], "scenario=no-such-scenario"),
     (["run", "middle-axis-flip", "--set", "inertia=1,1,2"], "three different moments"),
     (["run", "initial-axis", "--set", "torque=0,0,0"], "torque=0,0,0"),

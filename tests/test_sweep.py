@@ -75,6 +75,25 @@ def test_grid_and_random_bounds_are_read_as_a_person_writes_them():
         assert "--grid" in str(e.value)
 
 
+@pytest.mark.parametrize("spec, says", [
+    ("eccentricity=0.1,0.2,0.1", "each value once (0.1 given more than once)"),
+    ("eccentricity=0.1,0.2,0.20", "each value once (0.2 given more than once)"),  # the same number
+    ("eccentricity=0.1:0.1:3", "start and stop that differ"),
+    ("eccentricity=0:0.5:1_0", "count must be a whole number"),  # Python's float() reads 10
+    ("eccentricity=0,٠.٢", "eccentricity=٠.٢: a number"),  # Arabic-Indic digits: float() reads 0.2
+])
+def test_a_grid_runs_each_value_once_and_reads_ascii_numbers_only(spec, says):
+    """A grid with a value twice ran it twice and gave the store a coordinate that xarray's .sel
+    cannot select by; "1_0" and other scripts' digits were read as numbers by Python's float()."""
+    from theoria.app.sweep import parse_grid
+    from theoria.physics.errors import ParameterError
+    from theoria.scenarios import get
+
+    with pytest.raises(ParameterError) as e:
+        parse_grid(get("libration-eccentric"), spec)
+    assert says in str(e.value), str(e.value)
+
+
 @pytest.mark.slow  # a local cluster starts before the first runs say which metrics there are
 @pytest.mark.parametrize("suffix", ["zarr", "parquet"])
 def test_a_metric_no_run_reports_names_the_metrics_and_leaves_nothing(tmp_path, suffix):
