@@ -222,9 +222,14 @@ SETUP = r"""
     const k = T.shown(), R = m.nodeRefFromName, on = (g) => g == null || d.groups[g] !== false;
     P.frame = k;
     for (const tr of d.tracks) {
-      const o = R[tr.node];
-      if (!o) continue;
-      const v = tr.v, i = k * tr.dim;
+      const o = R[tr.node], v = tr.v, i = k * tr.dim;
+      if (!o) {
+        // a label has no object of its own: viser's label renderer reads its place from the pose
+        // data each frame (the letter at the tip of a turning ω stayed where it was first put)
+        const pose = tr.attr === 'position' && m.nodePoseData && m.nodePoseData[tr.node];
+        if (pose) pose.position = [v[i], v[i + 1], v[i + 2]];
+        continue;
+      }
       if (tr.attr === 'wxyz') o.quaternion.set(v[i + 1], v[i + 2], v[i + 3], v[i]).normalize();
       else if (tr.attr === 'position') o.position.set(v[i], v[i + 1], v[i + 2]);
       else if (tr.attr === 'scale') o.scale.setScalar(v[i]);

@@ -548,3 +548,30 @@ def test_playback_frame_rate_against_an_empty_page(browser, app):
     if ratio < 0.8:
         pytest.xfail(f"playback at {ratio:.2f} of an empty page's frame rate ({rate:.1f} / {empty:.1f}); "
                      "software WebGL on two cores")
+
+
+def test_the_letters_of_turning_arrows_sit_at_their_tips_in_a_paused_page(browser, app):
+    """A turning ω or L is drawn once and scaled by the page to each frame's length; its letter
+    was moved on a node viser's labels do not read, so it stayed where the server first put it:
+    a body at rest at t = 0 showed "ω" and "L" floating above it, far from any arrow."""
+    import numpy as np
+    from theoria.scenarios import get
+
+    base, sessions = app
+    spec = get("initial-axis")
+    for t in ("0", "2.5"):
+        before = set(sessions)
+        ctx, page = _open(browser, base + "?" + _query(spec, t=t, play="0"))
+        try:
+            s = _session_for(sessions, before, spec.name)
+            _page_plays(page)
+            page.wait_for_function("(k) => window.theoria.P.frame === k", arg=s.view.frame, timeout=WAIT_MS)
+            time.sleep(0.5)
+            k = s.view.frame
+            for name in ("omega", "L"):
+                arrows = next(it for it in s.drawing.items if it.name == name)
+                tip = 1.1 * float(np.linalg.norm(np.asarray(arrows.vectors, float)[k, 0]))
+                pos = page.evaluate("(n) => window.__viserMutable.nodePoseData[n].position", f"/world/{name}/label")
+                assert np.allclose(pos, [0.0, 0.0, tip], atol=1e-4 * max(1.0, tip)), (t, name, pos, tip)
+        finally:
+            ctx.close()
