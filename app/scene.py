@@ -557,7 +557,7 @@ class SceneView:
         anchor, scale = getattr(it, "anchor", "top-left"), float(self.label_scale)
         return [self._node(name, lambda: self.scene.add_label(name, text, position=pos, anchor=anchor,
                                                               font_screen_scale=scale),
-                           sig=(anchor, scale), text=text, position=pos)]
+                           text=text, position=pos, anchor=anchor, font_screen_scale=scale)]
 
     def _draw_light(self, it: Light, name, anim):
         pos = _tuple(self._static_value(it.position, "position" in anim))
@@ -582,8 +582,8 @@ class SceneView:
             if it.labels:
                 scale, anchor = float(self.label_scale), it.label_anchor(0)
                 label = self._node(f"{name}/label", lambda: self.scene.add_label(
-                    f"{name}/label", str(it.labels[0]), font_screen_scale=scale, anchor=anchor), sig=(scale, anchor),
-                    text=str(it.labels[0]))
+                    f"{name}/label", str(it.labels[0]), font_screen_scale=scale, anchor=anchor),
+                    text=str(it.labels[0]), anchor=anchor, font_screen_scale=scale)
             self._vectors[it.name] = [frame, arrow, label, -1.0, poses]
             return [frame, arrow, label]
         vec = _f32(self._static_value(it.vectors, "vectors" in anim))
@@ -595,7 +595,7 @@ class SceneView:
             scale, anchor = float(self.label_scale), it.label_anchor(j)
             out.append(self._node(f"{name}/label_{j}", lambda text=text, pos=pos, anchor=anchor: self.scene.add_label(
                 f"{name}/label_{j}", str(text), position=pos, font_screen_scale=scale, anchor=anchor),
-                sig=(scale, anchor), text=str(text), position=pos))
+                text=str(text), position=pos, anchor=anchor, font_screen_scale=scale))
         return out
 
     def _draw_path(self, it: Path, name, anim):

@@ -61,6 +61,7 @@ SLIDER_DEBOUNCE_S = 0.15  # slider moves closer than this are a drag: only its l
 STEP_FRACTION = 0.01  # ← / → move the clock by this fraction of the run
 LINK_EVERY_S = 0.5  # the address bar follows the view at most this often (1 s while playing)
 PRESENT_LABEL_SCALE = 1.6  # labels in the scene in presenter mode
+PRESENT_ROWS, APP_ROWS = 1080, 800  # a projector's screen, and the laptop's the labels are sized for
 PANEL_PX = 384  # viser's "large" control panel: 24 em of 16 px
 PRESENT_PANEL_SCALE = 1.45  # the panel's type in presenter mode (app/browser.py `present`)
 
@@ -554,7 +555,7 @@ class ClientSession:
         self.errata.content = ""
         self._set_title()
         self.good_values = None
-        self.view_opts = View(exaggerate=self.view_opts.exaggerate)
+        self.view_opts = View(exaggerate=self.view_opts.exaggerate, text_scale=self.view_opts.text_scale)
         self._restore = None
 
     # ---- the sweep's map ------------------------------------------------------------------------
@@ -770,6 +771,8 @@ class ClientSession:
             except Exception:
                 pass
         self.view.label_scale = PRESENT_LABEL_SCALE if self.present else 1.0
+        # the scene grows with the screen's rows, the labels by their scale: kept apart at that size
+        self.view_opts.text_scale = PRESENT_LABEL_SCALE * APP_ROWS / PRESENT_ROWS if self.present else 1.0
         try:  # the docked panel widens by the scale its type grows by (app/browser.py `present`)
             self.client.gui.main_panel.set_width(PANEL_PX * (PRESENT_PANEL_SCALE if self.present else 1.0))
         except AttributeError:  # a test's fake client

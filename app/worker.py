@@ -1615,7 +1615,7 @@ def drawing_of(spec, run, view=None):
     from theoria.scenarios.drawing import View
 
     view = view or View()
-    key = (spec.name, repr(sorted(view.options.items())), float(view.exaggerate))
+    key = (spec.name, repr(sorted(view.options.items())), float(view.exaggerate), float(view.text_scale))
     store = run.__dict__.setdefault("_theoria_drawings", OrderedDict())
     d = store.get(key)
     if d is None:

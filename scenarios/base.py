@@ -515,7 +515,7 @@ class Scenario:
         """What `run` draws (the one list the app, the recording and the HTML replay render)."""
         view = view or View()
         d = (self.draw or standard)(run, self, view)
-        declutter_labels(d)  # labels that stay put turned so that none covers another
+        declutter_labels(d, text_scale=view.text_scale)  # labels turned so that none covers another
         return d
 
     def param(self, name: str) -> Param:

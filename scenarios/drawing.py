@@ -227,6 +227,9 @@ class View:
 
     options: dict[str, bool] = field(default_factory=dict)
     exaggerate: float = 1.0
+    # the labels' size against the scene's, 1 for the app at 1280×800 (presenter mode's larger type
+    # on a projector is larger against the scene: the labels are kept apart at that size)
+    text_scale: float = 1.0
 
     def option(self, key: str, spec=None) -> bool:
         if key in self.options:
@@ -690,6 +693,7 @@ def other_bodies(d: Drawing, run, bodies: Mapping[str, np.ndarray] | None = None
 # ---- labels that do not overlap -----------------------------------------------------------------
 
 LABEL_PX_PER_CHAR, LABEL_PX_HEIGHT, LABEL_PAD_PX = 7.2, 18.0, 4.0  # viser's label at 1280×800
+SHOWN_WIDTH_PX = 1280 - 384  # the canvas beside the app's docked panel, the look-at in its middle
 ANCHOR_TRIES = ("top-left", "bottom-left", "center-left", "top-right", "bottom-right", "center-right",
                 "bottom-center", "top-center")
 
@@ -708,9 +712,9 @@ def _project(points, camera: Camera, width: float = 1280.0, height: float = 800.
     return np.stack([(x + 1) * width / 2, (1 - y) * height / 2], 1), depth
 
 
-def _box(xy, text: str, anchor: str) -> tuple[float, float, float, float]:
-    w = LABEL_PX_PER_CHAR * len(text) + 2 * LABEL_PAD_PX
-    h = LABEL_PX_HEIGHT
+def _box(xy, text: str, anchor: str, scale: float = 1.0) -> tuple[float, float, float, float]:
+    w = scale * (LABEL_PX_PER_CHAR * len(text) + 2 * LABEL_PAD_PX)
+    h = scale * LABEL_PX_HEIGHT
     vert, horiz = anchor.split("-")
     x0 = {"left": xy[0], "center": xy[0] - w / 2, "right": xy[0] - w}[horiz]
     y0 = {"top": xy[1], "center": xy[1] - h / 2, "bottom": xy[1] - h}[vert]
@@ -804,55 +808,65 @@ def _has(d: Drawing, name: str) -> bool:
 SWEPT_FRAMES = 12  # frames at which a moving label's place is taken as taken
 
 
-def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0) -> int:
-    """Labels and the letters at arrow tips are seen from the drawing's camera and turned to
-    another side of their point (their `anchor`; the point stays where the physics puts it) so as
-    not to cover one another: a moving one (on a turning body, a read-out that follows a body, the
-    letter of a turning ω or L) to the side where its box, at SWEPT_FRAMES frames of the run,
-    meets the places the moving ones before it pass through least; one that stays put off every
-    earlier one and every place a moving one passes through, or, where no side is free, on the side
-    that covers fewest. The texts of overlays that are off when the scene opens come last. Returns
-    how many were turned."""
+def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0, text_scale: float = 1.0) -> int:
+    """Labels and the letters at arrow tips are seen from the drawing's camera at SWEPT_FRAMES
+    frames of the run and turned to another side of their point (their `anchor`; the point stays
+    where the physics puts it) so that they cover one another in as few of those frames as can be:
+    a text that stays put and another that passes over it meet in the frames it passes; two that
+    stay put, in all of them. A side where a text runs off the canvas beside the panel counts as
+    covering in every frame it does, and the opening frame (what a class sees before Play) counts
+    as much as all the others together. Each text in turn takes its best side against those placed
+    before it (the moving ones first, the texts of overlays that are off when the scene opens
+    last), then each once more against all the others, until none moves. `text_scale`: the labels'
+    size against viser's at `width`×`height` (View.text_scale). Returns how many were turned."""
     ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
     texts = _texts(d, ks)
-    placed, fixed, turned = [], [], 0
-    for t in texts:  # where the moving ones pass, each on the side that covers the others least
-        if not t.moves:
-            continue
+    if not texts:
+        return 0
+    sides = ANCHOR_TRIES + tuple(dict.fromkeys(t.anchor for t in texts if t.anchor not in ANCHOR_TRIES))
+    weight = np.ones(len(ks))
+    weight[0] = len(ks)
+    # every text's box on every side at every frame; NaN where it is not shown (meets nothing)
+    boxes = np.full((len(texts), len(sides), len(ks), 4), np.nan)
+    for i, t in enumerate(texts):
         xy, depth = _project(t.pos, d.camera, width, height)
-        pts = [p for p, z, on in zip(xy, depth, t.shown) if on and z > 0]
-        best = _side(t, lambda a: sum(_overlap(_box(p, t.text, a), b) for p in pts for b in placed))
-        if best != t.anchor:
-            t.turn(best)
-            turned += 1
-        placed += [_box(p, t.text, best) for p in pts]
-    for t in texts:
-        if t.moves:
-            continue
-        xy, depth = _project(t.pos[:1], d.camera, width, height)
-        if depth[0] <= 0:
-            continue
-        # frames it covers: a box that stays put is there in every frame, a moving one's in one
-        best = _side(t, lambda a: sum(_overlap(_box(xy[0], t.text, a), b) for b in placed)
-                     + len(ks) * sum(_overlap(_box(xy[0], t.text, a), b) for b in fixed))
-        if best != t.anchor:
-            t.turn(best)
-            turned += 1
-        fixed.append(_box(xy[0], t.text, best))
-    return turned
+        on = np.asarray(t.shown, bool) & (depth > 0)
+        for s, a in enumerate(sides):
+            if on.any():
+                boxes[i, s, on] = [_box(p, t.text, a, text_scale) for p in xy[on]]
+    half = SHOWN_WIDTH_PX / 2 * width / 1280.0
+    cut = ((boxes[..., 0] < width / 2 - half) | (boxes[..., 2] > width / 2 + half)
+           | (boxes[..., 1] < 0) | (boxes[..., 3] > height))
+    side = np.array([sides.index(t.anchor) for t in texts])
+    first = np.array([t.shown_first for t in texts])
 
+    def best(i: int, others: np.ndarray) -> int:
+        """The side of text i that covers the others (on their sides now) least, weighed by frame:
+        its own if none covers less, else the first in ANCHOR_TRIES that covers least."""
+        mine, theirs = boxes[i][:, None], boxes[others, side[others]][None]  # (sides, 1, K, 4), (1, n, K, 4)
+        meets = ((mine[..., 0] < theirs[..., 2]) & (theirs[..., 0] < mine[..., 2])
+                 & (mine[..., 1] < theirs[..., 3]) & (theirs[..., 1] < mine[..., 3]))
+        cost = (meets.sum(1) + cut[i]) @ weight
+        order = [side[i]] + [s for s in range(len(sides)) if s != side[i]]
+        return order[int(np.argmin(cost[order]))]
 
-def _side(t: _Text, covers: Callable[[str], int]) -> str:
-    """The side of its point `t` is written on: its own if there it covers nothing, else the first
-    free one of ANCHOR_TRIES, else the one where it covers least (`covers(anchor)`)."""
-    best, fewest = t.anchor, None
-    for anchor in (t.anchor,) + tuple(a for a in ANCHOR_TRIES if a != t.anchor):
-        n = covers(anchor)
-        if fewest is None or n < fewest:
-            best, fewest = anchor, n
-        if n == 0:
+    everyone = np.arange(len(texts))
+    for i in everyone:  # each against those placed before it
+        side[i] = best(i, everyone[:i])
+    for _ in range(4):  # then against all the others (an overlay switched on later never moves the opening ones)
+        moved = False
+        for i in everyone:
+            s = best(i, everyone[(everyone != i) & (first | ~first[i])])
+            moved |= s != side[i]
+            side[i] = s
+        if not moved:
             break
-    return best
+    turned = 0
+    for t, s in zip(texts, side):
+        if sides[s] != t.anchor:
+            t.turn(sides[s])
+            turned += 1
+    return turned
 
 
 def standard(run, spec, view: View, shape: str = "ellipsoid") -> Drawing:

@@ -312,3 +312,58 @@ def test_two_labels_riding_together_are_put_on_different_sides():
     assert meetings() == F  # as made: on top of each other in every frame
     declutter_labels(d)
     assert meetings() == 0 and d.item("body/c").anchor == "top-left"
+
+
+def test_labels_that_pass_the_same_places_at_other_times_are_left_where_they_are():
+    """Two moving labels along one line, each where the other was half a run before: they never
+    meet. Sides were chosen against every place an earlier label passes through, at any time, so
+    the second was turned (and labels riding one body together were turned onto each other)."""
+    from theoria.scenarios.drawing import Camera, Drawing, Label, declutter_labels
+
+    F = 12
+    x = np.linspace(-3.0, 3.0, F)
+    d = Drawing(frames=np.arange(F), times=np.arange(F, dtype=float), time_unit="s",
+                camera=Camera(position=(0.0, -10.0, 0.0), look_at=(0.0, 0.0, 0.0), fov_deg=75.0))
+    a = np.stack([x, 0 * x, 0 * x], 1)
+    d.add(Label(name="a", text="first", position=a), Label(name="b", text="second", position=np.roll(a, F // 2, 0)))
+    assert declutter_labels(d) == 0 and d.item("b").anchor == "top-left"
+
+
+@pytest.mark.parametrize("name", ["libration-circular", "moon"])
+def test_labels_on_a_turning_body_meet_in_no_frame_at_either_size(name):
+    """The axis labels and the letters of ω and L ride one turning body: placed for the app's
+    size and for presenter mode's larger type (each for its own), no two of them meet in any of
+    the frames looked at (presenter mode's L sat on "C = 1" all run long)."""
+    import theoria as th
+    from theoria.scenarios.drawing import SWEPT_FRAMES, View, _box, _overlap, _project, _texts
+
+    spec = th.scenario(name)
+    run = spec.simulate()
+    for scale in (1.0, 1.6 * 800 / 1080):
+        d = spec.drawing(run, View(text_scale=scale))
+        ks = np.unique(np.linspace(0, d.n_frames - 1, SWEPT_FRAMES).round().astype(int))
+        texts = [t for t in _texts(d, ks) if t.shown_first and t.moves]
+        assert len(texts) >= 3, [t.text for t in texts]
+        for k in range(len(ks)):
+            boxes = [(t.text, _box(_project(t.pos[k:k + 1], d.camera)[0][0], t.text, t.anchor, scale))
+                     for t in texts if t.shown[k]]
+            for i, (p, b1) in enumerate(boxes):
+                for q, b2 in boxes[i + 1:]:
+                    assert not _overlap(b1, b2), (scale, k, p, q)
+
+
+def test_a_label_near_the_edge_of_the_canvas_is_written_inward():
+    """A label near the left edge of the canvas beside the panel, written to the left of its
+    point, was cut by the edge (libration-circular's axes note in presenter mode): it is turned to
+    write inward; so is one near the right edge written to the right."""
+    from theoria.scenarios.drawing import SHOWN_WIDTH_PX, Camera, Drawing, Label, _project, declutter_labels
+
+    cam = Camera(position=(0.0, -10.0, 0.0), look_at=(0.0, 0.0, 0.0), fov_deg=75.0)
+    d = Drawing(frames=np.arange(2), times=np.arange(2, dtype=float), time_unit="s", camera=cam)
+    d.add(Label(name="left", text="a note near the left edge", position=(-8.0, 0.0, 1.0), anchor="top-right"),
+          Label(name="right", text="a note near the right edge", position=(8.0, 0.0, -1.0), anchor="top-left"))
+    xs = _project(np.array([[-8.0, 0.0, 1.0], [8.0, 0.0, -1.0]]), cam)[0][:, 0]
+    edge = (1280 - SHOWN_WIDTH_PX) / 2
+    assert edge < xs[0] < edge + 40 and 1280 - edge - 40 < xs[1] < 1280 - edge  # inside, near the edges
+    assert declutter_labels(d) == 2
+    assert d.item("left").anchor.endswith("-left") and d.item("right").anchor.endswith("-right")

@@ -223,6 +223,34 @@ def test_session_typed_values_reset_step_and_presenter_mode(monkeypatch):
         assert all(h.visible for h in s.controls._containers)
 
 
+def test_presenter_mode_keeps_labels_apart_at_its_size_and_through_a_scenario_switch():
+    """Presenter mode's larger type (1.6× on a screen 1.35× taller) put libration-circular's L on
+    "C = 1" all run long and the Cassini scene's note on the normals: labels are placed for their
+    size there, and stay so on the next scene."""
+    from theoria.app.session import APP_ROWS, PRESENT_LABEL_SCALE, PRESENT_ROWS
+    from theoria.app.worker import drawing_of
+    from theoria.scenarios.drawing import View
+    from test_gallery import _session, _wait
+
+    def anchors(d):
+        return {it.name: (getattr(it, "anchor", None), getattr(it, "label_anchors", None)) for it in d.items}
+
+    scale = PRESENT_LABEL_SCALE * APP_ROWS / PRESENT_ROWS
+    with _session("cassini") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        normal = anchors(s.drawing)
+        s._set_present(True)
+        assert s.view_opts.text_scale == pytest.approx(scale)
+        assert anchors(s.drawing) == anchors(drawing_of(s.spec, s.result, View(text_scale=scale))) != normal
+        n = s.updates
+        s._switch_scenario("libration-circular")
+        s.request()
+        _wait(lambda: s.updates > n and s.drawing_spec == "libration-circular", 300)
+        assert s.view_opts.text_scale == pytest.approx(scale)
+        s._set_present(False)
+        assert s.view_opts.text_scale == 1.0
+
+
 def test_session_restores_a_link(monkeypatch):
     from theoria.app import browser
     from test_gallery import _session, _wait
