@@ -128,6 +128,10 @@ def test_the_example_runs_and_writes_its_files(tmp_path):
     assert p.returncode == 0, p.stderr[-2000:]
     assert "refused: spin=1e+09: allowed range [-50, 50] rad/s" in p.stdout
     assert "interval between flips: Euler" in p.stdout
+    import re
+
+    m = re.search(r"with a nudge of \S+: ([\d.]+) s between flips, against ([\d.]+) s", p.stdout)
+    assert m and float(m[1]) > float(m[2]), p.stdout  # as its comment says (it printed the opposite)
     from theoria.app.replay import check
 
     assert check(str(tmp_path / "flip.rrd"))["kind"] == "rrd"
