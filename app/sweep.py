@@ -918,6 +918,35 @@ def _workers_ignore_ctrl_c():
         shutil.rmtree(where, ignore_errors=True)
 
 
+GUARD_ADVICE = "put the sweep under `if __name__ == \"__main__\":` in that script, so that it runs once, in the process you started"
+
+
+def _unguarded_script() -> str | None:
+    """The Python file this process runs, when it has no `if __name__ == "__main__":` at its top
+    level (None for a console, a notebook, the theoria command, a guarded script, or a file that
+    cannot be read)."""
+    import ast
+
+    path = getattr(sys.modules.get("__main__"), "__file__", None)
+    if not isinstance(path, str) or not path.endswith(".py"):
+        return None
+    try:
+        with open(path, encoding="utf-8") as f:
+            tree = ast.parse(f.read(), path)
+    except (OSError, SyntaxError, ValueError):
+        return None
+
+    def is_main_test(t) -> bool:  # __name__ == "__main__", either way round
+        if not (isinstance(t, ast.Compare) and len(t.ops) == 1 and isinstance(t.ops[0], ast.Eq)):
+            return False
+        sides = [t.left, t.comparators[0]]
+        return (any(isinstance(x, ast.Name) and x.id == "__name__" for x in sides)
+                and any(isinstance(x, ast.Constant) and x.value == "__main__" for x in sides))
+
+    guarded = any(isinstance(node, ast.If) and is_main_test(node.test) for node in tree.body)
+    return None if guarded else path
+
+
 def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, resume=False, metrics=None,
               fixed=None, preset=None, seed=0, chunk=None, workers=None, progress=True,
               on_chunk=None, force=False, limits=None) -> tuple[Summary, Any]:
@@ -932,8 +961,12 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
         # script is its __mp_main__): were it to sweep too, every worker would start a cluster of
         # its own on the same OUT
         raise RuntimeError("a sweep was started while a local Dask worker re-imported the script that "
-                           "started it: put the sweep under `if __name__ == \"__main__\":` in that script, "
-                           "so that it runs once, in the process you started")
+                           "started it: " + GUARD_ADVICE)
+    script = _unguarded_script() if cluster is None else None
+    if script is not None:  # said here, before any worker starts (each would fail with this in its own
+        # traceback, and the sweep with "Nanny failed to start")
+        raise RuntimeError(f"{script} starts a sweep without `if __name__ == \"__main__\":`: the local Dask "
+                           "cluster's workers import the script again on their way in; " + GUARD_ADVICE)
     if resume and force:
         raise ParameterError("--resume", "--force", "one of the two: --resume completes the sweep at --out, "
                              "--force replaces it")

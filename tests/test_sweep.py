@@ -863,19 +863,18 @@ print("swept")
 def test_a_script_without_the_main_guard_is_told_to_add_it_and_leaves_no_half_store(tmp_path):
     """The documented `sc.sweep(...)` saved as a script and run with `python script.py`: the local
     cluster's worker process re-imports the script (as __mp_main__) and started a sweep of its
-    own (RuntimeError: Nanny failed to start; SweepBusy), leaving a half-made store."""
+    own (RuntimeError: Nanny failed to start; SweepBusy), leaving a half-made store. A script
+    with the guard runs."""
     out = tmp_path / "g.zarr"
     script = tmp_path / "guardless.py"
     script.write_text(GUARDLESS.format(out=str(out)))
     r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
-    assert 'if __name__ == "__main__":' in r.stderr, r.stderr[-3000:]
-    # whole (every chunk done, the sweep complete) or absent: never a store that blocks the next run
-    if out.exists():
-        import xarray as xr
-
-        with xr.open_zarr(out, consolidated=False) as ds:
-            assert bool((ds["status"] != 0).all())
-    assert not (tmp_path / "g.zarr.new").exists()
+    # said before any worker starts, as the traceback's last line (it ended "RuntimeError: Nanny
+    # failed to start." after ~100 lines of the workers' tracebacks, the advice buried in them)
+    last = r.stderr.strip().splitlines()[-1]
+    assert r.returncode == 1 and last.startswith("RuntimeError: ") and 'if __name__ == "__main__":' in last, r.stderr
+    assert "Nanny" not in r.stderr and "swept" not in r.stdout
+    assert not out.exists() and not (tmp_path / "g.zarr.new").exists()
     assert sorted(p.name for p in tmp_path.iterdir() if p.name != "g.zarr") == ["guardless.py"]
     # the script put right runs
     guarded = "if __name__ == \"__main__\":\n" + "".join("    " + ln + "\n" for ln in GUARDLESS.format(
@@ -883,3 +882,43 @@ def test_a_script_without_the_main_guard_is_told_to_add_it_and_leaves_no_half_st
     script.write_text("import theoria as th\n" + guarded)
     r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert r.returncode == 0 and "swept" in r.stdout, r.stderr[-3000:]
+
+
+def test_a_sweep_started_by_a_workers_reimport_is_refused_there(tmp_path, monkeypatch):
+    """Where the script's guard is missing but the check above cannot tell (a sweep at the top
+    level of a script that also has a guard), the worker re-importing it refuses to sweep."""
+    import multiprocessing
+
+    from theoria.app.sweep import run_sweep
+    from theoria.scenarios import get
+
+    monkeypatch.setattr(multiprocessing.current_process(), "_inheriting", True, raising=False)
+    with pytest.raises(RuntimeError, match='if __name__ == "__main__":'):
+        run_sweep(get("free-tumble"), grid=["step=0.01:0.02:2"], out=str(tmp_path / "w.zarr"))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_which_scripts_are_told_to_add_the_guard(tmp_path, monkeypatch):
+    """The file of __main__ is read: a script with the guard at its top level (either way round),
+    `python -m theoria` (whose module ran the command again in each worker), a console or a
+    notebook (no .py file) pass; a script without it is named."""
+    import types
+
+    import theoria.__main__ as theoria_main  # the module only: the guard keeps it from running the command
+    from theoria.app import sweep as sw
+
+    def main_file(path):
+        m = types.ModuleType("__main__")
+        if path is not None:
+            m.__file__ = str(path)
+        monkeypatch.setitem(sys.modules, "__main__", m)
+        return sw._unguarded_script()
+
+    bare, guarded, reversed_ = (tmp_path / n for n in ("bare.py", "guarded.py", "reversed.py"))
+    bare.write_text("import theoria as th\nth.scenario('free-tumble').sweep(out='x.zarr')\n")
+    guarded.write_text("import theoria as th\n\nif __name__ == '__main__':\n    th.scenario('free-tumble')\n")
+    reversed_.write_text("if '__main__' == __name__:\n    pass\n")
+    assert main_file(bare) == str(bare)
+    assert main_file(guarded) is None and main_file(reversed_) is None
+    assert main_file(theoria_main.__file__) is None
+    assert main_file(None) is None and main_file(tmp_path / "missing.py") is None
