@@ -114,27 +114,40 @@ def moon_semi_major_axis(month=C.SIDEREAL_MONTH_DAYS):
 
 @functools.lru_cache(maxsize=8)
 def calibrated_moon_elements(month=C.SIDEREAL_MONTH_DAYS, span_days=4 * JULIAN_YEAR_DAYS, iterations=3):
-    """Osculating (a, e, i) at J2000 whose integrated Moon has the observed mean sidereal month,
-    mean eccentricity and mean inclination (osculating and mean elements differ by the Sun's
-    periodic perturbations, and the Sun lengthens the mean month): fixed-point iteration
-    a ← a·(n_sim/n_obs)^(2/3), e ← e + (e_obs − ē_sim), i ← i + (i_obs − ī_sim). Only these
-    three are fitted; the node regression, the perigee motion and the mean distance come out of
-    the integration. Cached (a few REBOUND runs of `span_days`): the result is a tuple of floats
-    that depends on the arguments only."""
+    """Osculating (a, e, i, Ω, L) at J2000 whose integrated Moon has the observed mean sidereal
+    month, mean eccentricity, mean inclination, and mean node and mean longitude at J2000
+    (osculating and mean elements differ by the Sun's periodic perturbations, and the Sun
+    lengthens the mean month): fixed-point iteration a ← a·(n_sim/n_obs)^(2/3), e ← e + (e_obs −
+    ē_sim), and the same for i, Ω and L, the mean ones fitted over `span_days` (a straight line
+    in time for Ω and L, whose intercept is the mean value at J2000). The osculating node set to
+    the mean one started the mean node ~1.4° off Meeus's, and with it the phase of the 18.6-year
+    nutation (0.4″ of a cos Ω term in Δψ where IAU 2000A has 0.003″). The node regression, the
+    perigee and its motion, and the mean distance come out of the integration. Cached (a few
+    REBOUND runs of `span_days`): the result is a tuple of floats that depends on the arguments
+    only."""
+    d = math.radians
     a = moon_semi_major_axis(month)
-    e, inc = MOON_J2000["e"], math.radians(MOON_J2000["inc"])
+    e, inc, node, lon = MOON_J2000["e"], d(MOON_J2000["inc"]), d(MOON_J2000["node"]), d(MOON_J2000["L"])
     target = 2 * np.pi / month
     for _ in range(iterations):
-        me = moon_mean_elements(integrate_orbits(span_days, 0.5, moon_elements=(a, e, inc)))
+        me = moon_mean_elements(integrate_orbits(span_days, 0.5, moon_elements=(a, e, inc, node, lon)))
         a *= (me.n / target) ** (2.0 / 3.0)
         e += MOON_J2000["e"] - me.e
-        inc += math.radians(MOON_J2000["inc"]) - me.inc
-    return a, e, inc
+        inc += d(MOON_J2000["inc"]) - me.inc
+        node += _turn(d(MOON_J2000["node"]) - me.node0)
+        lon += _turn(d(MOON_J2000["L"]) - me.L0)
+    return a, e, inc, node, lon
+
+
+def _turn(angle: float) -> float:
+    """An angle difference brought into (−π, π]."""
+    return float(math.remainder(angle, 2 * math.pi))
 
 
 def make_simulation(moon_elements=None):
     """REBOUND simulation (IAS15) at J2000 with the elements above; moon_elements = osculating
-    (a, e, i) (default: Keplerian a of the month, the mean e and i taken as osculating)."""
+    (a, e, i) or (a, e, i, Ω, L) in AU and radians (default: Keplerian a of the month, the mean
+    elements taken as osculating)."""
     import rebound
 
     sim = rebound.Simulation()
@@ -143,9 +156,10 @@ def make_simulation(moon_elements=None):
     d = math.radians
     m = MOON_J2000
     sim.add(m=M_EARTH)
-    a, e, inc = moon_elements if moon_elements is not None else (moon_semi_major_axis(), m["e"], d(m["inc"]))
-    sim.add(m=M_MOON, a=a, e=e, inc=inc,
-            Omega=d(m["node"]), omega=d(m["varpi"] - m["node"]), l=d(m["L"]), primary=sim.particles[0])
+    el = tuple(moon_elements) if moon_elements is not None else (moon_semi_major_axis(), m["e"], d(m["inc"]))
+    a, e, inc = el[:3]
+    node, lon = el[3:] if len(el) == 5 else (d(m["node"]), d(m["L"]))
+    sim.add(m=M_MOON, a=a, e=e, inc=inc, Omega=node, omega=d(m["varpi"]) - node, l=lon, primary=sim.particles[0])
     s = SUN_J2000
     # the Sun seen from the Earth–Moon barycentre: longitude L☉, perigee ϖ☉, in the ecliptic
     sim.add(m=1.0, a=s["a"], e=s["e"], inc=0.0, Omega=0.0, omega=d(s["varpi"]), l=d(s["L"]), primary=sim.com())

@@ -1,8 +1,8 @@
 """The real sky, shared by the scenarios held against it: JPL's DE421 ephemeris (the `de421`
 package, read by `jplephem`; the file ships inside the package, nothing is downloaded).
 
-DE421 (Folkner, Williams & Boggs 2009) covers JD 2414864.5–2471184.5 (1899 July 29 – 2053
-October 9) in TDB; it holds the positions of the Sun, the Earth–Moon barycentre and the Moon
+DE421 (Folkner, Williams & Boggs 2009) as the `de421` package ships it covers JD 2414992.5 –
+2524624.5 (1899 December 4 – 2200 February 1) in TDB; it holds the positions of the Sun, the Earth–Moon barycentre and the Moon
 (geocentric) in the ICRF, and the Moon's libration angles (3-1-3 Euler angles from the ICRF to
 its principal axes) with their rates. Here everything is turned into theoria's J2000 ecliptic
 frame and times are days from J2000.0 (TDB).

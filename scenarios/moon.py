@@ -647,7 +647,7 @@ register(Scenario(
             "within a few arcseconds of DE421's Moon for years (time plot: difference from DE421)."),
     params=(
         Param("years", 6.0, 0.2, 40.0, "yr", "time span", label="Time span"),
-        Param("start_year", 2025.0, 1900.0, 2190.0, "yr", "start epoch (TDB, years; DE421 covers 1900.01–2200.09)",
+        Param("start_year", 2025.0, 1900.0, 2190.0, "yr", "start epoch (TDB, years; DE421 covers 1899.92–2200.08)",
               label="Start year"),
         Param("step_days", 0.25, 0.01, 2.0, "day", "integrator step", label="Integrator step", advanced=True),
         Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)", label="β = (C − A)/B"),

@@ -176,3 +176,21 @@ def test_optical_libration_maxima_quoted_are_de421s():
     assert max(lons) == pytest.approx(C.MOON_OPTICAL_LIBRATION_LON_MAX_DE421_DEG[1], abs=0.002)
     assert min(lats) == pytest.approx(C.MOON_OPTICAL_LIBRATION_LAT_MAX_DE421_DEG[0], abs=0.002)
     assert max(lats) == pytest.approx(C.MOON_OPTICAL_LIBRATION_LAT_MAX_DE421_DEG[1], abs=0.002)
+
+
+def test_the_span_the_moon_scene_states_is_de421s():
+    """The start year's help said DE421 covers 1900.01–2200.09 (and a docstring 1899–2053): the
+    file the `de421` package ships starts 1899 December 4 and ends 2200 February 1 (erfa.jd2cal)."""
+    import re
+
+    import de421
+    import erfa
+    from jplephem.ephem import Ephemeris
+
+    from theoria.scenarios import get
+
+    e = Ephemeris(de421)
+    assert erfa.jd2cal(e.jalpha, 0.0)[:3] == (1899, 12, 4) and erfa.jd2cal(e.jomega, 0.0)[:3] == (2200, 2, 1)
+    help_text = get("moon").param("start_year").help
+    lo, hi = map(float, re.search(r"covers (\d{4}\.\d+)–(\d{4}\.\d+)", help_text).groups())
+    assert lo == pytest.approx(erfa.epj(e.jalpha, 0.0), abs=0.005) and hi == pytest.approx(erfa.epj(e.jomega, 0.0), abs=0.005)
