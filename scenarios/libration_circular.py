@@ -74,7 +74,7 @@ def _libration_circular(values, progress=None):
     t, L, q = integrate(I, om0, duration, step, q0=q0, masses=[PointMass(gm, orbit.position)],
                         scheme="yoshida4", stride=stride_for(n), progress=progress)
     pos = orbit.position(t)
-    traj = Trajectory(t, q, L, I, time_unit="1/δ·rad", bodies={"attractor": pos})
+    traj = Trajectory(t, q, L, I, time_unit="unit", bodies={"attractor": pos})  # δ is in rad per unit
     zeta = zeta_of(q, pos)
     zeta = zeta - 2 * np.pi * np.round((zeta[0] - zeta0) / (2 * np.pi))
     zdot = d - traj.omega_body[:, 2]
@@ -119,16 +119,16 @@ def _libration_circular(values, progress=None):
         m["separatrix_time_to_80deg_euler"] = float(
             abs(lib.separatrix_time_euler(target, w0) - lib.separatrix_time_euler(phi0, w0)))
     comps = [
-        Comparison("libration period (small oscillation §831: 2π/√(2N))", T_small, T_meas, T_exact, "1/δ",
+        Comparison("libration period (small oscillation §831: 2π/√(2N))", T_small, T_meas, T_exact, "unit",
                    "modern: finite-amplitude pendulum in 2ζ, 4K(sin ζ_max)/√(2N)"),
         Comparison("largest digression ζ_max", None, amp_meas, m["libration_amplitude_exact_rad"], "rad"),
     ]
     if "circulation_period_euler" in m:
         comps.append(Comparison("half turn relative to F, π/(m√n) (§826 4th)", m["circulation_period_euler"], T_meas,
-                                T_exact, "1/δ", "Euler keeps the first term of t√n = ζ/m − sin 2ζ/(4m³)"))
+                                T_exact, "unit", "Euler keeps the first term of t√n = ζ/m − sin 2ζ/(4m³)"))
     if "separatrix_time_to_80deg" in m:
         comps.append(Comparison("time to creep to 80° on the separatrix, ln tan(45° + ζ/2)/√(2n) (§826 3rd)",
-                                m["separatrix_time_to_80deg_euler"], m["separatrix_time_to_80deg"], None, "1/δ"))
+                                m["separatrix_time_to_80deg_euler"], m["separatrix_time_to_80deg"], None, "unit"))
     notes = [f"Euler's case: {case} (§826).",
              "Euler's √(2n) is in his units: his n is N = 3GM(B−A)/(2Cs³); the small-oscillation "
              "angular frequency is √(2N) = δ√(3(B−A)/C) on a Kepler circle, and his π/√(2n) is half "

@@ -535,3 +535,18 @@ def test_a_section_cut_into_pieces_for_progress_is_the_uncut_run_bit_for_bit():
     for a, b in zip(whole, cut):
         np.testing.assert_array_equal(a, b)
     assert np.max(whole[2]) * 2 * np.pi > 0.1  # some start is chaotic: the test can see a last-bit slip
+
+
+def test_libration_times_are_in_the_scenes_time_unit_for_any_orbital_rate():
+    """With δ = 2 the period halves (it is in the time unit δ is given in, rad per unit), but the
+    comparison said "1/δ" and the trajectory "1/δ·rad": in units of 1/δ it would not change.
+    Against the small-oscillation period 2π/(δ√(3(B−A)/C)) (§831)."""
+    import theoria as th
+
+    sc = th.scenario("libration-circular")
+    for rate in (1.0, 2.0):
+        run = sc.simulate(orbital_rate=rate, asymmetry=0.2, zeta0_deg=1)
+        (row,) = [c for c in run.comparisons if c.label.startswith("libration period")]
+        assert row.unit == run.metric_units["libration_period"] == "unit" and run.trajectory.time_unit == "unit"
+        assert row.euler == pytest.approx(2 * np.pi / (rate * np.sqrt(3 * 0.2)), rel=1e-12)
+        assert row.simulated == pytest.approx(row.euler, rel=2e-4)  # 1° of swing: the pendulum's own correction
