@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
-import re
 import sys
 import time
 
@@ -67,41 +65,11 @@ class Progress:
 
 # ---- limits ------------------------------------------------------------------------------------
 
-_UNLIMITED = ("none", "inf", "unlimited")
-_UNITS = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "m": 1e6, "mb": 1e6, "g": 1e9, "gb": 1e9, "t": 1e12, "tb": 1e12,
-          "kib": 1024, "mib": 1024**2, "gib": 1024**3, "tib": 1024**4}
-
-
-def _max_steps(text: str) -> float | None:
-    if text.strip().lower() in _UNLIMITED:
-        return None
-    try:
-        v = float(text)
-    except ValueError:
-        raise ParameterError("--max-steps", text, "a whole number of integrator steps ≥ 1, or none") from None
-    if not (math.isfinite(v) and v >= 1 and v == int(v)):  # a run takes at least one step, and whole ones
-        raise ParameterError("--max-steps", text, "a whole number of integrator steps ≥ 1, or none")
-    return v
-
-
-def _max_memory(text: str) -> float | None:
-    t = text.strip().lower()
-    if t in _UNLIMITED:
-        return None
-    m = re.fullmatch(r"([0-9.]+(?:e[+-]?[0-9]+)?)\s*([a-z]*)", t)
-    if m is None or m.group(2) not in _UNITS:
-        raise ParameterError("--max-memory", text, "bytes with an optional unit (e.g. 4GB, 500MB, 2GiB), or none")
-    v = float(m.group(1)) * _UNITS[m.group(2)]
-    if not (math.isfinite(v) and v >= 1):  # "0.5" (bytes) was taken, and shown as a limit of 0 bytes
-        raise ParameterError("--max-memory", text, "a size of at least one byte (e.g. 4GB), or none")
-    return v
-
-
 def _limits(args) -> dict:
-    from theoria.scenarios.budget import MAX_MEMORY, MAX_STEPS
+    from theoria.scenarios.budget import MAX_MEMORY, MAX_STEPS, memory_limit, steps_limit
 
-    steps = MAX_STEPS if args.max_steps is None else _max_steps(args.max_steps)
-    memory = MAX_MEMORY if args.max_memory is None else _max_memory(args.max_memory)
+    steps = MAX_STEPS if args.max_steps is None else steps_limit(args.max_steps, "--max-steps")
+    memory = MAX_MEMORY if args.max_memory is None else memory_limit(args.max_memory, "--max-memory")
     return {"max_steps": steps, "max_memory": memory}
 
 

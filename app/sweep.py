@@ -970,9 +970,15 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if resume and force:
         raise ParameterError("--resume", "--force", "one of the two: --resume completes the sweep at --out, "
                              "--force replaces it")
-    if out is None:
-        raise ParameterError("--out", None, "a file name ending in .zarr or .parquet")
+    if not isinstance(out, (str, os.PathLike)):
+        raise ParameterError("--out", out, "a file name ending in .zarr or .parquet")
     out = os.fspath(out)
+    if not isinstance(out, str):
+        raise ParameterError("--out", out, "a file name ending in .zarr or .parquet, as text")
+    # each run's budget, read before anything starts ("4GB" as the command line writes it)
+    from ..scenarios.budget import memory_limit, steps_limit
+
+    limits = {k: (steps_limit if k == "max_steps" else memory_limit)(v, k) for k, v in (limits or {}).items()}
     kind = "zarr" if out.rstrip("/").endswith(".zarr") else "parquet" if out.endswith(".parquet") else None
     if kind is None:
         raise ParameterError("--out", out, "a name ending in .zarr (xarray/Zarr) or .parquet (flat table)")

@@ -337,6 +337,28 @@ class Batch:
 RESERVED = ("progress", "preset", "max_steps", "max_memory")  # keywords of Scenario.simulate: no parameter may be called so
 
 
+def in_python_words(e: ParameterError) -> ParameterError:
+    """A ParameterError of the command line's (`--out=…`, `--set=k=v`, `--resume=--force`) as a
+    Python caller reads it: the keywords for the flags (`out=…`, `k=v`, `resume=True, force=True`)."""
+    from ..physics.errors import show_value
+
+    name, value, allowed = e.name, e.value, str(e.allowed)
+    if not (isinstance(name, str) and name.startswith("--")):
+        return e
+    if name == "--set" and isinstance(value, str) and "=" in value:  # a scenario parameter
+        name, value = value.split("=", 1)
+    else:
+        name = name[2:].replace("-", "_")
+        if isinstance(value, str) and value.startswith("--"):  # two flags that cannot go together
+            name, value = f"{name}=True, {value[2:].replace('-', '_')}", True
+    allowed = re.sub(r"--([a-z][a-z-]*)", lambda m: m[1].replace("-", "_"), allowed)
+    out = type(e).__new__(type(e))  # the same kind (a SweepBusy stays one), its other fields kept
+    out.__dict__.update(e.__dict__)
+    out.name, out.value, out.allowed = name, value, allowed
+    out.args = (f"{show_value(name)}={show_value(value)}: {allowed}",)
+    return out
+
+
 @dataclass(frozen=True)
 class Scenario:
     """A scenario: what a user picks in the app, `theoria run NAME` runs and `theoria.scenario(NAME)`
@@ -480,10 +502,13 @@ class Scenario:
         "refused". See docs/sweeps.md."""
         from ..app.sweep import run_sweep
 
-        summary, result = run_sweep(self, grid=grid, random=random, samples=samples, out=out, cluster=cluster,
-                                    resume=resume, metrics=metrics, fixed=values, preset=preset, seed=seed,
-                                    chunk=chunk, workers=workers, progress=progress, force=force,
-                                    limits={"max_steps": max_steps, "max_memory": max_memory})
+        try:
+            summary, result = run_sweep(self, grid=grid, random=random, samples=samples, out=out, cluster=cluster,
+                                        resume=resume, metrics=metrics, fixed=values, preset=preset, seed=seed,
+                                        chunk=chunk, workers=workers, progress=progress, force=force,
+                                        limits={"max_steps": max_steps, "max_memory": max_memory})
+        except ParameterError as e:
+            raise in_python_words(e) from None
         if result is None:
             raise KeyboardInterrupt(summary.line())
         return result

@@ -234,18 +234,78 @@ def _remedy(spec: "Scenario", values: dict, which: str, fits_cost: Callable[[Cos
     return reset, None
 
 
+# ---- the limits as given: numbers, or text as the command line takes it ("4GB", "none") --------
+
+UNLIMITED = ("none", "inf", "unlimited")
+SIZE_UNITS = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "m": 1e6, "mb": 1e6, "g": 1e9, "gb": 1e9, "t": 1e12, "tb": 1e12,
+              "kib": 1024, "mib": 1024**2, "gib": 1024**3, "tib": 1024**4}
+
+
+def _none_word(name: str) -> str:
+    return "none" if name.startswith("--") else "None"
+
+
+def _limit_number(value, name: str, allowed: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ParameterError(name, value, allowed)
+    return float(value)
+
+
+def steps_limit(value, name: str = "max_steps") -> float | None:
+    """A limit of integrator steps: a whole number ≥ 1 (1e7 or "1e7"), or None / "none" / infinite
+    for no limit. `name`: the keyword or flag the message names."""
+    from ..physics.params import read_number
+
+    allowed = f"a whole number of integrator steps ≥ 1, or {_none_word(name)}"
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if value.strip().lower() in UNLIMITED:
+            return None
+        try:
+            v = read_number(value)
+        except ValueError:
+            raise ParameterError(name, value, allowed) from None
+    else:
+        v = _limit_number(value, name, allowed)
+    if v == math.inf:
+        return None
+    if not (math.isfinite(v) and v >= 1 and v == int(v)):  # a run takes at least one step, and whole ones
+        raise ParameterError(name, value, allowed)
+    return v
+
+
+def memory_limit(value, name: str = "max_memory") -> float | None:
+    """A limit of bytes: a number ≥ 1, or text with an optional unit ("4GB", "500MB", "2GiB"), or
+    None / "none" / infinite for no limit. `name`: the keyword or flag the message names."""
+    import re
+
+    if value is None:
+        return None
+    if isinstance(value, str):
+        t = value.strip().lower()
+        if t in UNLIMITED:
+            return None
+        m = re.fullmatch(r"(\d+\.?\d*|\.\d+)(e[+-]?\d+)?\s*([a-z]*)", t, re.ASCII)
+        if m is None or m.group(3) not in SIZE_UNITS:
+            raise ParameterError(name, value, f"bytes with an optional unit (e.g. 4GB, 500MB, 2GiB), or "
+                                              f"{_none_word(name)}")
+        v = float(m.group(1) + (m.group(2) or "")) * SIZE_UNITS[m.group(3)]
+    else:
+        v = _limit_number(value, name, f"a number of bytes ≥ 1 or a size such as \"4GB\", or {_none_word(name)}")
+    if v == math.inf:
+        return None
+    if not (math.isfinite(v) and v >= 1):  # "0.5" (bytes) was taken, and shown as a limit of 0 bytes
+        raise ParameterError(name, value, f"a size of at least one byte (e.g. 4GB), or {_none_word(name)}")
+    return v
+
+
 def check_budget(spec: "Scenario", values: Mapping[str, Any], max_steps: float | None = MAX_STEPS,
                  max_memory: float | None = MAX_MEMORY) -> Cost:
     """The run's Cost, or BudgetExceeded (a ParameterError) when it needs more integrator steps
     than `max_steps` or keeps more bytes than `max_memory` (None: no limit). The error names the
     parameter that drives the cost, the need, the limit and the value of that parameter that fits."""
-    for name, limit, what in (("max_steps", max_steps, "a number of integrator steps > 0"),
-                              ("max_memory", max_memory, "a number of bytes > 0")):
-        if limit is None:
-            continue
-        if isinstance(limit, bool) or not isinstance(limit, (int, float, np.integer, np.floating)) \
-                or not limit > 0:  # a string ('4GB' is the command line's), -1, 0 or NaN
-            raise ParameterError(name, limit, f"{what}, or None for no limit")
+    max_steps, max_memory = steps_limit(max_steps), memory_limit(max_memory)
     values = dict(values)
     cost = spec.cost_of(values)
     over_steps, over_mem = _over(cost.steps, max_steps), _over(cost.bytes, max_memory)

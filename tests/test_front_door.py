@@ -185,3 +185,34 @@ def test_record_and_export_from_python_check_what_they_write(tmp_path):
     assert page.read_bytes() == kept
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.html"]
     assert run.record(tmp_path / "a.rrd")["bytes"] > 0
+
+
+@pytest.mark.parametrize("kw, says", [
+    (dict(wrkers=2), "wrkers=2: unknown parameter 'wrkers'"),  # a misspelt keyword: a parameter to the scenario
+    (dict(out=None), "out=None: a file name ending in .zarr or .parquet"),
+    (dict(out=3), "out=3: a file name ending in .zarr or .parquet"),  # was a TypeError from os.fspath
+    (dict(resume=True, force=True), "resume=True, force=True: one of the two: resume completes the sweep at out"),
+    (dict(max_memory="lots"), "max_memory=lots: bytes with an optional unit (e.g. 4GB, 500MB, 2GiB), or None"),
+    (dict(max_steps=2.5), "max_steps=2.5: a whole number of integrator steps ≥ 1, or None"),
+])
+def test_a_sweep_from_python_names_its_keywords_not_the_command_lines_flags(tmp_path, kw, says):
+    """Errors read "--set=wrkers=2", "--out=None", "--resume=--force" (the command line's flags),
+    and out=3 raised a bare TypeError; all before any worker starts and with nothing written."""
+    given = {"grid": {"step": (0.01, 0.02, 2)}, "out": str(tmp_path / "s.zarr"), **kw}
+    with pytest.raises(th.ParameterError) as e:
+        th.scenario("free-tumble").sweep(**given)
+    assert str(e.value).startswith(says), str(e.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_takes_a_memory_limit_as_the_command_line_writes_it():
+    """`sweep(max_memory="4GB")` was taken (and then refused every run: each run's check took
+    numbers only) while `simulate(max_memory="4GB")` was refused: one reading for both, as
+    `--max-memory` reads it."""
+    sc = th.scenario("free-tumble")
+    assert sc.simulate(duration=2, max_memory="4GB").status == "ok"
+    assert sc.simulate(duration=2, max_memory="none").status == "ok"
+    with pytest.raises(th.BudgetExceeded, match="over the limit of 1 kB"):
+        sc.simulate(duration=2, max_memory="1KB")
+    with pytest.raises(th.ParameterError, match="max_memory=-1: a size of at least one byte"):
+        sc.simulate(duration=2, max_memory=-1)

@@ -141,7 +141,7 @@ def test_bad_specs_from_python_and_the_names_the_scenario_uses():
         sw.make_plan(sc, random={"free_zeta0_deg": (-5, 5)})
     with pytest.raises(th.ParameterError, match="free_zeta0_deg"):
         sw.make_plan(sc, random={"free_zeta0_deg": (-5, 500)}, samples=4)
-    with pytest.raises(th.ParameterError, match="--out"):
+    with pytest.raises(th.ParameterError, match="^out=x.nc: a name ending in .zarr"):  # the keyword, from Python
         sc.sweep(grid={"eccentricity": (0, 0.1, 2)}, out="x.nc")
     # grid × random: a sample dimension with the same draws at every grid point
     plan = sw.make_plan(sc, grid={"eccentricity": (0, 0.1, 3)}, random={"free_zeta0_deg": (-5, 5)}, samples=10, seed=3)
@@ -826,7 +826,7 @@ def test_resume_and_force_together_are_refused_naming_both(tmp_path, capsys):
     assert _files(tmp_path) == before
     with pytest.raises(th.ParameterError) as e:
         th.scenario("free-tumble").sweep(grid={"step": (0.01, 0.02, 2)}, out=out, resume=True, force=True)
-    assert "--resume" in str(e.value) and "--force" in str(e.value)
+    assert str(e.value).startswith("resume=True, force=True: one of the two")  # the keywords, from Python
 
 
 def test_a_finished_store_opened_as_the_docs_show_it_warns_nothing(tmp_path, in_process_client):
