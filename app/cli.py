@@ -417,9 +417,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
 
     s = sub.add_parser("serve", help="the web app")
-    s.add_argument("--port", type=int, default=8080)
+    s.add_argument("--port", type=int, default=8080, help="the port to serve on (default 8080; 0: any free one)")
     s.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1; 0.0.0.0 for a classroom)")
-    s.add_argument("--scenario", default=None)
+    s.add_argument("--scenario", default=None, metavar="NAME",
+                   help="the scenario a new browser opens on (default free-tumble; `theoria list` names them)")
     s.add_argument("--max-clients", type=int, default=200, metavar="N",
                    help="browsers connected at once (default 200); more are refused")
     s.add_argument("--max-per-address", type=int, default=10, metavar="N",
@@ -432,7 +433,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=cmd_serve)
 
     s = sub.add_parser("list", help="scenarios, one line each")
-    s.add_argument("--json", action="store_true")
+    s.add_argument("--json", action="store_true", help="each scenario's parameters, presets and metrics as JSON")
     s.set_defaults(fn=cmd_list)
 
     for name, fn, hlp in (("run", cmd_run, "headless run; prints metrics"),
@@ -475,7 +476,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a swept parameter (COUNT values, both ends included), or NAME=V1,V2,…; repeat for more")
     s.add_argument("--random", action="append", metavar="NAME=LO:HI",
                    help="a parameter drawn uniformly in [LO, HI], --samples times (a 'sample' dimension)")
-    s.add_argument("--samples", default=None, metavar="N")
+    s.add_argument("--samples", default=None, metavar="N", help="how many draws each --random parameter gets")
     s.add_argument("--seed", type=int, default=0, help="seed of the random draws (default 0)")
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="a fixed parameter")
     s.add_argument("--preset", default=None, metavar="NAME", help="fixed parameters from a preset")
@@ -541,7 +542,11 @@ def _main(argv: list[str] | None) -> int:
 
     with cli_signals(process=argv is None):  # argv None: the `theoria` command itself
         try:
-            args = build_parser().parse_args(argv)
+            parser = build_parser()
+            if not (sys.argv[1:] if argv is None else argv):  # bare `theoria`: what there is to do
+                parser.print_help(sys.stderr)
+                return 2
+            args = parser.parse_args(argv)
             code = args.fn(args)
             sys.stdout.flush()  # a closed pipe or a full disk under stdout shows here, not at exit
             return code

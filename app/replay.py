@@ -54,7 +54,8 @@ EXIT_NO_DIGEST = 3
 
 
 class ReplayError(Exception):
-    """The file is not a complete theoria recording / export. Message: one line."""
+    """The file cannot be replayed here: not a complete theoria recording / export, or no display
+    for the native viewer. Message: one line."""
 
 
 def _one_line(e: BaseException) -> str:
@@ -201,6 +202,11 @@ def replay(path: str, check_only: bool = False, web_viewer: bool = False, open_b
     if html:
         print(f"theoria export of {info['scenario']}: open {info['url']}")
         return 0
+    if not web_viewer and sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
+                                                                     or os.environ.get("WAYLAND_DISPLAY")):
+        # the native viewer needs a screen (rerun's own error is winit's, in its words)
+        raise ReplayError(f"{path}: no display to open rerun's viewer on here; add --web-viewer to serve it "
+                          "to a browser (on this machine or, with --host, another)")
     cmd, url = viewer_command(path, web_viewer, open_browser, host)
     if url is not None:
         print(f"rerun web viewer for {path}: {url}", flush=True)

@@ -141,7 +141,11 @@ class SweepMaps:
         self.path = os.fspath(path)
         what = "a Zarr store written by theoria sweep (theoria sweep SCENARIO … --out F.zarr)"
         if not os.path.isdir(self.path):
-            raise ParameterError("--sweep", self.path, what + "; no such folder")
+            if os.path.isfile(self.path) and self.path.endswith(".parquet"):  # a sweep's flat table
+                raise ParameterError("--sweep", self.path, what + "; a Parquet sweep is a flat table with no grid "
+                                     "to draw: sweep again with --out F.zarr")
+            raise ParameterError("--sweep", self.path, what + ("; this is a file" if os.path.exists(self.path)
+                                                               else "; no such folder"))
         try:
             ds = xr.open_zarr(self.path, consolidated=False)
         except Exception as e:  # noqa: BLE001 — not Zarr at all, or damaged: one line

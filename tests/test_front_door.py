@@ -216,3 +216,10 @@ def test_simulate_takes_a_memory_limit_as_the_command_line_writes_it():
         sc.simulate(duration=2, max_memory="1KB")
     with pytest.raises(th.ParameterError, match="max_memory=-1: a size of at least one byte"):
         sc.simulate(duration=2, max_memory=-1)
+
+
+def test_what_dir_shows_is_the_front_door():
+    """Tab completion on `th.` showed `annotations` (a __future__ import), a name that is nothing of
+    theoria's: every public name is in __all__, besides the subpackages that are reachable."""
+    stray = [n for n in dir(th) if not n.startswith("_") and n not in th.__all__ and n not in ("app", "physics")]
+    assert stray == []

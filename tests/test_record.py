@@ -99,3 +99,19 @@ def test_a_digest_field_not_stored_as_logged_is_encoded_again(tmp_path, monkeypa
     record("free-tumble", str(out), {"duration": "1"})
     assert len(calls) == 2 and calls[0] != calls[1]
     assert check(str(out))["digest"] is not None
+
+
+def test_replay_without_a_display_says_to_use_the_web_viewer(tmp_path, monkeypatch, capsys):
+    """On a machine with no screen (a server, CI, SSH) `theoria replay run.rrd` ended with rerun's
+    own winit error, exit 1: it says where the viewer can go instead, one line, exit 2."""
+    import theoria as th
+    from theoria.app.cli import main
+
+    rrd = tmp_path / "run.rrd"
+    th.scenario("free-tumble").simulate(duration=1).record(str(rrd))
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr("sys.platform", "linux")
+    code = main(["replay", str(rrd)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "no display" in err and "--web-viewer" in err, err

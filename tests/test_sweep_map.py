@@ -184,3 +184,17 @@ def test_a_sweep_written_again_while_served_does_not_mix_into_the_map(tiny_sweep
     row, col = 2, 3
     assert again.map.run_values(row, col)["probe_rate"] == GRID["probe_rate"][col]
     assert again.map.run_values(row, col)["eccentricity"] == pytest.approx(0.2)
+
+
+def test_a_parquet_sweep_given_to_serve_is_named_as_such(tmp_path):
+    """`serve --sweep e.parquet` said "no such folder" of a file that is there: a Parquet sweep has
+    no grid to draw, and the message says to sweep to .zarr."""
+    from theoria.app.sweep_map import SweepMaps
+    from theoria.physics.errors import ParameterError
+
+    f = tmp_path / "e.parquet"
+    f.write_bytes(b"PAR1")
+    with pytest.raises(ParameterError, match="a Parquet sweep is a flat table with no grid to draw"):
+        SweepMaps(f)
+    with pytest.raises(ParameterError, match="no such folder"):
+        SweepMaps(tmp_path / "missing.zarr")

@@ -22,7 +22,6 @@ max_memory=None)` lifts the limits. A file that cannot be written (a full disk) 
 (`theoria.physics`), the scenarios (`theoria.scenarios`) and the app (`theoria.app`) are
 reachable but not needed.
 """
-from __future__ import annotations
 
 from . import _console
 
