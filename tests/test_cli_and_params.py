@@ -265,3 +265,12 @@ def test_numbers_as_people_and_the_panel_write_them_are_taken():
     for text in ("1,5", "abc", "2.5 × 10", "× 10⁶"):
         with pytest.raises(ParameterError):
             p.parse(text)
+
+
+def test_bare_theoria_lists_what_there_is_to_do(capsys):
+    """`theoria` alone said "the following arguments are required: cmd" and nothing of the commands."""
+    from theoria.app.cli import main
+
+    assert main([]) == 2
+    err = capsys.readouterr().err
+    assert all(c in err for c in ("serve", "run", "record", "export", "replay", "sweep", "check", "bench")), err
