@@ -86,3 +86,23 @@ def test_the_cache_counts_every_array_of_runs_and_drawings():
         for obj in (run.trajectory, run.extras, run.plot_series, drawing):
             assert nbytes(obj) == _arrays_reached(obj), (name, type(obj).__name__)
         assert nbytes(drawing) > 0 and nbytes(run.trajectory) > 0, name
+
+
+def test_warm_marks_belong_to_the_install_whose_numba_cache_they_describe(tmp_path, monkeypatch):
+    """Without NUMBA_CACHE_DIR numba keeps compiled code beside the installed sources: a second
+    virtual environment with the same code found the first one's marks, took itself for warm and
+    compiled on the serving path (a link to libration-circular: 19 s to its first scene)."""
+    from theoria.app import worker
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setenv("THEORIA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(worker, "install_key", lambda: "first-venv")
+    first = worker.WarmMarks()
+    first.add("libration-circular")
+    assert "libration-circular" in worker.WarmMarks()
+    monkeypatch.setattr(worker, "install_key", lambda: "second-venv")
+    assert "libration-circular" not in worker.WarmMarks()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))  # one cache for every install: one set of marks
+    worker.WarmMarks().add("moon")
+    monkeypatch.setattr(worker, "install_key", lambda: "first-venv")
+    assert "moon" in worker.WarmMarks()
