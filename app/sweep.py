@@ -922,16 +922,22 @@ GUARD_ADVICE = "put the sweep under `if __name__ == \"__main__\":` in that scrip
 
 
 def _unguarded_script() -> str | None:
-    """The Python file this process runs, when it has no `if __name__ == "__main__":` at its top
-    level (None for a console, a notebook, the theoria command, a guarded script, or a file that
-    cannot be read)."""
+    """The Python file this process runs, which the local cluster's workers will run again on
+    their way in, when it tests `__name__ == "__main__"` nowhere (None for a console, a notebook,
+    the theoria command, `python -m pkg` (spawn never runs a package's __main__ again), a script
+    with the test, or a file that cannot be read)."""
     import ast
+    import tokenize
 
-    path = getattr(sys.modules.get("__main__"), "__file__", None)
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    spec = getattr(main, "__spec__", None)
+    if spec is not None and (spec.name == "__main__" or spec.name.endswith(".__main__")):
+        return None  # multiprocessing's spawn leaves such a module alone
     if not isinstance(path, str) or not path.endswith(".py"):
         return None
     try:
-        with open(path, encoding="utf-8") as f:
+        with tokenize.open(path) as f:  # its declared or BOM-marked encoding
             tree = ast.parse(f.read(), path)
     except (OSError, SyntaxError, ValueError):
         return None
@@ -943,7 +949,9 @@ def _unguarded_script() -> str | None:
         return (any(isinstance(x, ast.Name) and x.id == "__name__" for x in sides)
                 and any(isinstance(x, ast.Constant) and x.value == "__main__" for x in sides))
 
-    guarded = any(isinstance(node, ast.If) and is_main_test(node.test) for node in tree.body)
+    # anywhere: `if __name__ == "__main__" and …:`, a guard inside a try; a miss here is caught in
+    # the worker (run_sweep's first check)
+    guarded = any(is_main_test(node) for node in ast.walk(tree))
     return None if guarded else path
 
 

@@ -333,8 +333,8 @@ class WarmMarks:
     written after a compiling child has run it, in the numba cache directory when one is set.
     Without one, numba keeps the compiled code beside the installed sources, so the marks are
     kept per install: a second virtual environment with the same code was taken for warm, and a
-    scenario opened there first compiled on the serving path (19 s to its first scene, against 4 s
-    on the path for a cold cache)."""
+    scenario opened there first compiled on the serving path (19–24 s to its first scene, against
+    ~4 s on the path for a cold cache)."""
 
     def __init__(self):
         d = os.environ.get("NUMBA_CACHE_DIR")

@@ -345,6 +345,7 @@ def in_python_words(e: ParameterError) -> ParameterError:
     name, value, allowed = e.name, e.value, str(e.allowed)
     if not (isinstance(name, str) and name.startswith("--")):
         return e
+    standard = e.args[:1] == (f"{show_value(name)}={show_value(value)}: {allowed}",)
     if name == "--set" and isinstance(value, str) and "=" in value:  # a scenario parameter
         name, value = value.split("=", 1)
     else:
@@ -355,7 +356,8 @@ def in_python_words(e: ParameterError) -> ParameterError:
     out = type(e).__new__(type(e))  # the same kind (a SweepBusy stays one), its other fields kept
     out.__dict__.update(e.__dict__)
     out.name, out.value, out.allowed = name, value, allowed
-    out.args = (f"{show_value(name)}={show_value(value)}: {allowed}",)
+    # a message of its own (a SweepBusy's: the other sweep's PID, what to do) is kept
+    out.args = (f"{show_value(name)}={show_value(value)}: {allowed}",) if standard else e.args
     return out
 
 

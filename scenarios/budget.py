@@ -246,9 +246,14 @@ def _none_word(name: str) -> str:
 
 
 def _limit_number(value, name: str, allowed: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+    if isinstance(value, np.ndarray) and value.ndim == 0:  # np.array(4e9)
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ParameterError(name, value, allowed)
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # 10**400: as unlimited as "1e400"
+        return math.inf
 
 
 def steps_limit(value, name: str = "max_steps") -> float | None:

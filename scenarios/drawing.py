@@ -814,10 +814,11 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0, t
     where the physics puts it) so that they cover one another in as few of those frames as can be:
     a text that stays put and another that passes over it meet in the frames it passes; two that
     stay put, in all of them. A side where a text runs off the canvas beside the panel counts as
-    covering in every frame it does, and the opening frame (what a class sees before Play) counts
-    as much as all the others together. Each text in turn takes its best side against those placed
-    before it (the moving ones first, the texts of overlays that are off when the scene opens
-    last), then each once more against all the others, until none moves. `text_scale`: the labels'
+    covering in every frame it does, and the opening frame (what a class sees before Play) weighs
+    as many frames as were looked at. Each text in turn takes its best side against those placed
+    before it (in the drawing's order, the texts of overlays that are off when the scene opens
+    last), then each again against all the others, for at most four rounds (the scenes' own labels
+    settle in one or two; a crowd of random ones may not). `text_scale`: the labels'
     size against viser's at `width`×`height` (View.text_scale). Returns how many were turned."""
     ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
     texts = _texts(d, ks)

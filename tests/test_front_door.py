@@ -229,3 +229,23 @@ def test_what_dir_shows_is_the_front_door():
 
     stray = [n for n in dir(th) if not n.startswith("_") and n not in th.__all__ and not subpackage(n)]
     assert stray == []
+
+
+def test_a_busy_sweeps_own_message_reaches_python_whole():
+    """The keywords-for-flags rewording replaced a SweepBusy's message ("another sweep (PID …) is
+    writing …; wait for it to end, or give another --out") by a bare "out=…: a result no other
+    sweep is writing": the PID and the advice were lost."""
+    from theoria.app.sweep import SweepBusy
+    from theoria.scenarios.base import in_python_words
+
+    e = in_python_words(SweepBusy("/tmp/x.zarr", 1234))
+    assert isinstance(e, SweepBusy) and e.name == "out" and "1234" in str(e), str(e)
+
+
+@pytest.mark.parametrize("limit", [10 ** 400, np.array(1e400), float("inf")])
+def test_a_limit_too_large_for_a_float_is_no_limit(limit):
+    """10**400 raised OverflowError where "1e400" meant no limit; a 0-d numpy array was refused."""
+    from theoria.scenarios.budget import memory_limit, steps_limit
+
+    assert steps_limit(limit) is None and memory_limit(limit) is None
+    assert steps_limit(np.array(2e7)) == 2e7 and memory_limit(np.array(4e9)) == 4e9

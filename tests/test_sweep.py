@@ -914,11 +914,22 @@ def test_which_scripts_are_told_to_add_the_guard(tmp_path, monkeypatch):
         monkeypatch.setitem(sys.modules, "__main__", m)
         return sw._unguarded_script()
 
-    bare, guarded, reversed_ = (tmp_path / n for n in ("bare.py", "guarded.py", "reversed.py"))
+    bare, guarded, reversed_, anded, in_try, bom = (tmp_path / n for n in (
+        "bare.py", "guarded.py", "reversed.py", "anded.py", "in_try.py", "bom.py"))
     bare.write_text("import theoria as th\nth.scenario('free-tumble').sweep(out='x.zarr')\n")
     guarded.write_text("import theoria as th\n\nif __name__ == '__main__':\n    th.scenario('free-tumble')\n")
     reversed_.write_text("if '__main__' == __name__:\n    pass\n")
-    assert main_file(bare) == str(bare)
-    assert main_file(guarded) is None and main_file(reversed_) is None
+    anded.write_text("import sys\nif __name__ == '__main__' and len(sys.argv) < 9:\n    pass\n")
+    in_try.write_text("try:\n    if __name__ == '__main__':\n        pass\nexcept KeyboardInterrupt:\n    pass\n")
+    bom.write_bytes(b"\xef\xbb\xbfx = 1  # \xc3\xa9\n")  # a BOM, no guard: read, and named
+    assert main_file(bare) == str(bare) and main_file(bom) == str(bom)
+    for ok in (guarded, reversed_, anded, in_try):
+        assert main_file(ok) is None, ok.name
     assert main_file(theoria_main.__file__) is None
     assert main_file(None) is None and main_file(tmp_path / "missing.py") is None
+    # `python -m pkg` with no guard in its __main__.py: spawn never runs such a module again
+    m = types.ModuleType("__main__")
+    m.__file__ = str(bare)
+    m.__spec__ = types.SimpleNamespace(name="pkg.__main__")
+    monkeypatch.setitem(sys.modules, "__main__", m)
+    assert sw._unguarded_script() is None

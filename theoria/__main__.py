@@ -1,5 +1,5 @@
 """`python -m theoria …` is the `theoria` command."""
 from theoria.app.cli import main
 
-if __name__ == "__main__":  # not again in a sweep's worker, which imports this module on its way in
+if __name__ == "__main__":  # the command when run; importing the module runs nothing
     raise SystemExit(main())
