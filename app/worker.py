@@ -54,7 +54,7 @@ import time
 import traceback
 import weakref
 from collections import OrderedDict
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any, Callable
@@ -1627,7 +1627,10 @@ def drawing_of(spec, run, view=None):
     the renderers)."""
     from theoria.scenarios.drawing import View
 
+    # a copy: a browser's thread may change its options while another draws with them, and the
+    # drawing must be the one its key names
     view = view or View()
+    view = replace(view, options=dict(view.options))
     key = (spec.name, repr(sorted(view.options.items())), float(view.exaggerate), float(view.text_scale))
     store = run.__dict__.setdefault("_theoria_drawings", OrderedDict())
     d = store.get(key)

@@ -106,3 +106,22 @@ def test_warm_marks_belong_to_the_install_whose_numba_cache_they_describe(tmp_pa
     worker.WarmMarks().add("moon")
     monkeypatch.setattr(worker, "install_key", lambda: "first-venv")
     assert "moon" in worker.WarmMarks()
+
+
+def test_a_drawing_is_kept_under_the_view_it_was_drawn_with():
+    """A browser's thread may change its view (the exaggeration, an option, presenter size)
+    while the server draws with it: the drawing kept must be the one its key names."""
+    from types import SimpleNamespace
+
+    from theoria.scenarios.drawing import View
+
+    shown = View(exaggerate=1.0, options={"trail": True})
+
+    def drawing(run, view):
+        shown.exaggerate, shown.options["trail"] = 5.0, False  # the other thread, meanwhile
+        return (view.exaggerate, view.option("trail"))
+
+    spec = SimpleNamespace(name="probe", drawing=drawing)
+    run = SimpleNamespace()
+    assert drawing_of(spec, run, shown) == (1.0, True)
+    assert drawing_of(spec, run, View(exaggerate=1.0, options={"trail": True})) == (1.0, True)
