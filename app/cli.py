@@ -14,7 +14,7 @@ import time
 
 from theoria.app.files import WriteError
 from theoria.app.interrupt import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated, cli_signals
-from theoria.physics.params import ParameterError
+from theoria.physics.params import ParameterError, whole_number
 
 from .format import number
 
@@ -417,13 +417,13 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
 
     s = sub.add_parser("serve", help="the web app")
-    s.add_argument("--port", type=int, default=8080, help="the port to serve on (default 8080; 0: any free one)")
+    s.add_argument("--port", type=whole_number, default=8080, help="the port to serve on (default 8080; 0: any free one)")
     s.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1; 0.0.0.0 for a classroom)")
     s.add_argument("--scenario", default=None, metavar="NAME",
                    help="the scenario a new browser opens on (default free-tumble; `theoria list` names them)")
-    s.add_argument("--max-clients", type=int, default=200, metavar="N",
+    s.add_argument("--max-clients", type=whole_number, default=200, metavar="N",
                    help="browsers connected at once (default 200); more are refused")
-    s.add_argument("--max-per-address", type=int, default=10, metavar="N",
+    s.add_argument("--max-per-address", type=whole_number, default=10, metavar="N",
                    help="browsers from one network address (default 10)")
     s.add_argument("--no-precompute", action="store_true",
                    help="do not prepare every scenario's defaults and presets in the background")
@@ -477,13 +477,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--random", action="append", metavar="NAME=LO:HI",
                    help="a parameter drawn uniformly in [LO, HI], --samples times (a 'sample' dimension)")
     s.add_argument("--samples", default=None, metavar="N", help="how many draws each --random parameter gets")
-    s.add_argument("--seed", type=int, default=0, help="seed of the random draws (default 0)")
+    s.add_argument("--seed", type=whole_number, default=0, help="seed of the random draws (default 0)")
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="a fixed parameter")
     s.add_argument("--preset", default=None, metavar="NAME", help="fixed parameters from a preset")
     s.add_argument("--out", required=True, metavar="FILE.zarr|FILE.parquet")
     s.add_argument("--cluster", default=None, metavar="ADDRESS",
                    help="an existing Dask scheduler (tcp://host:8786); default: a local cluster on this machine's cores")
-    s.add_argument("--workers", default=None, type=int, help="workers of the local cluster (default: one per core)")
+    s.add_argument("--workers", default=None, type=whole_number, help="workers of the local cluster (default: one per core)")
     s.add_argument("--resume", action="store_true", help="keep the finished chunks of --out and compute the rest")
     s.add_argument("--force", action="store_true", help="replace what --out holds (an earlier sweep)")
     s.add_argument("--metrics", default=None, metavar="A,B", help="the metrics to keep (default: all)")

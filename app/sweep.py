@@ -40,7 +40,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..physics.errors import ParameterError, show_value
-from ..physics.params import plain_number, read_number
+from ..physics.params import plain_number, read_number, whole_number
 from .files import WriteError, mark_written, write_whole
 from .interrupt import signals_held
 
@@ -180,10 +180,7 @@ def parse_grid(sc, spec: str) -> Axis:
         if len(parts) != 3 or not all(re.fullmatch(_NUM, x) for x in parts[:2]):
             raise ParameterError("--grid", spec, form)
         try:  # "1000", "1e3"
-            c = read_number(parts[2])
-            count = int(c)
-            if count != c:
-                raise ValueError(parts[2])
+            count = whole_number(parts[2])
         except (ValueError, OverflowError):
             raise ParameterError("--grid", spec, f"count must be a whole number ≥ 1; {form}") from None
         if count < 1:
@@ -249,11 +246,12 @@ def make_plan(sc, grid=None, random=None, samples=None, fixed=None, preset=None,
         raise ParameterError("--samples", None, "a number of samples ≥ 1 with --random")
     if samples is not None:
         try:
-            samples = int(samples)
-        except (TypeError, ValueError):
-            raise ParameterError("--samples", samples, "a whole number from 1 to 10,000,000") from None
-        if samples < 1 or samples > 10_000_000:
+            n = whole_number(samples)
+        except (TypeError, ValueError, OverflowError):
+            n = 0
+        if not 1 <= n <= 10_000_000:
             raise ParameterError("--samples", samples, "a whole number from 1 to 10,000,000")
+        samples = n
         if not random:
             raise ParameterError("--samples", samples, "only with --random name=lo:hi")
     if not grid and not random:
@@ -334,9 +332,9 @@ def _chunk_shape(plan: Plan, chunk, workers) -> tuple[int, ...]:
     total = plan.size
     if chunk is not None:
         try:
-            target = int(chunk)
-        except (TypeError, ValueError):
-            raise ParameterError("--chunk", chunk, "a whole number of runs ≥ 1") from None
+            target = whole_number(chunk)
+        except (TypeError, ValueError, OverflowError):
+            target = 0
         if target < 1:
             raise ParameterError("--chunk", chunk, "a whole number of runs ≥ 1")
     else:
@@ -1001,9 +999,15 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
         raise ParameterError("--out", out, f"a path this system takes ({e.strerror or type(e).__name__})") from None
     if kind == "parquet" and os.path.isdir(out):
         raise ParameterError("--out", out, "a file name: this is a directory")
-    nworkers = int(workers) if workers else (_cores() if cluster is None else 1)
-    if workers is not None and (int(workers) < 1 or int(workers) > 256):
-        raise ParameterError("--workers", workers, "from 1 to 256")
+    if workers is not None:
+        try:
+            n = whole_number(workers)
+        except (TypeError, ValueError, OverflowError):
+            n = 0
+        if not 1 <= n <= 256:
+            raise ParameterError("--workers", workers, "a whole number from 1 to 256")
+        workers = n
+    nworkers = workers or (_cores() if cluster is None else 1)
     plan = make_plan(sc, grid, random, samples, fixed, preset, metrics, seed, chunk, nworkers)
     plan.limits = dict(limits or {})
     with _one_sweep_writes(out):

@@ -160,6 +160,22 @@ def read_number(text: str) -> float:
     return float(t)
 
 
+def whole_number(value) -> int:
+    """A count or a seed as a person or a script gives it: an int, a float or text that is whole
+    ("1000", "1e3", 1000.0); ValueError for anything else (2.5, True, "１０", "1_0")."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"not a whole number: {value!r}")
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    v = read_number(value) if isinstance(value, str) else float(value)
+    if not math.isfinite(v) or v != int(v):
+        raise ValueError(f"not a whole number: {value!r}")
+    return int(v)
+
+
+whole_number.__name__ = "whole number"  # what argparse names in "invalid whole number value: '2.5'"
+
+
 # units whose symbol means little on a panel, in words
 _UNIT_WORDS = {"deg": "°", "d": "days", "day": "days", "1/yr": "per year", "G=1 mass": "mass units, G = 1",
                "G=1 units": "units, G = 1", "rad/unit": "rad per time unit", "b": "× the Moon's distance b",

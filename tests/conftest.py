@@ -39,7 +39,10 @@ def cli(capsys):
     from theoria.app.cli import main
 
     def run(*argv):
-        code = main([str(a) for a in argv])
+        try:
+            code = main([str(a) for a in argv])
+        except SystemExit as e:  # argparse's own refusals (a flag's type) exit 2 from within
+            code = e.code
         out, err = capsys.readouterr()
         return code, out, err
 

@@ -79,6 +79,18 @@ def test_param_parse_errors():
     (["sweep", "free-tumble", "--random", "step=0.001:0.002", "--samples", "1e12", "--out", "x.parquet"],
      "--samples=1e12: a whole number from 1 to 10,000,000"),
     (["sweep", "free-tumble", "--out", "x.parquet"], "--grid=(none given): at least one --grid"),
+    # counts as a person writes them, in ASCII digits (int() read "２" and "1_0", and cut 1.5 to 1)
+    (["sweep", "free-tumble", "--random", "step=0.001:0.002", "--samples", "２", "--out", "x.parquet"],
+     "--samples=２: a whole number from 1 to 10,000,000"),
+    (["sweep", "free-tumble", "--grid", "duration=1:2:2", "--chunk", "1.5", "--out", "x.parquet"],
+     "--chunk=1.5: a whole number of runs ≥ 1"),
+    (["sweep", "free-tumble", "--grid", "duration=1:2:2", "--chunk", "1_0", "--out", "x.parquet"], "--chunk=1_0"),
+    (["sweep", "free-tumble", "--grid", "duration=1:2:2", "--workers", "２", "--out", "x.parquet"],
+     "argument --workers: invalid whole number value: '２'"),
+    (["sweep", "free-tumble", "--grid", "duration=1:2:2", "--seed", "1.5", "--out", "x.parquet"],
+     "argument --seed: invalid whole number value: '1.5'"),
+    (["serve", "--port", "８０８０"], "argument --port: invalid whole number value: '８０８０'"),
+    (["serve", "--max-clients", "٣"], "argument --max-clients: invalid whole number value"),
     # a parameter name typed by hand is cut like a value (a 3,000-character name was echoed whole)
     (["run", "free-tumble", "--set", "é" * 3000 + "=1"], "éééé…=1: unknown parameter"),
 ])

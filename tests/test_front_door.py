@@ -194,6 +194,11 @@ def test_record_and_export_from_python_check_what_they_write(tmp_path):
     (dict(resume=True, force=True), "resume=True, force=True: one of the two: resume completes the sweep at out"),
     (dict(max_memory="lots"), "max_memory=lots: bytes with an optional unit (e.g. 4GB, 500MB, 2GiB), or None"),
     (dict(max_steps=2.5), "max_steps=2.5: a whole number of integrator steps ≥ 1, or None"),
+    # counts that are not whole were cut (2.5 workers ran 2) or read in other scripts' digits
+    (dict(workers=2.5), "workers=2.5: a whole number from 1 to 256"),
+    (dict(workers="２"), "workers=２: a whole number from 1 to 256"),
+    (dict(chunk=1.5), "chunk=1.5: a whole number of runs ≥ 1"),
+    (dict(chunk=True), "chunk=True: a whole number of runs ≥ 1"),
 ])
 def test_a_sweep_from_python_names_its_keywords_not_the_command_lines_flags(tmp_path, kw, says):
     """Errors read "--set=wrkers=2", "--out=None", "--resume=--force" (the command line's flags),
