@@ -268,6 +268,8 @@ register(Scenario(
 ))
 
 
+# The checks run at the default δ = 1, where the run's time unit is 1/δ: their tables say "1/δ", the
+# unit of Euler's periods, and the numbers hold for any δ read in it.
 @register_check("E7", "libration in a circular orbit: small-oscillation period 2π/√(2N)", "§825–831")
 def e7():
     # small amplitude: Euler's period is exact up to the pendulum correction (1 + ζ₀²/4 + …)
