@@ -33,6 +33,7 @@ import shutil
 import signal
 import sys
 import threading
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Mapping
@@ -43,6 +44,7 @@ from ..physics.errors import ParameterError, show_value
 from ..physics.params import plain_number, read_number, whole_number
 from .files import WriteError, mark_written, write_whole
 from .interrupt import signals_held
+
 
 class SweepError(RuntimeError):
     """A sweep that cannot go on (a chunk's task failed as a whole): one line, exit status 1."""
@@ -245,13 +247,7 @@ def make_plan(sc, grid=None, random=None, samples=None, fixed=None, preset=None,
     if random and samples is None:
         raise ParameterError("--samples", None, "a number of samples ≥ 1 with --random")
     if samples is not None:
-        try:
-            n = whole_number(samples)
-        except (TypeError, ValueError, OverflowError):
-            n = 0
-        if not 1 <= n <= 10_000_000:
-            raise ParameterError("--samples", samples, "a whole number from 1 to 10,000,000")
-        samples = n
+        samples = _count(samples, "--samples", 10_000_000, "a whole number from 1 to 10,000,000")
         if not random:
             raise ParameterError("--samples", samples, "only with --random name=lo:hi")
     if not grid and not random:
@@ -325,18 +321,24 @@ def _item(v):
     return v.item() if hasattr(v, "item") else v
 
 
+def _count(value, flag: str, most, allowed: str) -> int:
+    """A count given on the command line or from Python, from 1 to `most`."""
+    try:
+        n = whole_number(value)
+    except (TypeError, ValueError, OverflowError):
+        n = 0
+    if not 1 <= n <= most:
+        raise ParameterError(flag, value, allowed)
+    return n
+
+
 def _chunk_shape(plan: Plan, chunk, workers) -> tuple[int, ...]:
     """Runs per chunk: `chunk` if given; else what the scenario's batch asks for (`Batch.chunk`:
     whole rows of the last dimensions share an orbit) or up to 16 single runs, with at least ~4
     chunks per worker. Filled from the last dimension backwards."""
     total = plan.size
     if chunk is not None:
-        try:
-            target = whole_number(chunk)
-        except (TypeError, ValueError, OverflowError):
-            target = 0
-        if target < 1:
-            raise ParameterError("--chunk", chunk, "a whole number of runs ≥ 1")
+        target = _count(chunk, "--chunk", math.inf, "a whole number of runs ≥ 1")
     else:
         cap = int(plan.scenario.batch.chunk) if plan.batched else 16
         target = max(1, min(cap, total // max(1, 4 * workers)))
@@ -1000,13 +1002,7 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     if kind == "parquet" and os.path.isdir(out):
         raise ParameterError("--out", out, "a file name: this is a directory")
     if workers is not None:
-        try:
-            n = whole_number(workers)
-        except (TypeError, ValueError, OverflowError):
-            n = 0
-        if not 1 <= n <= 256:
-            raise ParameterError("--workers", workers, "a whole number from 1 to 256")
-        workers = n
+        workers = _count(workers, "--workers", 256, "a whole number from 1 to 256")
     nworkers = workers or (_cores() if cluster is None else 1)
     plan = make_plan(sc, grid, random, samples, fixed, preset, metrics, seed, chunk, nworkers)
     plan.limits = dict(limits or {})
