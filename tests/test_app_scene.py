@@ -423,3 +423,47 @@ def test_viser_casts_every_property_as_its_own_casting_does():
                     assert repr(got) == repr(want), (cls.__name__, name, value)
                 compared += 1
     assert compared > 1000
+
+
+def _octahedron(shared: bool):
+    """Eight triangles about the origin: six corners shared by four faces each, or three corners
+    of its own for every face (24 vertices)."""
+    corners = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    tris = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    if shared:
+        return corners, tris
+    return corners[tris.ravel()], np.arange(24).reshape(8, 3)
+
+
+def test_a_mesh_is_flat_faced_when_each_vertex_lies_in_one_plane_of_faces():
+    assert scene_mod.flat_faced(*_octahedron(shared=False))
+    assert not scene_mod.flat_faced(*_octahedron(shared=True))  # the renderer smooths across its edges
+    v, f = _octahedron(shared=False)
+    two = np.concatenate([f[:1], f[1:2]])  # two faces in one plane sharing an edge are still flat
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    assert scene_mod.flat_faced(square, np.array([[0, 1, 2], [0, 2, 3]]))
+    assert scene_mod.flat_faced(v, two)
+    assert not scene_mod.flat_faced(square, np.zeros((0, 3), int))
+
+
+def test_the_flips_brick_is_drawn_diffuse_and_a_smooth_body_as_it_was():
+    """A flat-faced body looks the same in the diffuse material, which costs a software renderer
+    less per pixel; a smooth ellipsoid keeps the physically based one (its sheen shows its shape)."""
+    asked = {}
+
+    class Recorder(FakeScene):
+        def __getattr__(self, method):
+            add = super().__getattr__(method)
+
+            def record(name, *args, **kw):
+                if method == "add_mesh_simple":
+                    asked[name] = kw.get("material", "standard")
+                return add(name, *args, **kw)
+
+            return record
+
+    for name in ("middle-axis-flip", "free-tumble"):
+        SceneView(Recorder()).show(_drawing(name)[2])
+        body = {k: v for k, v in asked.items() if k.startswith("/world/body/mesh/")}
+        assert body and set(body.values()) == {"toon5" if name == "middle-axis-flip" else "standard"}, (name, body)
+        asked.clear()
