@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import brentq
+from ..physics.errors import ParameterError
 from ..physics.free_flow import free_flow
 from ..physics.inertia import validate_moments
 from ..physics.integrator import integrate, samples_kept, step_count
@@ -18,8 +19,24 @@ INERTIA_PARAM = dict(kind="vec3", minimum=1e-6, maximum=1e6, unit="kg m^2",
                 help="principal moments A, B, C about the body x, y, z axes", label="Moments of inertia A, B, C")
 
 
+# The slowest rate a free body is run at: below ~1e-110 rad/s Euler's quadrature for the flip
+# (§808) underflows to NaN, below ~1e-155 the exact period does, and a rate's square vanishes
+# below ~1e-162. A body turning once in 1e100 seconds is at rest for any class or paper.
+SLOWEST_RATE_RAD_PER_S = 1e-100
+
+
+def check_rate(name: str, given, rates, fastest: float = 50.0) -> None:
+    """Refuse a body's starting rates that are all zero or too slow to compute with."""
+    if not np.max(np.abs(np.asarray(rates, float))) >= SLOWEST_RATE_RAD_PER_S:
+        raise ParameterError(name, given, f"a rate of at least {SLOWEST_RATE_RAD_PER_S:g} rad/s in size (a body "
+                                          "at rest does not move; a slower one's periods overflow), allowed "
+                                          f"range [{-fastest:g}, {fastest:g}] rad/s")
+
+
 def check_body(values):
     validate_moments(values["inertia"], "inertia")
+    if "omega0" in values:
+        check_rate("omega0", values["omega0"], values["omega0"])
 
 
 def stride_for(duration, step):

@@ -469,8 +469,12 @@ class Scenario:
         return self.cost_of(self.resolve(self._merge(given, preset, values)))
 
     def cost_of(self, values: dict[str, Any]) -> Cost:
-        """The Cost of a run with these validated values (`resolve`)."""
-        return (self.cost_fn or default_cost)(values)
+        """The Cost of a run with these validated values (`resolve`); unbounded where counting it
+        overflows (a tiny sampling interval over a long run)."""
+        try:
+            return (self.cost_fn or default_cost)(values)
+        except OverflowError:
+            return Cost(math.inf, math.inf, math.inf)
 
     def check_budget(self, values: dict[str, Any], max_steps: float | None = MAX_STEPS,
                      max_memory: float | None = MAX_MEMORY) -> Cost:

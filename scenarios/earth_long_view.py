@@ -386,7 +386,7 @@ def _cost(values):
         cached = mean_orbits.cache_info().currsize > 0  # the mean orbits: once per process
         steps += n + (0 if cached else REBOUND_STEPS_PER_DAY * 40 * YR)
     else:
-        samples = float(round(values["years"] / values["sample_years"]) + 1)  # as _earth_long samples it
+        samples = float(np.floor(values["years"] / values["sample_years"] + 0.5) + 1)  # as _earth_long samples it (inf for a tiny sample_years)
         cached = secular_calibration.cache_info().currsize > 0
         steps += SECULAR_STEPS_PER_YEAR * values["years"] + 10 + (
             0 if cached else SECULAR_CALIBRATION_YEARS * YR * REBOUND_STEPS_PER_DAY)  # REBOUND's steps, not its samples

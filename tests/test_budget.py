@@ -128,6 +128,8 @@ PROBES = [
     ("lunar-perturbation", {"duration_yr": 200, "step_days": 0.005, "sample_days": 0.05}, "step_days", "steps"),
     # a zoom window of the full torque at a tiny step: 2.9e7 steps (the window was not counted once)
     ("earth-long-view", {"zoom_years": 40.0, "step_days": 0.0005}, "zoom_years", "integrator steps"),
+    # a sampling interval so small that counting the samples overflows (OverflowError before)
+    ("earth-long-view", {"sample_years": 5e-324}, "sample_years", "unbounded memory"),
 ]
 
 
@@ -149,14 +151,15 @@ def test_probe_refused_before_it_runs(name, given, driver, needle, no_integratio
 STEPPED = {"earth-long-view": {"model": "full"}}
 
 
-@pytest.mark.parametrize("bad", [1e-300, 0.0, -1.0, float("nan")])
+@pytest.mark.parametrize("bad", [1e-300, 5e-324, 0.0, -1.0, float("nan")])
 def test_absurd_steps_anywhere_get_the_parameter_message(bad, no_integration):
-    """Every step-like parameter of every scenario, at 1e-300, 0, a negative value or NaN: one
-    ParameterError naming it (a range error, or a budget refusal), never a traceback."""
+    """Every step-like or sampling parameter of every scenario, at 1e-300, the smallest float, 0, a
+    negative value or NaN: one ParameterError naming it (a range error, or a budget refusal),
+    never a traceback."""
     seen = 0
     for sc in all_scenarios():
         for p in sc.params:
-            if "step" not in p.name:
+            if "step" not in p.name and "sample" not in p.name:
                 continue
             seen += 1
             with pytest.raises(ParameterError) as ei:
