@@ -111,8 +111,12 @@ class Param:
         return v
 
     def _number(self, part: Any, whole: Any) -> float:
-        if isinstance(part, (bool, np.bool_)):  # True is 1 to Python, not a number a user meant
+        if isinstance(part, (bool, np.bool_)) or np.iscomplexobj(part):
+            # True is 1 to Python, not a number a user meant; float() of a numpy complex drops its
+            # imaginary part with only a warning
             raise ParameterError(self.name, whole, "a number, " + self.allowed())
+        if isinstance(part, (bytes, bytearray)):  # text all the same (float() reads b"1_0" as 10)
+            part = part.decode("ascii", "replace")
         try:
             v = read_number(part) if isinstance(part, str) else float(part)
         except OverflowError:  # an int beyond float range (10**400): as infinite as "inf"

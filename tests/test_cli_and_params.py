@@ -264,6 +264,24 @@ def test_values_a_user_did_not_mean_as_numbers_are_refused():
             sc.resolve(kw)
 
 
+def test_numpy_complex_numbers_and_bytes_are_read_as_a_python_value_would_be():
+    """float() of a numpy complex dropped the imaginary part with only a warning (2+3j ran as 2,
+    where Python's own 2+3j is refused); float() of b"1_0" read 10 where the text "1_0" is refused."""
+    import warnings
+
+    import numpy as np
+    import theoria as th
+
+    sc = th.scenario("middle-axis-flip")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no ComplexWarning on the way to the refusal
+        for kw in ({"spin": np.complex128(2 + 3j)}, {"spin": np.array(2 + 0j)}, {"spin": 2 + 3j},
+                   {"inertia": np.array([5 + 1j, 10, 13])}, {"spin": b"1_0"}):
+            with pytest.raises(ParameterError, match="a number"):
+                sc.resolve(kw)
+    assert sc.resolve({"spin": b"2.5", "inertia": np.array([5, 10, 13], np.int64)})["spin"] == 2.5
+
+
 def test_numbers_as_people_and_the_panel_write_them_are_taken():
     """The panel writes "−0.5" (a true minus) and "2.5 × 10⁶"; copied back into a field, both were
     refused as not a number. Taken exactly, as the Python literals say; a comma is still not a
