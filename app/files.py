@@ -47,6 +47,8 @@ def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = 
         raise ParameterError(what, repr(path), "a file name: text or a pathlib.Path")
     if not raw or raw.endswith(os.sep) or (os.altsep and raw.endswith(os.altsep)):
         raise ParameterError(what, str(path), "a file name, not a directory")
+    if "\0" in raw:  # no system takes it (the file calls raised ValueError)
+        raise ParameterError(what, repr(raw), "a file name without a NUL character")
     p = Path(raw).expanduser()
     try:
         p.lstat()

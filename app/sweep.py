@@ -983,6 +983,8 @@ def run_sweep(sc, grid=None, random=None, samples=None, out=None, cluster=None, 
     out = os.fspath(out)
     if not isinstance(out, str):
         raise ParameterError("--out", out, "a file name ending in .zarr or .parquet, as text")
+    if "\0" in out:
+        raise ParameterError("--out", repr(out), "a file name without a NUL character")
     # each run's budget, read before anything starts ("4GB" as the command line writes it)
     from ..scenarios.budget import memory_limit, steps_limit
 

@@ -59,7 +59,7 @@ def select(ids: list[str] | None) -> list[Check]:
         return checks
     known = {c.id for c in checks} | {c.id.split(".")[0] for c in checks}
     for i in ids:
-        if i not in known:
+        if not isinstance(i, str) or i not in known:
             raise ParameterError("check", i, "one of " + ", ".join(sorted(known, key=lambda s: (len(s), s))))
     return [c for c in checks if c.id in ids or c.id.split(".")[0] in ids]
 

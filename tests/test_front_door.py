@@ -118,6 +118,10 @@ def test_check_rows_from_python():
     assert all(r.passed for r in rows) and rows[0].rel_error <= rows[0].tolerance
     with pytest.raises(th.ParameterError, match="E99"):
         th.check("E99")
+    # a list, as the command line's `theoria check E1 E2` reads in Python (a TypeError before)
+    assert [r.id for r in th.check(["E1", "E3"])] == [r.id for r in th.check("E1", "E3")]
+    with pytest.raises(th.ParameterError, match="^check=3: one of E1, "):
+        th.check(3)
 
 
 @pytest.mark.slow
@@ -254,3 +258,15 @@ def test_a_limit_too_large_for_a_float_is_no_limit(limit):
 
     assert steps_limit(limit) is None and memory_limit(limit) is None
     assert steps_limit(np.array(2e7)) == 2e7 and memory_limit(np.array(4e9)) == 4e9
+
+
+def test_a_path_with_a_nul_character_is_refused_by_name(tmp_path):
+    """pathlib raised "ValueError: embedded null byte" from record and export."""
+    run = th.scenario("free-tumble").simulate(duration=1)
+    for call, name in ((lambda p: run.record(p + ".rrd"), "path"), (lambda p: run.export_html(p + ".html"), "path"),
+                       (lambda p: th.scenario("free-tumble").sweep(grid={"duration": (1, 2, 2)}, out=p + ".zarr"),
+                        "out")):
+        with pytest.raises(th.ParameterError, match="a file name without a NUL character") as e:
+            call(str(tmp_path / "a\0b"))
+        assert e.value.name == name
+    assert list(tmp_path.iterdir()) == []

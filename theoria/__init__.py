@@ -61,9 +61,10 @@ def scenario(name: str) -> Scenario:
 
 
 def check(*ids: str) -> list[Comparison]:
-    """Rows of `theoria check` (every row when no id is given; "E8" selects E8, E8.free, ...):
-    Euler's value, the simulated one, the modern reference, the relative error, the tolerance
-    and the verdict (`.passed`)."""
+    """Rows of `theoria check` (every row when no id is given; "E8" selects E8, E8.free, ...;
+    `check("E1", "E2")` or `check(["E1", "E2"])`): Euler's value, the simulated one, the modern
+    reference, the relative error, the tolerance and the verdict (`.passed`)."""
     from .scenarios.checks import run_checks
 
-    return run_checks(list(ids) or None)
+    flat = [i for x in ids for i in (x if isinstance(x, (list, tuple)) else (x,))]
+    return run_checks(flat or None)
