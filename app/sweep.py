@@ -1092,45 +1092,53 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
             result = writer.open()
             held.drop()
         return summary, result
-    if todo:
-        interrupted = False
-        client, local, where, owned = _client(cluster, workers)
-        summary.cluster = where
-        threads = 1 if local is not None else None
-        with _quiet_distributed(local is not None):  # to the cluster's last line
-            try:
-                writer.create()
-                with _Stop() as stop, _progress(progress, plan.size, sum(_nruns(regions[i]) for i in done), sc.name) as bar:
-                    interrupted = _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, threads, on_chunk)
-                    if interrupted:
-                        summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
-            except BaseException:
-                if summary.chunks_computed == 0:  # a new sweep that failed with nothing finished leaves nothing
-                    writer.discard()
-                raise
-            finally:
+    # From the cluster's shutdown to the sweep's recorded end a Ctrl-C or SIGTERM waits (a second
+    # one still stops it): the invocation that computed the chunks is always written down, and a
+    # sweep whose every chunk is done is reported done.
+    with contextlib.ExitStack() as to_the_end:
+        held = None
+        if todo:
+            client, local, where, owned = _client(cluster, workers)
+            summary.cluster = where
+            threads = 1 if local is not None else None
+            with _quiet_distributed(local is not None):  # to the cluster's last line
                 try:
-                    if interrupted and local is not None:
-                        _stop_workers(local)  # a worker deep in a long chunk would hold the exit for minutes
-                    if owned:
-                        client.close()
-                    if local is not None:
-                        local.close(timeout=20)
-                except Exception:  # noqa: BLE001 — shutting down after Ctrl-C
-                    pass
-    summary.seconds = time.perf_counter() - t0
-    summary.statuses = counts
-    summary.interrupted = interrupted
-    summary.kept = writer.kept
-    writer.session({"started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-                    "chunks_computed": summary.chunks_computed, "chunks_done_before": summary.chunks_done_before,
-                    "path": summary.path, "seconds": round(summary.seconds, 3), "interrupted": interrupted,
-                    "where": summary.cluster})
-    if interrupted:
-        return summary, None
-    # the finished result takes the place of OUT and is opened: one Ctrl-C or SIGTERM waits for it
-    # and is then too late to undo it (the sweep is reported done); a second one still stops it
-    with signals_held() as held:
+                    writer.create()
+                    with _Stop() as stop, _progress(progress, plan.size, sum(_nruns(regions[i]) for i in done),
+                                                    sc.name) as bar:
+                        interrupted = _drive(client, plan, regions, todo, writer, stop, bar, counts, summary,
+                                             threads, on_chunk)
+                        if interrupted:
+                            summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
+                except BaseException:
+                    if summary.chunks_computed == 0:  # a new sweep that failed with nothing finished leaves nothing
+                        writer.discard()
+                    raise
+                finally:
+                    held = to_the_end.enter_context(signals_held())
+                    try:
+                        if interrupted and local is not None:
+                            _stop_workers(local)  # a worker deep in a long chunk would hold the exit for minutes
+                        if owned:
+                            client.close()
+                        if local is not None:
+                            local.close(timeout=20)
+                    except Exception:  # noqa: BLE001 — shutting down after Ctrl-C
+                        pass
+        summary.seconds = time.perf_counter() - t0
+        summary.statuses = counts
+        summary.interrupted = interrupted
+        summary.kept = writer.kept
+        held = held or to_the_end.enter_context(signals_held())
+        writer.session({"started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                        "chunks_computed": summary.chunks_computed, "chunks_done_before": summary.chunks_done_before,
+                        "path": summary.path, "seconds": round(summary.seconds, 3), "interrupted": interrupted,
+                        "where": summary.cluster})
+        if interrupted:  # a stop during the shutdown asked for what is already happening
+            held.drop()
+            return summary, None
+        # the finished result takes the place of OUT and is opened: it is then too late to undo it
+        # (the sweep is reported done)
         writer.finish()
         mark_written(out)
         result = writer.open()

@@ -933,3 +933,47 @@ def test_which_scripts_are_told_to_add_the_guard(tmp_path, monkeypatch):
     m.__spec__ = types.SimpleNamespace(name="pkg.__main__")
     monkeypatch.setitem(sys.modules, "__main__", m)
     assert sw._unguarded_script() is None
+
+
+STOP_DURING_SHUTDOWN = """
+import os, signal, sys
+
+import distributed
+
+close = distributed.LocalCluster.close
+
+
+def stopped_while_closing(self, *args, **kwargs):  # Ctrl-C or SIGTERM as the cluster shuts down
+    os.kill(os.getpid(), getattr(signal, os.environ["STOP_WITH"]))
+    return close(self, *args, **kwargs)
+
+
+if __name__ == "__main__":
+    distributed.LocalCluster.close = stopped_while_closing
+    from theoria.app.cli import main
+
+    sys.argv = ["theoria", *sys.argv[1:]]
+    sys.exit(main())
+"""
+
+
+@pytest.mark.slow  # two sweeps, each with its local cluster
+@pytest.mark.parametrize("stop", ["SIGINT", "SIGTERM"])
+def test_a_stop_while_a_finished_sweep_shuts_down_is_too_late_and_the_sweep_is_recorded(tmp_path, stop):
+    """Every chunk written, then Ctrl-C or SIGTERM while the local cluster shut down: the sweep
+    exited 130/143 "interrupted" with no summary, and the invocation that computed every chunk was
+    never written in the store's `sessions` (not by --resume either). A stop then is too late: the
+    sweep says it is done and exits 0, its session recorded."""
+    import xarray as xr
+
+    script = tmp_path / "stop_during_shutdown.py"
+    script.write_text(STOP_DURING_SHUTDOWN)
+    out = tmp_path / "s.zarr"
+    r = subprocess.run([sys.executable, str(script), "sweep", "free-tumble", "--grid", "step=0.01:0.02:2",
+                        "--chunk", "1", "--workers", "1", "--out", str(out)], capture_output=True, text=True,
+                       timeout=600, cwd=ROOT, env={**os.environ, "STOP_WITH": stop})
+    assert r.returncode == 0, (r.returncode, r.stderr[-2000:])
+    assert "interrupted" not in r.stderr and "terminated" not in r.stderr and str(out) in r.stderr, r.stderr
+    ds = xr.open_zarr(out)
+    assert (ds["status"].values == sw.STATUS["ok"]).all()
+    assert [(x["chunks_computed"], x["interrupted"]) for x in ds.attrs["sessions"]] == [(2, False)]
