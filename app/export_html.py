@@ -22,6 +22,7 @@ import numpy as np
 import viser
 
 from .files import write_whole
+from .interrupt import signals_held
 from .page import SOFTWARE_GL_JS
 from .replay import HTML_DIGEST_BLANK, html_digest
 from .scene import SceneView
@@ -90,8 +91,13 @@ def render_html(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
             ser.insert_sleep(1.0 / fps)
         page = ser.as_html()
     finally:
-        with contextlib.redirect_stdout(io.StringIO()):
+        # viser's server thread says "Server stopped" on stdout as it ends: the redirection lasts
+        # until it has, and a Ctrl-C meanwhile waits (the line came out before "interrupted")
+        with signals_held(), contextlib.redirect_stdout(io.StringIO()):
             server.stop()
+            thread = getattr(getattr(server, "_websock_server", None), "_server_thread", None)
+            if thread is not None:  # stop() waits a second for it, a loaded machine may take longer
+                thread.join(timeout=10.0)
     marker = MARKER.format(name=html_lib.escape(run.scenario), digest=HTML_DIGEST_BLANK)
     # the live page's own start: no "Software WebGL rendering detected" notice over the replay,
     # and no multisampling where WebGL runs in software (app/page.py)
