@@ -29,6 +29,7 @@ import re
 import threading
 import time
 import traceback
+from collections import OrderedDict
 from typing import Any
 
 import numpy as np
@@ -165,9 +166,14 @@ class ClientSession:
         # comes, and twenty scene switches sent at once raced each other's panels (controls left
         # twice, or of another scenario)
         self._callback_lock = threading.RLock()
+        # events waiting for the one before them to be handled, oldest first; a control's newer
+        # value takes the place of its older one still waiting (`_browser_event`)
+        self._waiting: OrderedDict = OrderedDict()
+        self._waiting_lock = threading.Lock()
+        self._handling = False  # a thread of viser's pool is handling this session's events
         self._closed = False
-        self._debounce: threading.Timer | None = None
-        self._slider_at = -1e9  # when a slider last moved (perf_counter)
+        self._settling: dict[str, threading.Timer] = {}  # a dragged slider's last value, when the drag pauses
+        self._moved_at: dict[str, float] = {}  # when each slider last moved (perf_counter)
         self._link_sent = None
         self._link_time = 0.0
         self._class_key = None
@@ -235,7 +241,7 @@ class ClientSession:
             self.presets.on_update(self._on(self._on_preset))
             self.playback = gui.add_button_group("Playback", [PAUSE, RESET, BACK, FORWARD],
                                                  hint="keys: space play/pause, ← → step")
-            self.playback.on_click(self._on(lambda: self._on_playback(self.playback.value)))
+            self.playback.on_click(self._on(lambda: self._on_playback(self.playback.value), clicks=True))
             self.scrub = gui.add_slider("Time (% of the run)", min=0.0, max=100.0, step=0.1, initial_value=0.0)
             self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)  # made, not moved by a browser
             self.scrub.on_update(self._on(self._on_scrub))
@@ -305,7 +311,7 @@ class ClientSession:
         for label, key, fn in keys:
             try:
                 cmd = gui.add_command(label, hotkey=key)
-                cmd.on_trigger(self._on(fn))
+                cmd.on_trigger(self._on(fn, clicks=True))
                 self._commands.append(cmd)
             except (AttributeError, TypeError, ValueError):  # a fake client, or a viser without commands
                 return
@@ -414,21 +420,30 @@ class ClientSession:
                 self.presets.value = gallery.CUSTOM
             finally:
                 self._pguard = False
-        if self._debounce is not None:
-            self._debounce.cancel()
-            self._debounce = None
-        now = time.perf_counter()
-        if debounce and now - self._slider_at < SLIDER_DEBOUNCE_S:
-            # a slider being dragged: its first value ran at once; the values in between are dropped
-            # and the last one runs when the drag pauses (the last value wins, nothing queues)
-            self._slider_at = now
-            self._debounce = threading.Timer(SLIDER_DEBOUNCE_S, lambda: self._browser_event(self.request))
-            self._debounce.daemon = True
-            self._debounce.start()
+        if debounce and self._settles("parameters", self.request):
             return
-        if debounce:
-            self._slider_at = now
+        self._unsettle("parameters")  # a typed value runs at once, with the values of every control
         self.request()
+
+    def _settles(self, key: str, fn) -> bool:
+        """A slider being dragged (moves closer than SLIDER_DEBOUNCE_S): its first value was taken
+        at once; the values in between are dropped and `fn` runs for the last one when the drag
+        pauses (the last value wins, nothing queues). True when this move waits."""
+        self._unsettle(key)
+        now = time.perf_counter()
+        dragged = now - self._moved_at.get(key, -1e9) < SLIDER_DEBOUNCE_S
+        self._moved_at[key] = now
+        if dragged:
+            timer = threading.Timer(SLIDER_DEBOUNCE_S, lambda: self._browser_event(fn, key=("settled", key)))
+            timer.daemon = True
+            self._settling[key] = timer
+            timer.start()
+        return dragged
+
+    def _unsettle(self, key: str) -> None:
+        timer = self._settling.pop(key, None)
+        if timer is not None:
+            timer.cancel()
 
     # ---- messages ----------------------------------------------------------------------------
     def notify(self, title: str, body: str, color: str = "red") -> None:
@@ -465,16 +480,18 @@ class ClientSession:
         if name in good:
             self.controls.set_values({name: good[name]})
 
-    def _on(self, fn, *args):
-        """A callback for viser's on_update / on_click / on_trigger: `fn(*args)` through `_safe`.
-        A browser's own events (the event names its client) run one at a time per session. A value
-        the server sets itself calls the callback at once on the setting thread (no client): not
-        queued behind a browser's event, which may be waiting for the view lock that thread holds."""
+    def _on(self, fn, *args, clicks: bool = False):
+        """A callback for viser's on_update (or, `clicks`, on_click / on_trigger): `fn(*args)`
+        through `_safe`. A browser's own events (the event names its client) run one at a time per
+        session; a control's value is read when its event is handled, so a newer value replaces
+        its event still waiting (a click is never dropped: two Steps are two). A value the server
+        sets itself calls the callback at once on the setting thread (no client): not queued
+        behind a browser's event, which may be waiting for the view lock that thread holds."""
         def callback(event):
             if getattr(event, "client", None) is None:
                 self._safe(fn, *args)
             else:
-                self._browser_event(fn, *args)
+                self._browser_event(fn, *args, key=None if clicks else callback)
         return callback
 
     def _typed_into(self, handle):
@@ -486,14 +503,33 @@ class ClientSession:
         def take(text: str) -> None:
             handle.value = param.parse(str(text).strip())
 
-        return lambda typed: self._browser_event(take, typed.text)
+        return lambda typed: self._browser_event(take, typed.text, key=take)
 
-    def _browser_event(self, fn, *args) -> None:
-        """`fn(*args)` for something the browser did, after its earlier events are handled."""
+    def _browser_event(self, fn, *args, key=None) -> None:
+        """`fn(*args)` for something the browser did, after its earlier events are handled. An
+        event with a `key` (a control's new value) replaces one with the same key still waiting:
+        a browser sending values faster than they are drawn makes the server draw the newest, not
+        every one in turn. One thread of viser's pool handles a session's events in order while
+        the others return at once (a pool thread waiting for a busy session is one fewer for every
+        other student)."""
         self._linked_time = None  # the view is the browser's now, not the link's
-        with self._callback_lock:
-            if not self._closed:
-                self._safe(fn, *args)
+        with self._waiting_lock:
+            if self._closed:
+                return
+            self._waiting[key if key is not None else object()] = (fn, args)
+            if self._handling:
+                return
+            self._handling = True
+        while True:
+            with self._waiting_lock:
+                if not self._waiting or self._closed:
+                    self._waiting.clear()
+                    self._handling = False
+                    return
+                _, (fn, args) = self._waiting.popitem(last=False)
+            with self._callback_lock:
+                if not self._closed:
+                    self._safe(fn, *args)
 
     def _safe(self, fn, *args) -> None:
         """Run a callback (playback giving way meanwhile); no exception reaches viser's loop, and
@@ -732,10 +768,15 @@ class ClientSession:
         self._send_clock()
 
     def _on_exaggerate(self) -> None:
-        if self.result is None:
+        """Each new exaggeration is a new drawing of the run: dragged, the slider's last value is drawn."""
+        if self.result is None or self._settles("exaggerate", self._exaggerate):
             return
-        self.view_opts.exaggerate = float(self.exag.value)
-        self._redraw()
+        self._exaggerate()
+
+    def _exaggerate(self) -> None:
+        if self.result is not None:
+            self.view_opts.exaggerate = float(self.exag.value)
+            self._redraw()
 
     def _on_toggle(self, key: str) -> None:
         if self._guard:
@@ -1182,8 +1223,10 @@ class ClientSession:
             ClientSession.active = max(0, ClientSession.active - 1)
         self._closed = True
         playback.ticker().remove(self)
-        if self._debounce is not None:
-            self._debounce.cancel()
+        for key in list(self._settling):
+            self._unsettle(key)
+        with self._waiting_lock:
+            self._waiting.clear()
         self.worker.close()
 
 

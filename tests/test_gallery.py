@@ -380,3 +380,73 @@ def test_a_playing_session_advances_its_clock_and_a_paused_one_does_not():
         c1 = s.clock
         time.sleep(0.5)
         assert s.clock == c1
+
+
+def test_a_browser_flooding_a_control_holds_one_thread_and_has_its_newest_value_drawn(monkeypatch):
+    """Ten browsers dragging "Exaggerate the shape" at the gate's rate stalled every other student
+    for seconds: each value waited in its own thread of viser's pool for the session's drawing
+    before it, the pool's threads all waiting, and minutes of drawings ran on after the tabs closed.
+    A value arriving while its session is busy returns at once and takes the place of the older
+    value still waiting: the session draws the first and then the newest."""
+    from theoria.app import session as session_mod
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        drawn, drawing, release = [], threading.Event(), threading.Event()
+        real = session_mod.drawing_of
+
+        def slow(spec, run, view=None):
+            drawn.append(view.exaggerate)
+            drawing.set()
+            release.wait(30)
+            return real(spec, run, view)
+
+        monkeypatch.setattr(session_mod, "drawing_of", slow)
+        browser = object()
+        exag = s.exag
+
+        def send(value):  # as viser does: the value is set, then the callbacks run on a pool thread
+            object.__setattr__(exag, "value", value)
+            for cb in exag._cbs:
+                cb(types.SimpleNamespace(target=exag, client=browser))
+
+        first = threading.Thread(target=send, args=(2.0,))
+        first.start()
+        assert drawing.wait(30)
+        later = threading.Thread(target=lambda: [send(2.0 + 0.5 * k) for k in range(1, 36)])
+        later.start()
+        later.join(10)
+        assert not later.is_alive(), "a value waited for the drawing before it"
+        release.set()
+        first.join(30)
+        _wait(lambda: len(drawn) >= 2)
+        time.sleep(0.5)  # (a slider's settling time: nothing more is drawn)
+        assert drawn == [2.0, 19.5] and s.view_opts.exaggerate == 19.5
+
+
+def test_clicks_sent_while_the_session_is_busy_are_each_handled():
+    """Values of one control waiting together are one; clicks are not: two Steps are two."""
+    from theoria.app.session import FORWARD, STEP_FRACTION
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        s._step(1)  # paused, off the start
+        before = s.clock
+        browser = object()
+        bar = s.playback
+
+        def click():
+            object.__setattr__(bar, "value", FORWARD)
+            for cb in bar._cbs:
+                cb(types.SimpleNamespace(target=bar, client=browser))
+
+        with s._callback_lock:  # the session busy with an earlier event
+            clicks = [threading.Thread(target=click) for _ in range(2)]
+            for t in clicks:
+                t.start()
+                time.sleep(0.1)
+        for t in clicks:
+            t.join(10)
+        _wait(lambda: s.clock > before + 1.5 * STEP_FRACTION)
+        step = max(STEP_FRACTION, 1.0 / max(s.drawing.n_frames - 1, 1))
+        assert s.clock == pytest.approx(before + 2 * step)
