@@ -249,6 +249,70 @@ def test_flood_of_updates_is_coalesced_and_does_not_starve_another_client():
         assert final == 9.5
 
 
+def test_students_dragging_the_shape_neither_hold_up_another_nor_outlive_their_tabs(monkeypatch):
+    """Ten students drag "Exaggerate the shape" at the gate's own rate (every value passes) while an
+    eleventh chooses presets. Each value waited in a thread of viser's pool for the drawing before
+    it: the pool's threads all waiting, the eleventh's presets took 2-12 s and then none came, and
+    the drawings ran on for 8-40 s after the tabs closed. Now each of the eleventh's presets is
+    redrawn, the draggers' sessions draw a few of the values they send, not each one, and nothing
+    is drawn once their tabs are closed."""
+    from theoria.app import session as session_mod
+
+    drawn = []
+    real = session_mod.drawing_of
+
+    def counting(spec, run, view=None):
+        drawn.append(spec.name)
+        return real(spec, run, view)
+
+    monkeypatch.setattr(session_mod, "drawing_of", counting)
+    with _server(limits=Limits(max_per_address=20)) as (srv, sessions, url, log):
+
+        async def main():
+            draggers = [ViserProtocolClient(url) for _ in range(10)]
+            other = ViserProtocolClient(url)
+            for c in draggers + [other]:
+                await c.connect()
+            for c in draggers + [other]:
+                assert await c.wait_for(lambda c=c: c.update_no >= 1, 180)
+            t_end = time.monotonic() + 8.0
+
+            async def drag(c):
+                uuid, n = c.uuid_of("Exaggerate"), 0
+                while time.monotonic() < t_end:
+                    await c.send_gui(uuid, 2.0 + 0.5 * (n % 36))
+                    n += 1
+                    await asyncio.sleep(1.0 / GUI_RATE)
+                return n
+
+            async def presets():
+                uuid, options = other.dropdown("Start from")
+                answered, k = [], 0
+                while time.monotonic() < t_end:
+                    k += 1
+                    await other.act(uuid, options[k % 4], timeout=120)
+                    answered.append(other.answered)
+                    await asyncio.sleep(1.0)
+                return answered
+
+            *sent, answered = await asyncio.gather(*[drag(c) for c in draggers], presets())
+            drawn_while = len(drawn)
+            for c in draggers:
+                await c.close()
+            closed = await asyncio.to_thread(_wait, lambda: len(sessions) == 1, 60)
+            at_close = len(drawn)
+            await asyncio.sleep(2.0)
+            after = len(drawn) - at_close
+            await other.close()
+            return sum(sent), answered, drawn_while, closed, after
+
+        sent, answered, drawn_while, closed, after = asyncio.run(main())
+        assert answered and all(answered), answered
+        assert sent >= 500 and drawn_while < sent / 5, (sent, drawn_while)
+        assert closed, "the draggers' sessions were not let go"
+        assert after == 0, f"{after} drawings made after the tabs were closed"
+
+
 def test_idle_sockets_are_closed_and_one_address_cannot_take_every_seat():
     limits = Limits(max_connections=50, max_per_address=3, handshake_s=1.0)
     with _server(limits=limits) as (srv, sessions, url, log):
