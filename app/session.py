@@ -469,16 +469,19 @@ class ClientSession:
         who, allowed = self._words_for(e, spec)
         self.notify(f"Not allowed: {who}", f"“{show_value(e.value)}”: {allowed}{tail}")
 
-    def _restore_control(self, name: str) -> None:
+    def _restore_control(self, name: str) -> bool:
         """A refused value leaves its control: it shows the value of the last good run again (or
         the scenario's default before any), so the next change of another control is not refused
-        for it."""
+        for it. True when the control's value changed."""
         if name not in self.controls.handles:
-            return
+            return False
         good = self.good_values if self.good_values is not None and self.drawing_spec == self.spec.name \
             else self.spec.resolve(None)
-        if name in good:
-            self.controls.set_values({name: good[name]})
+        if name not in good:
+            return False
+        before = self.controls.values().get(name)
+        self.controls.set_values({name: good[name]})
+        return self.controls.values().get(name) != before
 
     def _on(self, fn, *args, clicks: bool = False):
         """A callback for viser's on_update (or, `clicks`, on_click / on_trigger): `fn(*args)`
@@ -839,10 +842,18 @@ class ClientSession:
         if self.updates == 0:  # nothing drawn: the panel (with the error) replaces the loading line
             page.set_loading(self.client, None)
         if isinstance(e, ParameterError):
+            who, allowed = self._words_for(e, req.spec)
+            if req.spec.name == self.spec.name and self.drawing_spec != self.spec.name \
+                    and self._restore_control(e.name):
+                # nothing of this scene shown yet (a link's values that pass one by one and together
+                # go over the budget): it is drawn with that value at its default
+                self._notify_bad(e, " — drawn with its default value", spec=req.spec)
+                self._status(f"Not allowed: {who} ({allowed}); drawn with its default value.")
+                self.request()
+                return
             self._notify_bad(e, " — keeping the last good state", spec=req.spec)
             if req.spec.name == self.spec.name:
                 self._restore_control(e.name)
-            who, allowed = self._words_for(e, req.spec)
             self._status(f"Not allowed: {who} ({allowed}); the scene shows the last good values.")
         else:
             self.notify(f"Error in {req.spec.title}", f"{type(e).__name__}: {e} — keeping the last good state")

@@ -184,6 +184,27 @@ def test_a_link_with_a_camera_the_view_cannot_take_still_shows_the_scene(monkeyp
         assert np.linalg.norm(np.subtract(client.camera.position, client.camera.look_at)) > 0.1
 
 
+def test_a_link_whose_values_together_go_over_the_budget_still_shows_its_scene(monkeypatch):
+    """A duration and a step each in range, together 10¹⁰ steps: the link's run was refused at
+    its start and the page showed no scene at all ("simulation failed"), the duration field
+    showing 20 while nothing was drawn. The value named by the refusal goes back to its default,
+    the class is told, and the scene is drawn with it."""
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0:
+                        "http://127.0.0.1:1/?s=free-tumble&p.duration=1000000&p.step=0.0001")
+    spec = get("free-tumble")
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        assert s.drawing_spec == "free-tumble" and s.spec.name == "free-tumble"
+        refused = [e for e in ("duration", "step") if s.good_values[e] == spec.resolve(None)[e]]
+        kept = {"duration": 1e6, "step": 1e-4}
+        assert len(refused) == 1 and all(s.good_values[k] == v for k, v in kept.items() if k not in refused)
+        assert s.controls.values()[refused[0]] == spec.resolve(None)[refused[0]]
+        assert any(t.startswith("Not allowed") and "default" in b for t, b in client.notes), client.notes
+
+
 def test_the_class_link_only_on_a_network_address():
     assert linkmod.class_link("127.0.0.1", 8080) is None
     assert linkmod.class_link("192.168.1.5", 8080) == "http://192.168.1.5:8080/"
