@@ -334,6 +334,8 @@ def read_address(client, timeout: float = 10.0) -> str | None:
         ls.set_item(ADDRESS_KEY + "-probe", "1")
         if not run_js(client, WRITE_ADDRESS):
             return None
-        return ls.get_item(ADDRESS_KEY, timeout=timeout)
+        address = ls.get_item(ADDRESS_KEY, timeout=timeout)
     except Exception:
         return None
+    # a page writes text; anything else came from a hand-made message, and opens the default view
+    return address if isinstance(address, str) else None

@@ -93,7 +93,7 @@ def from_address(address: str | None) -> LinkState:
     """The state a link holds (fields it does not hold stay None / empty). Bad numbers are
     dropped; the parameters are checked later, by the scenario."""
     st = LinkState()
-    if not address:
+    if not address or not isinstance(address, str):
         return st
     query = urlsplit(address).query if ("?" in address or "://" in address) else address
     for k, v in parse_qsl(query, keep_blank_values=True):

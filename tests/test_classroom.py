@@ -33,6 +33,7 @@ import pytest
 import websockets
 
 from theoria.app import worker as worker_mod
+from theoria.app.browser import ADDRESS_KEY
 from theoria.app.server import GUI_BURST, GUI_RATE, READ_BURST, READ_RATE, Limits, make_server
 from theoria.benchmarks.classroom import SLIDER, ViserProtocolClient, _free_port
 
@@ -311,6 +312,41 @@ def test_students_dragging_the_shape_neither_hold_up_another_nor_outlive_their_t
         assert sent >= 500 and drawn_while < sent / 5, (sent, drawn_while)
         assert closed, "the draggers' sessions were not let go"
         assert after == 0, f"{after} drawings made after the tabs were closed"
+
+
+class _AnswersItsAddressWith(ViserProtocolClient):
+    """A script speaking viser's protocol that answers the page's address probe with `value`."""
+
+    def __init__(self, url, value):
+        super().__init__(url)
+        self.value = value
+
+    def _handle(self, m):
+        if m.get("type") == "LocalStorageGetItemRequestMessage" and str(m.get("key", "")).endswith(ADDRESS_KEY):
+            asyncio.get_running_loop().create_task(self.send_raw({
+                "type": "LocalStorageGetItemResponseMessage", "value": self.value, "error": None,
+                "request_uuid": m.get("request_uuid")}))
+            return
+        super()._handle(m)
+
+
+def test_an_address_that_is_not_text_opens_the_default_view():
+    """A page writes its address as text; a script answered the probe with a map or a number: the
+    link reader raised, the session never started (a seat held, no scene) and the console got a
+    traceback for each connection. It opens the default view, and nothing is logged."""
+    with _server() as (srv, sessions, url, log):
+
+        async def main():
+            out = []
+            for value in ({"a": 1}, 12345, ["?s=moon"]):
+                c = _AnswersItsAddressWith(url, value)
+                await c.connect()
+                out.append(await c.wait_for(lambda c=c: c.update_no >= 1, 120))
+                await c.close()
+            return out
+
+        assert asyncio.run(main()) == [True, True, True]
+        assert "Traceback" not in log.getvalue() and "could not start" not in log.getvalue(), log.getvalue()
 
 
 def test_idle_sockets_are_closed_and_one_address_cannot_take_every_seat():
