@@ -200,8 +200,9 @@ class Gate:
 
     def _fits(self, client, target, value) -> bool:
         """Whether a value goes on to its control as viser would set it. A slider takes a finite
-        number within its range; text typed into its box, and any other number (NaN, infinite, out
-        of range: its page never sends one), go to the app's parser instead, which refuses them
+        number within its range (a whole one if it holds whole numbers); text typed into its box,
+        and any other number (NaN, infinite, out of range, a fraction for a count: its page never
+        sends one), go to the app's parser instead, which refuses them
         naming the range; the slider keeps its value and is shown it again. A checkbox takes true
         or false, a menu or a text box text; anything else is dropped (viser would set it as it
         came)."""
@@ -216,7 +217,10 @@ class Gate:
             lo, hi = getattr(target, "min", None), getattr(target, "max", None)
             # a dragged slider's value may miss its end by a rounding of its step
             slack = 1e-9 * abs(hi - lo) if _number(lo) and _number(hi) else 0.0
-            if not _number(value) or (_number(lo) and value < lo - slack) or (_number(hi) and value > hi + slack):
+            # a whole-number slider's page sends whole numbers (viser would cut 59.9 to 59)
+            fraction = isinstance(current, int) and _number(value) and value != int(value)
+            if not _number(value) or (_number(lo) and value < lo - slack) or (_number(hi) and value > hi + slack) \
+                    or fraction:
                 self._typed(client, target, repr(float(value)))
                 # the sender's slider shows the value it keeps (viser sends a value only when it changes)
                 target._impl.gui_api._websock_interface.queue_message(

@@ -1032,6 +1032,11 @@ def test_a_number_typed_into_a_sliders_box_is_parsed_by_the_app():
                     assert await c.wait_for(lambda: len(refused()) > n, 30), (text, c.notifications)
                     assert f"“{text}”" in refused()[-1] and "[16, 512]" in refused()[-1], refused()[-1]
                 assert s.controls.values()["steps_per_orbit"] == 100 and s.controls.handles["steps_per_orbit"].value == 100
+                # a fraction as a number (its page sends whole ones): refused, not cut to 100 by viser
+                n = len(refused())
+                await c.send_gui(steps, 100.9)
+                assert await c.wait_for(lambda: len(refused()) > n, 30), c.notifications
+                assert "an integer" in refused()[-1] and s.controls.values()["steps_per_orbit"] == 100, refused()[-1]
                 await c.send_gui(steps, True)  # viser would take it as 1
                 await c.enter("Orbits to follow", "60")  # a text field: taken as ever
                 # the run of 60 orbits is made at 100 steps an orbit (at 1 it was refused)
