@@ -58,6 +58,7 @@ CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubbe
 SCRUB_HOLD_S = 3.0
 # a page that plays by itself needs the server's ticks only for the time read-out
 PAGE_TICK_HZ = 1.0 / CLOCK_TEXT_EVERY
+LINK_ERRORS_SHOWN = 3  # a link's refused values, each in a notification of its own; the rest counted
 SLIDER_DEBOUNCE_S = 0.15  # slider moves closer than this are a drag: only its last value is simulated
 STEP_FRACTION = 0.01  # ← / → move the clock by this fraction of the run
 LINK_EVERY_S = 0.5  # the address bar follows the view at most this often (1 s while playing)
@@ -197,8 +198,11 @@ class ClientSession:
             self._apply(self.worker.adopt(self.spec, run.params), run, 0.0)
         elif self._restore is not None and self._restore.params:
             values, errors = linkmod.link_values(self.spec, self._restore)
-            for e in errors:
+            for e in errors[:LINK_ERRORS_SHOWN]:
                 self._notify_bad(e, " (from the link: the default is used)")
+            if len(errors) > LINK_ERRORS_SHOWN:  # a link of thousands of keys is not thousands of notices
+                self.notify("Not allowed: more values of the link",
+                            f"{len(errors) - LINK_ERRORS_SHOWN} more values of the link were not used")
             self.controls.set_values(values)
             self._set_preset_for(values)
             self.request(values)

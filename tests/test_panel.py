@@ -205,6 +205,21 @@ def test_a_link_whose_values_together_go_over_the_budget_still_shows_its_scene(m
         assert any(t.startswith("Not allowed") and "default" in b for t, b in client.notes), client.notes
 
 
+def test_a_link_of_thousands_of_unknown_values_gives_a_few_notices(monkeypatch):
+    """A hand-made link with 3,000 unknown `p.` keys made the server send 3,000 notifications."""
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    keys = "&".join(f"p.x{k}=1" for k in range(3000))
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0:
+                        f"http://127.0.0.1:1/?s=free-tumble&p.duration=7&{keys}")
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        assert s.good_values["duration"] == 7.0
+        assert len(client.notes) == 4 and client.notes[-1][1] == "2997 more values of the link were not used", \
+            client.notes[-2:]
+
+
 def test_the_class_link_only_on_a_network_address():
     assert linkmod.class_link("127.0.0.1", 8080) is None
     assert linkmod.class_link("192.168.1.5", 8080) == "http://192.168.1.5:8080/"
