@@ -534,9 +534,14 @@ class ClientSession:
                     self._handling = False
                     return
                 _, (fn, args) = self._waiting.popitem(last=False)
-            with self._callback_lock:
-                if not self._closed:
-                    self._safe(fn, *args)
+            try:
+                with self._callback_lock:
+                    if not self._closed:
+                        self._safe(fn, *args)
+            except BaseException:  # never leave the session's line without a thread to handle it
+                with self._waiting_lock:
+                    self._handling = False
+                raise
 
     def _safe(self, fn, *args) -> None:
         """Run a callback (playback giving way meanwhile); no exception reaches viser's loop, and

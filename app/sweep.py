@@ -27,13 +27,13 @@ import contextlib
 import datetime
 import functools
 import json
+import math
 import os
 import re
 import shutil
 import signal
 import sys
 import threading
-import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Mapping
