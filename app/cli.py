@@ -13,7 +13,8 @@ import sys
 import time
 
 from theoria.app.files import WriteError
-from theoria.app.interrupt import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated, cli_signals
+from theoria.app.interrupt import (EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated, cli_signals,
+                                   forget_interrupts_in_source_text)
 from theoria.physics.params import ParameterError, whole_number
 
 from .format import number
@@ -535,6 +536,8 @@ def main(argv: list[str] | None = None) -> int:
         return _fail("interrupted", EXIT_INTERRUPTED)
     except Terminated:
         return _fail("terminated", EXIT_TERMINATED)
+    finally:
+        forget_interrupts_in_source_text()
 
 
 def _main(argv: list[str] | None) -> int:

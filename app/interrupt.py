@@ -159,6 +159,17 @@ def cli_signals(process: bool = False):
                 _raise(pending)
 
 
+def forget_interrupts_in_source_text() -> None:
+    """CPython remembers a KeyboardInterrupt that left any code it ran from source text (`exec`
+    or `eval` of a string: `dataclasses` builds every `__init__` that way, `namedtuple` its
+    `__new__`), even when the interrupt was caught later, and a process started with `python -m`
+    that exits normally then ends by SIGINT after its last line (exit −2, not the command's 130).
+    A Ctrl-C while a sweep's local cluster starts (Dask imports dozens of modules of dataclasses)
+    did that 2 of 10 times. Running an empty string clears the record; call it once the command's
+    handlers are gone, when no KeyboardInterrupt can come any more."""
+    exec("")
+
+
 def finishing() -> None:
     """The command's work is done and cannot be undone (its file is in place): Ctrl-C and SIGTERM
     are ignored from here to the end of the process, so that a stop in its last lines is not

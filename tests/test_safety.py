@@ -606,6 +606,24 @@ def test_a_signal_inside_set_name_is_not_turned_into_a_runtime_error():
     assert made == []
 
 
+@pytest.mark.parametrize("reached", ["the exec'd code", "the command"])
+def test_a_ctrl_c_that_passed_through_code_made_from_text_still_exits_130(tmp_path, reached):
+    """`python -m theoria`: a Ctrl-C raised inside code that Python ran from source text (here an
+    `exec` of a string, as `dataclasses` makes every `__init__` while Dask's modules import) and
+    reported by the command made CPython end the process by SIGINT after it had exited 130
+    (exit −2: it remembers such an interrupt as unhandled). 2 of 10 Ctrl-C 1.2–1.3 s into a sweep."""
+    (tmp_path / "interrupted_in_exec.py").write_text(textwrap.dedent(f"""
+        from theoria.app import cli
+        def parser():
+            exec("raise KeyboardInterrupt")  # the Ctrl-C, raised in code made from text
+        cli.build_parser = parser
+        {"raise SystemExit(cli.main())" if reached == "the command" else "raise SystemExit(cli.main([]))"}
+        """))
+    r = subprocess.run([sys.executable, "-m", "interrupted_in_exec"], cwd=tmp_path, capture_output=True, text=True,
+                       timeout=60)
+    assert (r.returncode, r.stderr) == (130, "theoria: interrupted\n")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name,delay", [("initial-axis", 0.0), ("initial-axis", 1.3), ("middle-axis-flip", 0.7)])
 def test_ctrl_c_during_a_long_run(name, delay):
