@@ -23,6 +23,7 @@ class Trajectory:
     bodies: dict[str, np.ndarray] = field(default_factory=dict)  # name → (N,3) inertial positions
     series: dict[str, np.ndarray] = field(default_factory=dict)  # extra scalar series (N,)
     figure_axis_index: int | None = None  # body axis drawn as the "figure axis" (default: largest moment)
+    moment_unit: str = "kg m^2"  # of `inertia`: "C" where the moments are given as fractions of the largest
 
     def __post_init__(self):
         self.t = np.asarray(self.t, float)

@@ -27,7 +27,7 @@ from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
 from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
 from .drawing import Camera, Drawing, Option, View, declutter_labels, standard
-from .units import metric_unit as unit_of_metric
+from .units import metric_unit as unit_of_metric, rotation_units, unit_in_label, unit_in_name
 
 
 @dataclass(frozen=True)
@@ -153,17 +153,43 @@ class Run:
 
     def to_dataframe(self):
         """One row per sample: t, the attitude, ω and L on the body axes, the other bodies'
-        positions and every per-sample series of the run (pandas; `pip install theoria-motus[pandas]`)."""
+        positions and every per-sample series of the run (pandas; `pip install theoria-motus[pandas]`).
+        `df.attrs["units"]` holds the unit of each column that has one (`column_units`)."""
         try:
             import pandas as pd
         except ImportError:
             raise ImportError("Run.to_dataframe needs pandas: pip install pandas "
                               "(or theoria-motus[pandas])") from None
-        return pd.DataFrame(self.columns())
+        df = pd.DataFrame(self.columns())
+        df.attrs["units"] = self.column_units()
+        return df
+
+    def column_units(self) -> dict[str, str]:
+        """The unit of each column of `columns()` that has one, as parameters write units ("1" for
+        a pure number): t in the trajectory's time unit, the quaternion "1", ω, L and the kinetic
+        energy in the time unit and the moments' unit of the run ("rad/s", "kg m^2/s", "J" for a
+        body given in SI; "n", "C n", "C n^2" where time is counted in orbits' radians and the
+        moments as fractions of C), and a series whose name ends in a unit (`obliquity_deg`,
+        "obliquity of date (deg)")."""
+        tr = self.trajectory
+        if tr is None:
+            return {}
+        units = {f"t_{tr.time_unit}": tr.time_unit}
+        if self._spec().kind == "rotation":
+            units.update({f"q_{c}": "1" for c in "wxyz"})
+            if of := rotation_units(tr.time_unit, tr.moment_unit):
+                units.update({f"omega_body_{c}": of["omega"] for c in "xyz"})
+                units.update({f"L_body_{c}": of["L"] for c in "xyz"})
+                units["energy"] = of["energy"]
+        for name in self.columns():
+            unit = unit_in_label(name) or (named[1] if (named := unit_in_name(name)) else None)
+            if name not in units and unit is not None:
+                units[name] = unit
+        return units
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The per-sample columns of `to_dataframe` as numpy arrays (name → (N,)); units in the names
-        where the run has them (t is in `trajectory.time_unit`)."""
+        """The per-sample columns of `to_dataframe` as numpy arrays (name → (N,)); their units are
+        `column_units()` (t's is in its name)."""
         tr = self.trajectory
         if tr is None:
             return {}

@@ -164,7 +164,7 @@ def _cassini(values, progress=None):
         notes_rows,
     ]
     node_line = unit(np.cross(k, nrm))
-    traj = Trajectory(t, q, L, I, time_unit="day", bodies={"earth": earth(t)})
+    traj = Trajectory(t, q, L, I, time_unit="day", bodies={"earth": earth(t)}, moment_unit="C")
     extras = {"orbit_normal": nrm, "spin_axis": spin, "node_line": node_line, "ecliptic_pole": k}
     plot = {"obliquity (deg)": np.degrees(obl), "obliquity, Peale (deg)": np.full_like(obl, I_peale),
             "out of plane (arcsec)": off / ARCSEC_RAD}

@@ -107,7 +107,7 @@ def _traj(t_days, L, q, I, eph_sun, eph_moon, stride):
     moon = eph_moon(td)
     return Trajectory(td / YR, q[sl], L[sl] * YR, I, time_unit="yr",
                       bodies={"sun": sun / np.linalg.norm(sun, axis=1, keepdims=True),
-                              "moon": moon / np.linalg.norm(moon, axis=1, keepdims=True)})
+                              "moon": moon / np.linalg.norm(moon, axis=1, keepdims=True)}, moment_unit="C")
 
 
 def euler_nutation_terms(moon: EP.MeanElements, H=EARTH_DYNAMICAL_ELLIPTICITY, obliquity=OBLIQUITY_J2000_RAD,

@@ -248,7 +248,7 @@ def _earth_long(values, progress=None):
         moon = LT.on_ecliptic_of_date(lambda tt: _on_circle(tt, me.L0 + me.n * tt, me.inc, me.node0 + me.node_rate * tt),
                                       ecl)(t)
     traj = Trajectory(ty, q, L * YR, I, time_unit="yr",
-                      bodies={"sun": unit(sun), "moon": unit(moon)})
+                      bodies={"sun": unit(sun), "moon": unit(moon)}, moment_unit="C")
     lam_e = lam[0] - eul * ARCSEC_RAD * (ty - ty[0])
     extras = {"vondrak_pole": ref, "ecliptic_pole": k}
     plot = {"obliquity of date (deg)": np.degrees(obl), "obliquity, Vondrák 2011 (deg)": np.degrees(obl_ref),

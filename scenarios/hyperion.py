@@ -92,7 +92,7 @@ def _hyperion(values, progress=None):
                         q0=quat.from_axis_angle([0, 0, 1], values["probe_theta_deg"] * np.pi / 180),
                         masses=[PointMass(1.0, orbit.position)], scheme="yoshida4", progress=part(0.6, 0.8))
     pos = orbit.position(t)
-    traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
+    traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos}, moment_unit="C")
     zeta = zeta_of(q, pos)
     lp = probe_lyapunov([values["probe_theta_deg"]], [values["probe_rate"]], e, [w0], max(no, 100),
                         values["steps_per_orbit"], progress=part(0.8, 0.9))

@@ -74,7 +74,7 @@ def _libration_circular(values, progress=None):
     t, L, q = integrate(I, om0, duration, step, q0=q0, masses=[PointMass(gm, orbit.position)],
                         scheme="yoshida4", stride=stride_for(n), progress=progress)
     pos = orbit.position(t)
-    traj = Trajectory(t, q, L, I, time_unit="unit", bodies={"attractor": pos})  # δ is in rad per unit
+    traj = Trajectory(t, q, L, I, time_unit="unit", bodies={"attractor": pos}, moment_unit="C")  # δ is in rad per unit
     zeta = zeta_of(q, pos)
     zeta = zeta - 2 * np.pi * np.round((zeta[0] - zeta0) / (2 * np.pi))
     zdot = d - traj.omega_body[:, 2]

@@ -117,7 +117,7 @@ def _finish(values, s, t, L, q):
     g, e, n, I, gm, orbit, N, P = s.g, s.e, s.n, s.I, s.gm, s.orbit, lib.euler_N(s.g, s.gm, 1.0), s.P
     fs, dz, step = s.fs, s.dz, s.step
     pos = orbit.position(t)
-    traj = Trajectory(t, q, L, I, time_unit="1/n·rad", bodies={"attractor": pos})
+    traj = Trajectory(t, q, L, I, time_unit="unit", bodies={"attractor": pos}, moment_unit="C")  # n in rad per unit
     zeta = zeta_of(q, pos)
     z_forced = fs.zeta(t)
     zeta -= np.pi * np.round((zeta[0] - z_forced[0] - dz) / np.pi)

@@ -407,7 +407,8 @@ def _moon(values, progress=None):
     t, L, q = _integrate(values, state, progress=sub)
     tt = t0 + t
     earth = state.earth(t)
-    traj = Trajectory(t, q, L, I, time_unit="day", bodies={"attractor": earth, "earth": earth})
+    traj = Trajectory(t, q, L, I, time_unit="day", bodies={"attractor": earth, "earth": earth},
+                      moment_unit="C")
     lon, lat = moon.sub_earth_point(q, earth)
     real = against_de421(t, q, tt, values)
     lp, bp = moon.optical_libration_meeus(tt, values["equator_inclination_deg"])

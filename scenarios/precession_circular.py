@@ -146,7 +146,8 @@ def _precession_circular(values, progress=None):
     delta, eps = 1.0, r
     eul = linear_theory(N, eps, delta, n)
     cen = np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], -1)
-    traj = Trajectory(t, q, L, I, time_unit="1/δ", bodies={"centre": cen})
+    traj = Trajectory(t, q, L, I, time_unit="1/δ", bodies={"centre": cen},
+                      moment_unit="M a^2")
     fit, phi = fit_circular(t, traj.figure_axis, delta, corr.eps_gyro)
     ap = -fit.obliquity["2phi"][1]  # p = n − a_p cos 2φ
     al = fit.longitude["2phi"][0]  # λ = … + a_λ sin 2φ

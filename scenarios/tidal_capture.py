@@ -119,7 +119,7 @@ def _simulate(values, progress=None):
     I = planar_moments(w0**2 / 3.0)
     z = np.zeros_like(th)
     traj = Trajectory(t, np.stack([np.cos(th / 2), z, z, np.sin(th / 2)], 1), np.stack([z, z, I[2] * wd], 1), I,
-                      time_unit="1/n·rad", bodies={"attractor": orb.position(t)})
+                      time_unit="1/n·rad", bodies={"attractor": orb.position(t)}, moment_unit="C")
     q = m["pseudo_synchronous_rate_n"]
     final, cap = m["final_spin_rate_n"], m["captured_resonance"]
     warnings = []

@@ -32,6 +32,18 @@ def unit_in_name(key: str) -> tuple[str, str] | None:
     return None
 
 
+# a plot's label ends in its unit in brackets: "obliquity of date (deg)", "node longitude (deg, simulated)"
+_LABEL_UNIT = re.compile(r"\(([^(),]+)(?:,[^()]*)?\)$")
+LABEL_UNITS = {unit for _, unit in NAME_SUFFIXES} | {"arcmin", "rad/s"}
+
+
+def unit_in_label(label: str) -> str | None:
+    """The unit a plot's label ends in, in brackets ("obliquity, Vondrák 2011 (deg)" → "deg"), if
+    it is one (not "BC/AB (simulated)")."""
+    m = _LABEL_UNIT.search(label)
+    return m.group(1).strip() if m and m.group(1).strip() in LABEL_UNITS else None
+
+
 def metric_unit(key: str, declared: Mapping[str, str]) -> str | None:
     """The unit of metric `key`: the scenario's declaration (a name, or a pattern matching whole
     names such as r"gp_half_width_[\\d.]+") first, then the unit in the name; None if neither says."""
@@ -42,3 +54,25 @@ def metric_unit(key: str, declared: Mapping[str, str]) -> str | None:
             return unit
     found = unit_in_name(key)
     return found[1] if found else None
+
+
+# a trajectory's time unit → the unit of a rate in it: its own unit where the scenario measures time
+# in a rate's inverse (the mean motion n, Euler's δ), else radians per time unit
+RATE_OF_TIME_UNIT = {"1/n·rad": "n", "1/δ": "δ"}
+TIME_UNITS = {"s", "day", "yr", "unit"}  # "unit": a scenario's own unit of time
+
+
+def rotation_units(time_unit: str, moment_unit: str) -> dict[str, str]:
+    """The units of a rotating body's ω, L = Iω and kinetic energy ½ω·L, with the time of its
+    trajectory in `time_unit` and its principal moments in `moment_unit` ("kg m^2", or "C" where
+    the largest moment is the unit). Radians are left out of L and E, as SI leaves them out of the
+    joule. None where the trajectory's variable is not a time."""
+    rate = RATE_OF_TIME_UNIT.get(time_unit)
+    if rate is None and time_unit not in TIME_UNITS:  # the run's "time" is not one (a sweep of sizes)
+        return {}
+    if rate is None:
+        if moment_unit == "kg m^2" and time_unit == "s":
+            return {"omega": "rad/s", "L": "kg m^2/s", "energy": "J"}
+        return {"omega": f"rad/{time_unit}", "L": f"{moment_unit}/{time_unit}",
+                "energy": f"{moment_unit}/{time_unit}^2"}
+    return {"omega": rate, "L": f"{moment_unit} {rate}", "energy": f"{moment_unit} {rate}^2"}

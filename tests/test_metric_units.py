@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import re
 
+import numpy as np
 import pytest
 
 import theoria as th
@@ -18,7 +19,8 @@ K = 2.0  # every rate ×2, every time ÷2
 
 # each unit's power of time (a unit not listed here makes the test fail: add it with its power)
 TIME_POWER = {"": 0, "1": 0, "rad": 0, "deg": 0, "s": 1, "unit": 1, "1/s": -1, "rad/s": -1, "rad/s^2": -2,
-              "1/unit^2": -2, "J": -2, "kg m^2/s": -1}
+              "1/unit^2": -2, "J": -2, "kg m^2/s": -1,
+              "rad/unit": -1, "C/unit": -1, "C/unit^2": -2}  # a run's columns in the scenario's own unit of time
 
 # scenario → how to make it K times faster: parameter → factor (rates ×K, rates squared ×K², times ÷K)
 FASTER = {
@@ -57,6 +59,40 @@ def test_metrics_change_with_the_time_scale_as_their_units_say(name):
         assert w / v == pytest.approx(want, rel=1e-6), f"{name}: {key} in {units[key]!r}: ×{w / v:.6g}, not ×{want:g}"
         checked += 1
     assert checked >= 3, f"{name}: only {checked} metrics to check"
+
+
+@pytest.mark.parametrize("name", sorted(FASTER))
+def test_columns_change_with_the_time_scale_as_their_units_say(name):
+    """`Run.column_units` (`to_dataframe().attrs["units"]`): ω, L, the energy and the time of each
+    sample scale with the rates as their units say. (libration-eccentric's time was labelled in the
+    orbit's radians, 1/n·rad, which holds only at its default n = 1: ω doubled with n.)"""
+    sc = th.scenario(name)
+    base = {p: sc.parameters[p].default for p in sc.parameters}
+    slow, fast = sc.simulate(**base), sc.simulate(**_scaled(base, FASTER[name]))
+    units, a, b = slow.column_units(), slow.columns(), fast.columns()
+    assert fast.column_units() == units
+    checked = []
+    for key in ("omega_body_x", "omega_body_y", "omega_body_z", "L_body_z", "energy", *[k for k in a if k.startswith("t_")]):
+        if key not in a:
+            continue
+        v, w = a[key][-1], b[key][-1]
+        if abs(v) < 1e-8 * max(1.0, float(np.max(np.abs(a[key])))):
+            continue
+        want = K ** -TIME_POWER[units[key]]
+        assert w / v == pytest.approx(want, rel=1e-6), f"{name}: {key} in {units[key]!r}: ×{w / v:.6g}, not ×{want:g}"
+        checked.append(key)
+    assert "energy" in checked and any(k.startswith("t_") for k in checked), checked
+
+
+def test_every_column_of_a_rotating_body_has_a_unit_in_the_dataframe():
+    run = th.scenario("free-tumble").simulate(duration=5)
+    df = run.to_dataframe()
+    assert df.attrs["units"] == run.column_units()
+    assert {c: df.attrs["units"][c] for c in ("t_s", "q_w", "omega_body_x", "L_body_y", "energy")} == {
+        "t_s": "s", "q_w": "1", "omega_body_x": "rad/s", "L_body_y": "kg m^2/s", "energy": "J"}
+    moon = th.scenario("earth").simulate(years=1)  # moments as fractions of C, time in years
+    assert {k: v for k, v in moon.column_units().items() if k in ("L_body_z", "obliquity − ε₀ (arcsec)")} == {
+        "L_body_z": "C/yr", "obliquity − ε₀ (arcsec)": "arcsec"}
 
 
 @pytest.mark.parametrize("name", th.scenarios())
