@@ -245,7 +245,7 @@ class ClientSession:
             self.presets.on_update(self._on(self._on_preset))
             self.playback = gui.add_button_group("Playback", [PAUSE, RESET, BACK, FORWARD],
                                                  hint="keys: space play/pause, ← → step")
-            self.playback.on_click(self._on(lambda: self._on_playback(self.playback.value), clicks=True))
+            self.playback.on_click(self._clicked(self._on_playback))
             self.scrub = gui.add_slider("Time (% of the run)", min=0.0, max=100.0, step=0.1, initial_value=0.0)
             self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)  # made, not moved by a browser
             self.scrub.on_update(self._on(self._on_scrub))
@@ -512,6 +512,24 @@ class ClientSession:
 
         return lambda typed: self._browser_event(take, typed.text, key=take)
 
+    def _clicked(self, fn):
+        """A button group's click: `fn(button clicked)`. viser sets the group's value to the button
+        and then runs its callbacks on its pool; read there, two clicks close together (Pause, then
+        a step, while a drawing held the session) both read the second: two steps while the run
+        played on. A callback that is a coroutine runs in viser's loop as the click arrives: the
+        button is read then, and the click joins the session's line in the order the clicks came."""
+        async def clicked(event):
+            button = event.target.value
+            if getattr(event, "client", None) is None:
+                self._safe(fn, button)
+            elif self._enqueue(fn, (button,), None):
+                try:
+                    self.client.gui._thread_executor.submit(self._drain)
+                except RuntimeError:  # the server is stopping: its pool takes nothing more
+                    with self._waiting_lock:
+                        self._handling = False
+        return clicked
+
     def _browser_event(self, fn, *args, key=None) -> None:
         """`fn(*args)` for something the browser did, after its earlier events are handled. An
         event with a `key` (a control's new value) replaces one with the same key still waiting:
@@ -519,14 +537,24 @@ class ClientSession:
         every one in turn. One thread of viser's pool handles a session's events in order while
         the others return at once (a pool thread waiting for a busy session is one fewer for every
         other student)."""
+        if self._enqueue(fn, args, key):
+            self._drain()
+
+    def _enqueue(self, fn, args, key) -> bool:
+        """Put an event in the session's line; True when no thread is handling the line (the
+        caller is to `_drain` it)."""
         self._linked_time = None  # the view is the browser's now, not the link's
         with self._waiting_lock:
             if self._closed:
-                return
+                return False
             self._waiting[key if key is not None else object()] = (fn, args)
             if self._handling:
-                return
+                return False
             self._handling = True
+            return True
+
+    def _drain(self) -> None:
+        """Handle the session's waiting events in order until none is left."""
         while True:
             with self._waiting_lock:
                 if not self._waiting or self._closed:

@@ -3,7 +3,10 @@ formulas as readable text, no stale scene objects after switching through every 
 browser session (fake viser client) choosing presets, switching scenarios and showing progress."""
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import contextlib
+import inspect
 import math
 import threading
 import time
@@ -141,6 +144,15 @@ def test_switching_through_all_scenarios_leaves_no_stale_objects():
 # ---- a session with a fake viser client ------------------------------------------------------
 
 
+def _call(cb, event):
+    """A GUI callback as viser calls it: a coroutine function in its event loop (here, at once),
+    any other on a thread of its pool (here, on the calling thread)."""
+    if inspect.iscoroutinefunction(cb):
+        asyncio.run(cb(event))
+    else:
+        cb(event)
+
+
 class FakeGuiHandle:
     def __init__(self, kind, label=None, value=None, **props):
         object.__setattr__(self, "_cbs", [])
@@ -158,7 +170,7 @@ class FakeGuiHandle:
         self.history.append((key, value))
         if key == "value":  # viser calls the update callbacks synchronously on assignment
             for cb in list(self._cbs):
-                cb(types.SimpleNamespace(target=self, client=None))
+                _call(cb, types.SimpleNamespace(target=self, client=None))
         if key == "options" and self.value not in value:
             self.value = value[0]
 
@@ -191,6 +203,8 @@ class FakeGuiHandle:
 
 
 class FakeGui:
+    _thread_executor = concurrent.futures.ThreadPoolExecutor(4)  # viser's pool for callbacks
+
     def __init__(self):
         self.handles: list[FakeGuiHandle] = []
 
@@ -438,7 +452,7 @@ def test_clicks_sent_while_the_session_is_busy_are_each_handled():
         def click():
             object.__setattr__(bar, "value", FORWARD)
             for cb in bar._cbs:
-                cb(types.SimpleNamespace(target=bar, client=browser))
+                _call(cb, types.SimpleNamespace(target=bar, client=browser))
 
         with s._callback_lock:  # the session busy with an earlier event
             clicks = [threading.Thread(target=click) for _ in range(2)]
@@ -450,3 +464,38 @@ def test_clicks_sent_while_the_session_is_busy_are_each_handled():
         _wait(lambda: s.clock > before + 1.5 * STEP_FRACTION)
         step = max(STEP_FRACTION, 1.0 / max(s.drawing.n_frames - 1, 1))
         assert s.clock == pytest.approx(before + 2 * step)
+
+
+def test_two_different_clicks_close_together_are_each_the_button_clicked():
+    """Pause, then a step forward, while the session is busy: viser sets the group's value to each
+    button in turn and runs the callbacks later; both clicks were read as the step (the run played
+    on, two steps taken). Each click is the button it was: paused, then one step."""
+    from theoria.app.session import FORWARD, PAUSE
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        s._set_playing(True)
+        bar, browser = s.playback, object()
+
+        def click(button):  # viser's loop: the value set, then the callbacks: a coroutine at once, others on its pool
+            object.__setattr__(bar, "value", button)
+            for cb in bar._cbs:
+                event = types.SimpleNamespace(target=bar, client=browser)
+                if inspect.iscoroutinefunction(cb):
+                    asyncio.run(cb(event))
+                else:
+                    FakeGui._thread_executor.submit(cb, event)
+
+        done = []
+        real_step, real_toggle = s._step, s._toggle_play
+        s._step = lambda k: (done.append(("step", k)), real_step(k))
+        s._toggle_play = lambda: (done.append("play/pause"), real_toggle())
+        with s._callback_lock:  # the session busy with an earlier event
+            loop = threading.Thread(target=lambda: (click(PAUSE), click(FORWARD)))
+            loop.start()
+            loop.join(10)
+            time.sleep(0.2)
+            assert done == []
+        _wait(lambda: len(done) >= 2)
+        time.sleep(0.2)
+        assert done == ["play/pause", ("step", 1)] and not s.playing
