@@ -100,6 +100,25 @@ SETUP = r"""
     if (t && t.getAttribute && t.getAttribute('role') === 'slider'
         && /^(Arrow(Left|Right|Up|Down)|Home|End|Page(Up|Down))$/.test(e.key)) e.stopPropagation();
   });
+  // ← and → step the clock; viser's camera turns on them too (its keys listen on the document), so
+  // one key stepped and turned the view: past the hotkeys (on the root element) they stop there
+  const typing = (t) => t && t.closest && !!t.closest('input, textarea, select, [contenteditable=true]');
+  document.documentElement.addEventListener('keydown', (e) => {
+    if ((e.key === 'ArrowLeft' || e.key === 'ArrowRight') && !typing(e.target)) e.stopPropagation();
+  });
+  // A scene or a preset chosen from its list kept the focus in the list's search box, where the
+  // keys (Space, 1–9, ← →) were typed as a search: the box lets go once a choice is made.
+  const chosen = () => setTimeout(() => {
+    const a = document.activeElement;
+    if (a && a.closest && a.closest('.mantine-Select-root')) a.blur();
+  }, 0);
+  document.addEventListener('click', (e) => {
+    if (e.target && e.target.closest && e.target.closest('.mantine-Select-option, [role=option]')) chosen();
+  }, true);
+  document.addEventListener('keydown', (e) => {
+    if (e.key === 'Enter' && e.target && e.target.closest && e.target.closest('.mantine-Select-root')
+        && e.target.getAttribute('aria-expanded') === 'true') chosen();
+  }, true);
   // A number typed into a slider's box is the user's text until Enter or the box loses focus,
   // then sent as typed, once; the server parses it as a text field's value (exactly, or refused
   // with the allowed range; app/controls.py). The box is Mantine's NumberInput: it dropped an
@@ -113,6 +132,11 @@ SETUP = r"""
     return s && s.classList.contains('mantine-Slider-root') && s.id ? s : null;
   };
   const VALUE = Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, 'value');
+  // The box's blur is kept from React too, so the number field's caret keeper still thinks it has
+  // the focus, and on the next value the server sends (the time, twice a second while playing; a
+  // preset's values) it called focus() on the box: Space, ← and → then typed into the time's box
+  // instead of playing and stepping. A box takes the focus from the user only.
+  const FOCUS = HTMLInputElement.prototype.focus;
   T.held = (t) => {
     if (t.__theoria) return t.__theoria;
     const inner = Object.getOwnPropertyDescriptor(t, 'value') || VALUE;  // React's value tracker's
@@ -120,6 +144,7 @@ SETUP = r"""
     Object.defineProperty(t, 'value', {configurable: true,
       get() { return inner.get.call(this); },
       set(v) { h.shown = v; if (!h.editing) inner.set.call(this, v); }});
+    t.focus = function (...a) { if (document.activeElement === this) return FOCUS.apply(this, a); };
     return h;
   };
   T.hold = (t) => { const h = T.held(t); if (!h.editing) { h.editing = true; h.typed = false; } };

@@ -361,6 +361,48 @@ def test_an_arrow_key_on_a_focused_slider_moves_the_slider_only(browser, app):
         assert _wait_for(lambda: s.clock > clock, limit=10.0)
 
 
+def test_keys_keep_playing_and_stepping_after_a_typed_time_and_a_chosen_scene(browser, app):
+    """Three ways the keys were taken from a teacher: after a time typed into its box, the number
+    field, which had not seen the box lose the focus, took it back when playback moved the time
+    (Space and ← → then typed into the box); ← → also turned the camera; and a scene chosen from its
+    list kept the focus in the list's search box (Space and the digits were typed as a search)."""
+    from theoria.app import gallery
+    from theoria.scenarios import get
+
+    flip, tumble = get("middle-axis-flip"), get("free-tumble")
+    with _scene(browser, app, flip) as (page, s):
+        page.get_by_role("button", name="Pause").click()
+        assert _wait_for(lambda: not s.playing)
+        box = _near(page, "Time (% of the run)", "input.mantine-NumberInput-input")
+        box.click()
+        box.press("Control+a")
+        box.type("50")
+        box.press("Enter")
+        assert _wait_for(lambda: abs(s.scrub.value - 50) < 1e-9)
+        page.mouse.click(300, 500)
+        camera = page.evaluate(CAMERA_WORLD_JS)
+        page.keyboard.press("Space")
+        assert _wait_for(lambda: s.playing, limit=10.0)
+        time.sleep(2.0)  # playback moves the time's box four times
+        assert page.evaluate("document.activeElement.tagName") == "BODY"
+        page.keyboard.press("Space")
+        assert _wait_for(lambda: not s.playing, limit=10.0)
+        clock = s.clock
+        page.keyboard.down("ArrowRight")  # held a moment, as a hand does: the camera turned while it was down
+        time.sleep(0.4)
+        page.keyboard.up("ArrowRight")
+        assert _wait_for(lambda: s.clock > clock, limit=10.0)
+        time.sleep(0.5)
+        assert max(abs(a - b) for a, b in zip(page.evaluate(CAMERA_WORLD_JS), camera)) < 1e-6, "the key turned the camera"
+        _near(page, "Scene", ".mantine-Select-input").click()
+        page.locator("[role=option]", has_text=gallery.label(tumble)).first.click()
+        assert _wait_for(lambda: s.drawing_spec == tumble.name and s.updates >= 1, limit=WAIT_MS / 1000)
+        playing = s.playing
+        page.keyboard.press("Space")
+        assert _wait_for(lambda: s.playing != playing, limit=10.0)
+        assert page.evaluate("document.activeElement.tagName") == "BODY"
+
+
 # the body's orientation on the page, each animation frame for `seconds`: frames drawn, poses seen
 POSES_JS = """(seconds) => new Promise(resolve => {
   const m = window.__viserMutable.nodeRefFromName;
