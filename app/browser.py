@@ -58,16 +58,25 @@ SETUP = r"""
     if (r.left <= c.left + c.width / 2) return 0;  // not a panel on the right
     return Math.max(0, c.right - r.left);
   };
+  // A scene is framed for the canvas beside the docked panel at 1280x800 (~1.1 wide for 1 high);
+  // a narrower canvas (a small window, a phone held upright) would cut the sides of the scene off
+  // (collinear's third body, the Moon's face seen from the Earth): there the camera zooms out
+  // until the scene is as wide as in the canvas it was framed for. (The camera's zoom, not its
+  // distance: a student's wheel moves the distance, and the link keeps it.)
+  T.ASPECT = 1.1;
   T.frame = () => {
     const m = window.__viserMutable;
     if (!m || !m.camera || !m.canvas) return;
     const w = m.canvas.clientWidth, h = m.canvas.clientHeight;
     if (!w || !h) return;
-    const dx = Math.round(T.covered() / 2);
+    const dx = Math.round(T.covered() / 2), zoom = Math.min(1, w / h / T.ASPECT);
     const v = m.camera.view;
-    if (v && v.enabled && v.offsetX === dx && v.fullWidth === w && v.fullHeight === h) return;
+    const offset = dx === 0 ? !(v && v.enabled) : (v && v.enabled && v.offsetX === dx && v.fullWidth === w && v.fullHeight === h);
+    if (offset && Math.abs(m.camera.zoom - zoom) < 1e-3) return;
     if (dx === 0) { if (v && v.enabled) m.camera.clearViewOffset(); }
     else m.camera.setViewOffset(w, h, dx, 0, w, h);
+    if (m.cameraControl && m.cameraControl.zoomTo) m.cameraControl.zoomTo(zoom, false);  // it keeps the camera's zoom
+    else m.camera.zoom = zoom;
     m.camera.updateProjectionMatrix();
     if (m.requestRender) m.requestRender();
   };

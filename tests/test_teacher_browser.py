@@ -403,6 +403,38 @@ def test_keys_keep_playing_and_stepping_after_a_typed_time_and_a_chosen_scene(br
         assert page.evaluate("document.activeElement.tagName") == "BODY"
 
 
+# where each of the scene's bodies is drawn on the canvas, in the camera's normalised coordinates
+# (−1 … 1 across the canvas): the bodies' nodes, projected by the page's own camera
+BODIES_ON_CANVAS_JS = """() => { const m = window.__viserMutable, out = {};
+  m.camera.updateMatrixWorld(); m.camera.updateProjectionMatrix();
+  for (const [name, o] of Object.entries(m.nodeRefFromName)) {
+    if (!o || !/^\\/world\\/bodies\\/[^/]+$/.test(name)) continue;
+    const p = new o.position.constructor(); o.getWorldPosition(p); p.project(m.camera);
+    out[name] = [p.x, p.y];
+  }
+  return out; }"""
+
+
+def test_a_narrow_window_shows_every_body_of_the_scene(browser, app):
+    """At 800x600 the canvas beside the docked panel is 412 px wide, narrower than high: the
+    scene, framed for 1280x800, lost its sides (collinear's third body C under the panel's edge).
+    The camera zooms out until the scene is as wide as in the canvas it was framed for."""
+    from theoria.scenarios import get
+
+    base, sessions = app
+    spec = get("collinear")
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(spec, play="0"), 800, 600)
+    try:
+        _session_for(sessions, before, spec.name)
+        page.wait_for_function(f"Object.keys(({BODIES_ON_CANVAS_JS})()).length >= 3", timeout=WAIT_MS)
+        time.sleep(1.0)  # the page frames the camera every half second
+        where = page.evaluate(BODIES_ON_CANVAS_JS)
+        assert len(where) >= 3 and all(abs(x) < 1 and abs(y) < 1 for x, y in where.values()), where
+    finally:
+        ctx.close()
+
+
 # the body's orientation on the page, each animation frame for `seconds`: frames drawn, poses seen
 POSES_JS = """(seconds) => new Promise(resolve => {
   const m = window.__viserMutable.nodeRefFromName;
