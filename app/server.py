@@ -107,7 +107,7 @@ class Gate:
         self.closing = False
         self.tokens = GUI_BURST
         self.t = time.monotonic()
-        self.pending: dict[str, object] = {}
+        self.pending: dict[object, object] = {}  # a control (or a click) → its message waiting for the rate
         self.flush_at: float | None = None
         self.camera_t = 0.0
         self.camera_pending = None
@@ -153,13 +153,16 @@ class Gate:
             if why:
                 self._drop(why)
                 return
-            if message.uuid in self.pending:
+            # a control's newest value replaces its older one still waiting; a click is never
+            # merged (Back then Step, over the rate after a drag, had become one Step)
+            key = (message.uuid, self.seen) if self._is_button(client_id, message.uuid) else message.uuid
+            if key in self.pending:
                 self.coalesced += 1
-                del self.pending[message.uuid]  # the newest value goes to the end
+                del self.pending[key]  # the newest value goes to the end
             elif len(self.pending) >= MAX_PENDING:
                 self.dropped += 1
                 return
-            self.pending[message.uuid] = message
+            self.pending[key] = message
             self._pump()
             return
         if typ in ACTIONS:
@@ -189,6 +192,11 @@ class Gate:
         self.door.refused[typ.__name__] = self.door.refused.get(typ.__name__, 0) + 1
         self.door.log.line(f"theoria: ignored a {typ.__name__} message from {self.address} "
                            "(not something this app offers; logged once)", once_key=("type", typ.__name__))
+
+    def _is_button(self, client_id, uuid) -> bool:
+        client = self.door.server._connected_clients.get(client_id)
+        target = client and client.gui._gui_input_handle_from_uuid.get(uuid)
+        return bool(target is not None and getattr(target._impl, "is_button", False))
 
     def _dispatch(self, client_id, message) -> None:
         if type(message) is vm.GuiUpdateMessage:

@@ -524,7 +524,7 @@ class ClientSession:
                 self._safe(fn, button)
             elif self._enqueue(fn, (button,), None):
                 try:
-                    self.client.gui._thread_executor.submit(self._drain)
+                    self.client.gui._thread_executor.submit(self._drain).add_done_callback(self._drained)
                 except RuntimeError:  # the server is stopping: its pool takes nothing more
                     with self._waiting_lock:
                         self._handling = False
@@ -547,6 +547,8 @@ class ClientSession:
         with self._waiting_lock:
             if self._closed:
                 return False
+            if key is not None:  # the newer value goes where the user's latest action is: last
+                self._waiting.pop(key, None)
             self._waiting[key if key is not None else object()] = (fn, args)
             if self._handling:
                 return False
@@ -554,7 +556,9 @@ class ClientSession:
             return True
 
     def _drain(self) -> None:
-        """Handle the session's waiting events in order until none is left."""
+        """Handle the session's waiting events in order until none is left. An error that gets
+        past a callback's own guard is logged and the line goes on: the events behind it (a
+        slider's last value) are still handled."""
         while True:
             with self._waiting_lock:
                 if not self._waiting or self._closed:
@@ -566,10 +570,21 @@ class ClientSession:
                 with self._callback_lock:
                     if not self._closed:
                         self._safe(fn, *args)
+            except Exception as e:
+                self._log_error(e)
             except BaseException:  # never leave the session's line without a thread to handle it
                 with self._waiting_lock:
                     self._handling = False
                 raise
+
+    def _drained(self, future) -> None:
+        e = None if future.cancelled() else future.exception()
+        if e is not None:
+            self._log_error(e)
+
+    def _log_error(self, e: BaseException) -> None:
+        self.worker.pool.logger.line("theoria: error in a browser's callback:\n" + "".join(
+            traceback.format_exception(type(e), e, e.__traceback__)), once_key=("callback", type(e).__name__, _where(e)))
 
     def _safe(self, fn, *args) -> None:
         """Run a callback (playback giving way meanwhile); no exception reaches viser's loop, and
@@ -584,8 +599,7 @@ class ClientSession:
             self._notify_bad(e)
             self._restore_control(e.name)
         except Exception as e:  # a bug in a scenario or the scene must not kill the server
-            self.worker.pool.logger.line("theoria: error in a browser's callback:\n" + traceback.format_exc(),
-                                         once_key=("callback", type(e).__name__, _where(e)))
+            self._log_error(e)
             self.notify("Something went wrong", f"{type(e).__name__}; the scene keeps its last good state")
 
     def _set_title(self) -> None:

@@ -250,6 +250,35 @@ def test_flood_of_updates_is_coalesced_and_does_not_starve_another_client():
         assert final == 9.5
 
 
+def test_clicks_over_the_rate_are_each_handled_in_order(monkeypatch):
+    """A browser over its rate (a slider dragged at forty values) then clicks Back, Step, Step: the
+    gate merged a control's updates while they waited for the rate, the button group's clicks too,
+    and the three clicks became one Step. Each click reaches the session, in order."""
+    from theoria.app import session as session_mod
+
+    seen = []
+    real = session_mod.ClientSession._on_playback
+    monkeypatch.setattr(session_mod.ClientSession, "_on_playback",
+                        lambda self, which: (seen.append(which), real(self, which))[1])
+    with _server() as (srv, sessions, url, log):
+        async def main():
+            c = ViserProtocolClient(url)
+            await c.connect()
+            assert await c.wait_for(lambda: c.update_no >= 1, 120)
+            slider, bar = c.uuid_of(SLIDER), c.uuid_of("Playback")
+            for k in range(40):
+                await c.send_gui(slider, round(3.0 + 0.1 * k, 1))
+            for button in (session_mod.BACK, session_mod.FORWARD, session_mod.FORWARD):
+                await c.send_gui(bar, button)
+            ok = await c.wait_for(lambda: len(seen) >= 3, 60)
+            await asyncio.sleep(1.0)
+            await c.close()
+            return ok
+
+        assert asyncio.run(main()), seen
+        assert seen == [session_mod.BACK, session_mod.FORWARD, session_mod.FORWARD]
+
+
 def test_students_dragging_the_shape_neither_hold_up_another_nor_outlive_their_tabs(monkeypatch):
     """Ten students drag "Exaggerate the shape" at the gate's own rate (every value passes) while an
     eleventh chooses presets. Each value waited in a thread of viser's pool for the drawing before

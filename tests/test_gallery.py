@@ -466,6 +466,75 @@ def test_clicks_sent_while_the_session_is_busy_are_each_handled():
         assert s.clock == pytest.approx(before + 2 * step)
 
 
+def test_a_newer_value_waits_behind_the_actions_before_it():
+    """Scrub to 10 %, Step, scrub to 50 %, all while the session is busy: the newer scrub took the
+    older one's place in the line, ahead of the Step, and the clock ended a step past 50 %. The
+    newer value goes last, where the user's latest action is: the clock ends at 50 %."""
+    from theoria.app.session import FORWARD
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        s._set_playing(False)
+        browser, bar, scrub = object(), s.playback, s.scrub
+
+        def hold():  # an earlier event of the browser, still being handled
+            pass
+
+        def move(value):  # as viser does: the value and its time set as the message arrives
+            object.__setattr__(scrub, "value", value)
+            object.__setattr__(scrub, "update_timestamp", time.time())
+            for cb in scrub._cbs:
+                cb(types.SimpleNamespace(target=scrub, client=browser))
+
+        def click(button):
+            object.__setattr__(bar, "value", button)
+            for cb in bar._cbs:
+                _call(cb, types.SimpleNamespace(target=bar, client=browser))
+
+        with s._callback_lock:
+            first = threading.Thread(target=s._browser_event, args=(hold,))
+            first.start()
+            _wait(lambda: s._handling and not s._waiting)  # its thread waits for the session
+            move(10.0)
+            click(FORWARD)
+            move(50.0)
+        first.join(10)
+        _wait(lambda: not s._handling)
+        assert s.clock == pytest.approx(0.5) and not s.playing
+
+
+def test_an_error_past_a_callbacks_guard_does_not_strand_the_events_behind_it(monkeypatch):
+    """Something raising past a callback's own guard left the session's line without a thread while
+    the events behind it waited (a slider's last value never applied until the browser sent another).
+    It is logged and the line goes on."""
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        done = []
+        real = s._safe
+
+        def broken(fn, *args):
+            if fn is boom:
+                raise RuntimeError("past the guard")
+            return real(fn, *args)
+
+        def boom():
+            pass
+
+        def hold():
+            pass
+
+        monkeypatch.setattr(s, "_safe", broken)
+        with s._callback_lock:
+            first = threading.Thread(target=s._browser_event, args=(hold,))
+            first.start()
+            _wait(lambda: s._handling and not s._waiting)  # its thread waits for the session
+            s._browser_event(boom)
+            s._browser_event(lambda: done.append("after"))
+        first.join(10)
+        _wait(lambda: not s._handling)
+        assert done == ["after"] and not s._waiting
+
+
 def test_two_different_clicks_close_together_are_each_the_button_clicked():
     """Pause, then a step forward, while the session is busy: viser sets the group's value to each
     button in turn and runs the callbacks later; both clicks were read as the step (the run played
