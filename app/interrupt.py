@@ -230,6 +230,9 @@ class Held:
         self.signals.clear()
 
 
+_holding: list[Held] = []  # the `signals_held` blocks the main thread is in, outermost first
+
+
 @contextlib.contextmanager
 def signals_held():
     """Ctrl-C and SIGTERM wait for the end of the block (or its next `Held.check`), then take
@@ -244,6 +247,14 @@ def signals_held():
     held = Held()
     if threading.current_thread() is not threading.main_thread():
         yield held
+        return
+    if _holding:  # inside another such block: its handler holds the signals for both, and counts them
+        held.signals = _holding[-1].signals  # (a second Ctrl-C stops both, as it stops one)
+        _holding.append(held)
+        try:
+            yield held
+        finally:
+            _holding.pop()
         return
     old = {}
     stopped = False
@@ -264,10 +275,13 @@ def signals_held():
             previous = signal.getsignal(s)
             if previous is not None and previous is not signal.SIG_IGN:  # one installed from C cannot be put back
                 old[s] = signal.signal(s, note)
+        _holding.append(held)
         yield held
     except _Stopped:
         stopped = True
     finally:
+        if _holding and _holding[-1] is held:
+            _holding.pop()
         for s, h in old.items():
             signal.signal(s, h)
         for s in dict.fromkeys(held.signals):  # each signal once, in the order it came

@@ -1101,23 +1101,31 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
             client, local, where, owned = _client(cluster, workers)
             summary.cluster = where
             threads = 1 if local is not None else None
+            failed = False
             with _quiet_distributed(local is not None):  # to the cluster's last line
                 try:
                     writer.create()
+                    # held from here (the chunks' own stop handler in front while they run), so that
+                    # none comes between that handler's end and the shutdown
+                    held = to_the_end.enter_context(signals_held())
                     with _Stop() as stop, _progress(progress, plan.size, sum(_nruns(regions[i]) for i in done),
                                                     sc.name) as bar:
+                        if held.signals:  # one came just before the chunks' handler: it stops them
+                            stop.flag, stop.signum = True, held.signals[0]
+                            held.drop()
                         interrupted = _drive(client, plan, regions, todo, writer, stop, bar, counts, summary,
                                              threads, on_chunk)
                         if interrupted:
                             summary.signal = signal.Signals(stop.signum).name if stop.signum else "KeyboardInterrupt"
                 except BaseException:
+                    failed = True
                     if summary.chunks_computed == 0:  # a new sweep that failed with nothing finished leaves nothing
                         writer.discard()
                     raise
                 finally:
-                    held = to_the_end.enter_context(signals_held())
+                    held = held or to_the_end.enter_context(signals_held())
                     try:
-                        if interrupted and local is not None:
+                        if (interrupted or failed) and local is not None:
                             _stop_workers(local)  # a worker deep in a long chunk would hold the exit for minutes
                         if owned:
                             client.close()
@@ -1194,6 +1202,8 @@ def _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, thre
     checked_metrics = plan.metrics is None
     try:
         while True:
+            if summary.chunks_computed == len(todo):  # every chunk written: a stop now changes nothing
+                return False
             if stop.flag:
                 return True
             try:

@@ -587,6 +587,34 @@ def test_a_signal_held_is_raised_once_the_block_ends():
     assert reached == ["end of block"]
 
 
+def test_blocks_that_hold_signals_inside_one_another_hold_them_as_one():
+    """A sweep's shutdown holds Ctrl-C while its store's methods hold it again inside: the inner
+    block passed a second Ctrl-C to the outer one, which held it as a first, and it took four to
+    stop a shutdown that hung. Nested blocks hold a signal once, and a second one stops both; a
+    single held one is raised once, at the outer block's end."""
+    from theoria.app import interrupt
+
+    reached = []
+    with interrupt.cli_signals():
+        with pytest.raises(KeyboardInterrupt):
+            with interrupt.signals_held():
+                with interrupt.signals_held():
+                    os.kill(os.getpid(), signal.SIGINT)
+                    time.sleep(0.05)
+                    os.kill(os.getpid(), signal.SIGINT)
+                    time.sleep(0.05)
+                    reached.append("after the second Ctrl-C")
+        with pytest.raises(KeyboardInterrupt):
+            with interrupt.signals_held():
+                with interrupt.signals_held():
+                    os.kill(os.getpid(), signal.SIGINT)
+                    time.sleep(0.05)
+                    reached.append("end of the inner block")
+                reached.append("end of the outer block")
+        assert signal.getsignal(signal.SIGINT) is interrupt._handler and not getattr(interrupt, "_holding", [])
+    assert reached == ["end of the inner block", "end of the outer block"]
+
+
 def test_a_signal_inside_set_name_is_not_turned_into_a_runtime_error():
     """Python (3.11) wraps an exception raised in `__set_name__` (run while a class is made, e.g.
     on importing a module) in a RuntimeError: a Ctrl-C there ended a command with a traceback and
