@@ -171,6 +171,10 @@ def whole_number(value) -> int:
         raise ValueError(f"not a whole number: {value!r}")
     if isinstance(value, (int, np.integer)):
         return int(value)
+    if isinstance(value, (bytes, bytearray)):  # float() reads bytes as text, "1_0" included
+        raise ValueError(f"not a whole number: {value!r}")
+    if isinstance(value, str) and re.fullmatch(r"[+-]?[0-9]+", value.strip()):
+        return int(value.strip())  # exactly: a seed of twenty digits is not rounded through a float
     v = read_number(value) if isinstance(value, str) else float(value)
     if not math.isfinite(v) or v != int(v):
         raise ValueError(f"not a whole number: {value!r}")

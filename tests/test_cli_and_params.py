@@ -308,3 +308,16 @@ def test_bare_theoria_lists_what_there_is_to_do(capsys):
     assert main([]) == 2
     err = capsys.readouterr().err
     assert all(c in err for c in ("serve", "run", "record", "export", "replay", "sweep", "check", "bench")), err
+
+
+def test_a_whole_number_given_as_text_is_read_exactly():
+    """Counts and seeds typed as text went through a float: a twenty-digit seed came back as another
+    number (…891 as …168), and bytes were read as text ("1_0" as 10)."""
+    from theoria.physics.params import whole_number
+
+    assert whole_number("12345678901234567891") == 12345678901234567891
+    assert whole_number("9007199254740993") == 9007199254740993  # 2⁵³ + 1, which a float cannot hold
+    assert whole_number(" +42 ") == 42 and whole_number("1e3") == 1000
+    for bad in (b"1_0", bytearray(b"10"), "1_0", "２", "2.5", True):
+        with pytest.raises(ValueError):
+            whole_number(bad)
