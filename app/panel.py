@@ -15,7 +15,7 @@ import numpy as np
 
 from ..scenarios.units import NAME_SUFFIXES, unit_in_name
 from . import gallery
-from .format import capitalised, human_number
+from .format import capitalised, human_number, readable
 
 UPLOT_POINTS = 2000  # points per series in the live plot
 
@@ -99,7 +99,7 @@ _WORDS = {"rel": "relative", "abs": "absolute", "err": "error", "max": "largest"
           "eta": "η", "phi": "φ", "theta": "θ", "psi": "ψ", "eps": "ε", "delta": "δ", "alpha": "α",
           "beta": "β", "gamma": "γ", "L": "L", "gp": "Goldreich–Peale", "k2": "k²", "mprime": "M′ term",
           "peale": "Peale's", "de421": "DE421", "iau2000": "IAU 2000", "iau2006": "IAU 2006", "vondrak": "Vondrák",
-          "me": "mean-Earth axes", "plus": "+", "minus": "−"}
+          "me": "mean-Earth axes", "plus": "+", "minus": "−", "floquet": "Floquet"}
 # pieces of a key read as one (before the key is cut at its underscores)
 _FORMS = [(re.compile(r"(?<![a-z0-9])(\d+)_(\d+)(yr|d)(?=_|$)"),  # 18_6yr: the 18.6-year term
            lambda m: f"{m[1]}.{m[2]}-{'year' if m[3] == 'yr' else 'day'}"),
@@ -180,10 +180,10 @@ def compare_html(result) -> str:
             f"<tr><th></th><th style='{th}'>Euler</th><th style='{th}'>simulated</th><th style='{th}'>modern</th></tr>"]
     for c in result.comparisons:
         unit = gallery.pretty_unit(c.unit)
-        label = html.escape(c.label) + (f" <span style='color:#666'>({html.escape(unit)})</span>"
+        label = html.escape(readable(c.label)) + (f" <span style='color:#666'>({html.escape(unit)})</span>"
                                         if _unit_not_in(c.label, unit) else "")
         words, tone = verdict(c)
-        note = f"<div style='color:#666;font-size:0.85em'>{html.escape(c.note)}</div>" if c.note else ""
+        note = f"<div style='color:#666;font-size:0.85em'>{html.escape(readable(c.note))}</div>" if c.note else ""
         cell = "padding:1px 4px;text-align:right;white-space:nowrap;font-variant-numeric:tabular-nums"
         rows.append(
             f"<tr><td colspan='4' style='padding:8px 0 1px 0;border-top:1px solid #ddd'><b>{label}</b></td></tr>"
@@ -200,7 +200,7 @@ def warnings_html(result) -> str:
     """The run's warnings (outside a formula's validity, diverged, …) as a yellow note; "" if none."""
     if result is None or not result.warnings:
         return ""
-    items = "".join(f"<li>{html.escape(w)}</li>" for w in result.warnings)
+    items = "".join(f"<li>{html.escape(readable(w))}</li>" for w in result.warnings)
     return ("<div style='background:#fff4d6;border-left:4px solid #e0a800;padding:4px 8px;margin:0 0 6px 0;"
             f"font-size:0.9em'><b>Note</b><ul style='margin:2px 0 2px 16px;padding:0'>{items}</ul></div>")
 
@@ -221,7 +221,7 @@ def notes_markdown(result) -> str:
     if result is None:
         return ""
     notes = [n for n in result.notes if n not in result.warnings]
-    return "\n\n".join(f"*{_md(n)}*" for n in notes)
+    return "\n\n".join(f"*{_md(readable(n))}*" for n in notes)
 
 
 def comparison_markdown(result) -> str:
@@ -231,20 +231,20 @@ def comparison_markdown(result) -> str:
         return ""
     lines = []
     for w in result.warnings:
-        lines.append(f"> **Note:** {_md(w)}")
+        lines.append(f"> **Note:** {_md(readable(w))}")
     if result.warnings:
         lines.append("")
     if result.comparisons:
         lines += ["| | Euler | simulated | modern | |", "|---|---|---|---|---|"]
         for c in result.comparisons:
             unit = gallery.pretty_unit(c.unit)
-            label = (c.label + (f" ({unit})" if _unit_not_in(c.label, unit) else "")).replace("|", "\\|")
+            label = (readable(c.label) + (f" ({unit})" if _unit_not_in(c.label, unit) else "")).replace("|", "\\|")
             lines.append(f"| {label} | {human_number(c.euler)} | {human_number(c.simulated)} | "
                          f"{human_number(c.modern)} | {verdict(c)[0]} |")
         lines.append("")
     for n in result.notes:
         if n not in result.warnings:
-            lines.append(f"\n*{_md(n)}*")
+            lines.append(f"\n*{_md(readable(n))}*")
     return "\n".join(lines)
 
 

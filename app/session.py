@@ -43,7 +43,7 @@ from . import browser, gallery, page, playback
 from . import link as linkmod
 from .controls import ParamControls, PerThread, number_param, on_typed
 from .export_html import configure_scene
-from .format import capitalised, human_number
+from .format import capitalised, human_number, readable
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
                     read_markdown, y_axis_px)
 from .scene import SceneView
@@ -467,7 +467,7 @@ class ClientSession:
                 allowed = allowed.replace(f" {p.unit}", f" {p.unit_text()}" if p.unit_text() else "")
         except KeyError:
             who = {"parameters": "These values", "preset": "Preset", "scenario": "Scene"}.get(e.name, e.name)
-        return who, allowed
+        return who, readable(allowed)
 
     def _notify_bad(self, e: ParameterError, tail: str = "", spec=None) -> None:
         who, allowed = self._words_for(e, spec)

@@ -1600,7 +1600,7 @@ def limits_text() -> str:
     try:
         from theoria.scenarios.budget import MAX_MEMORY, MAX_STEPS  # the step and memory budget, when present
 
-        budget = f", at most {MAX_STEPS:.0e} integrator steps and {MAX_MEMORY / 1e9:g} GB".replace("e+0", "e")
+        budget = f", at most {MAX_STEPS / 1e6:g} million integrator steps and {MAX_MEMORY / 1e9:g} GB"
     except ImportError:
         pass
     return (f"*This server runs one simulation per browser at a time (a newer request replaces it){budget}, "

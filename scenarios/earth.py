@@ -285,8 +285,8 @@ def _earth(values, progress=None):
         f"eccentricities (1 − e²)^(3/2) and the Moon's inclination 1/(1 − 3/2 sin² i) (together {100 * (f_e - 1):+.2f}%).",
         "The pole measured is the figure axis without its diurnal circle (Euler's 'true pole', §848: the centre of "
         "that circle; the CIP of a rigid Earth), L̂ − A(L̂ × τ)/|L|²; its path is fitted by least squares to a line "
-        "plus sin/cos of the fundamental arguments taken from the simulated orbits. Metrics ending in "
-        "_momentum_axis are the same fit for the angular-momentum axis.",
+        "plus sin/cos of the fundamental arguments taken from the simulated orbits. The numbers named "
+        "for the momentum axis are the same fit for the angular-momentum axis.",
         "The annual term is left out of the metrics: l' and 2L☉ − l' share the annual frequency and cannot be "
         "told apart by the fit.",
         f"Solar part {parts['sun']:.3f}″/yr, lunar part {parts['moon']:.3f}″/yr (each from a run with that body alone); "

@@ -94,7 +94,7 @@ def _syzygy(values, progress=None):
     }
     comps = [
         Comparison("syzygy distance (lunar distances)", (sz.EULER_N_SQUARED / 3.0) ** (1.0 / 3.0), b_lunar, None, "c",
-                   "Euler: v ≈ c·(n²/3)^{1/3} with n² = 175, 'about four'; simulated: root of §7/§9 with today's n, m"),
+                   "Euler: v ≈ c·∛(n²/3) with n² = 175, 'about four'; simulated: root of §7/§9 with today's n, m"),
         Comparison("α = v/a: Euler's §7 equation vs the restricted problem's quintic", alpha_e, alpha, None, "",
                    "Euler pulls the Moon toward the Sun with a³ = G(M☉ + M⊕) where the Sun alone gives "
                    "a³(1 − μ); simulated: the collinear point (quintic) the run sits at"),
@@ -355,7 +355,7 @@ def e12_distance():
     rel = abs(eu / b - 1)
     return dict(euler=eu, simulated=b, modern=None, rel_error=rel, tolerance=sz.equilibrium_conjunction(m) + 0.01,
                 unit="lunar distances",
-                note="Euler's first approximation (n²/3)^{1/3} with n² = 175 against the root with today's m, n; "
+                note="Euler's first approximation ∛(n²/3) with n² = 175 against the root with today's m, n; "
                      "tolerance: the neglected α (1%) plus his n² = 175 vs 178.7 (0.7% in the cube root)")
 
 

@@ -144,7 +144,7 @@ def _simulate(values, progress=None):
                         "where the orbit-averaged tide vanishes"),
              Comparison("probability of capture into 3:2 (Goldreich & Peale 1966)", None, m["captured_3_2"],
                         m["gp_capture_probability_3_2"], "", "one run is captured (1) or not (0); a sweep over the "
-                        "initial angle measures the probability (as `theoria check` does)"),
+                        "initial angle measures the probability (as the check of this result does)"),
              Comparison("probability of ending in 1:1", None, m["captured_1_1"], m["gp_capture_probability_1_1"], "",
                         "passes 3:2 (and 2:1 if above it), then captured if q lies inside the 1:1 zone")]
     notes = [f"This run: {what}.",

@@ -23,3 +23,17 @@ def test_cells():
 def test_vectors():
     assert number([1.0, None, 2, math.nan], 3) == "1, –, 2, –"
     assert number(np.array([0.5, 1 / 3]), 3) == "0.5, 0.333" == number((0.5, 1 / 3), 3)
+
+
+def test_text_for_the_panel_is_written_as_a_person_writes_it():
+    """Refusals and notes reached the panel in a programmer's notation: "allowed range (0, 1e+06] s",
+    "at least 1e-100 rad/s", "needs A+B >= C", "θ = -0.00"."""
+    from theoria.app.format import readable
+
+    assert readable("allowed range (0, 1e+06] s") == "allowed range (0, 1 × 10⁶] s"
+    assert readable("at least 1e-100 rad/s") == "at least 1 × 10⁻¹⁰⁰ rad/s"
+    assert readable("keeps the ratio to 3.3e-04") == "keeps the ratio to 3.3 × 10⁻⁴"
+    assert readable("needs A+B >= C, x <= 1") == "needs A+B ≥ C, x ≤ 1"
+    assert readable("[-50, 50] rad/s; θ = -0.00") == "[−50, 50] rad/s; θ = −0.00"
+    # left as they are: years, names with digits, a hyphen between words
+    assert readable("1900-2100, DE421, k2, x-1, middle-axis") == "1900-2100, DE421, k2, x-1, middle-axis"

@@ -107,9 +107,12 @@ def raw_identifiers(text: str, spec, run) -> list[str]:
     nonword = {k for k in keys if not re.fullmatch(r"[A-Za-z]+", k) or k in ("gm",)}
     slugs = {s.name for s in all_scenarios() if "-" in s.name}  # "moon", "syzygy" are words too
     found = []
-    for tok in re.findall(r"[A-Za-z0-9_\-]+", text):
-        if re.fullmatch(r"[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)+", tok) or tok in nonword or tok in slugs:
+    for tok in re.findall(r"[A-Za-z0-9_\-+.]+", text):
+        tok = tok.strip(".")
+        if (re.fullmatch(r"_?[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)+", tok) or tok in nonword or tok in slugs
+                or re.fullmatch(r"[+-]?\d+(?:\.\d+)?[eE][+-]?\d+", tok)):  # a programmer's 1e-06
             found.append(tok)
+    found += re.findall(r"[<>]=|`", text)  # ">=" for ≥, code in backquotes
     return found
 
 
