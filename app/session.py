@@ -193,6 +193,11 @@ class ClientSession:
         if unknown:
             self._notify_bad(ParameterError("scenario", unknown, "the name of one of the scenes (the list at the top "
                                                           f"of the panel); {self.spec.title} is shown"))
+        speed = self._restore.speed if self._restore is not None else None
+        if speed is not None and not self.speed.min <= speed <= self.speed.max:
+            self._notify_bad(ParameterError("speed", speed, f"allowed range [{self.speed.min:g}, {self.speed.max:g}]"),
+                             " (from the link: the default is used)")
+            self._restore.speed = None
         if run is not None and run.scenario == self.spec.name:
             self.controls.set_values(run.params)
             self._apply(self.worker.adopt(self.spec, run.params), run, 0.0)
@@ -466,7 +471,8 @@ class ClientSession:
             if p.unit:
                 allowed = allowed.replace(f" {p.unit}", f" {p.unit_text()}" if p.unit_text() else "")
         except KeyError:
-            who = {"parameters": "These values", "preset": "Preset", "scenario": "Scene"}.get(e.name, e.name)
+            who = {"parameters": "These values", "preset": "Preset", "scenario": "Scene",
+                   "speed": "Playback speed"}.get(e.name, e.name)
         return who, readable(allowed)
 
     def _notify_bad(self, e: ParameterError, tail: str = "", spec=None) -> None:
@@ -946,7 +952,7 @@ class ClientSession:
         if restore.time is not None and drawing.n_frames > 1:
             self._set_clock_at(restore.time, drawing)
         if restore.speed is not None:
-            self.speed.value = float(np.clip(restore.speed, 0.1, 10.0))
+            self.speed.value = float(restore.speed)
         if restore.camera is not None:
             self._set_camera_from_link(restore.camera)
 

@@ -169,6 +169,21 @@ def test_a_link_with_nan_for_the_time_and_speed_leaves_the_clock_moving(monkeypa
         _wait(lambda: math.isfinite(s.clock) and s.clock != start, 30)
 
 
+@pytest.mark.parametrize("speed,used,told", [("100", 1.0, True), ("0.01", 1.0, True), ("2.5", 2.5, False)])
+def test_a_link_with_a_speed_out_of_range_says_so(monkeypatch, speed, used, told):
+    """speed=100 became 10 without a word, unlike every other value a link holds that is refused."""
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    monkeypatch.setattr(browser, "read_address",
+                        lambda client, timeout=3.0: f"http://127.0.0.1:1/?s=free-tumble&speed={speed}")
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        assert s.speed.value == used
+        notes = [(t, b) for t, b in client.notes if t == "Not allowed: Playback speed"]
+        assert bool(notes) == told and all("[0.1, 10]" in b and "default" in b for _, b in notes), client.notes
+
+
 @pytest.mark.parametrize("cam", ["0,0,0,0,0,0", "3,2,1,0,0,0,0,0,0"])
 def test_a_link_with_a_camera_the_view_cannot_take_still_shows_the_scene(monkeypatch, cam):
     """A camera at the point it looks at, or with no up direction: viser raised while the link was
