@@ -121,7 +121,7 @@ def metric_label(key: str, unit: str | None = None) -> str:
                 key = key.replace(f"_{suffix}_", "_", 1)
                 break
     unit = gallery.pretty_unit(unit or "")
-    key = re.sub(r"^d([a-z]+)_dt(?=_|$)", r"\1_rate", key)  # dspin_dt: the rate of the spin
+    key = re.sub(r"^d([a-z]+)_dt(?=_|$)", r"rate_of_change_of_\1", key)  # dspin_dt: not the spin rate itself
     for form, words in _FORMS:
         key = form.sub(words, key)
     words = []
@@ -132,6 +132,9 @@ def metric_label(key: str, unit: str | None = None) -> str:
             words.append(f"§{w}" if len(w) == 3 else w)
         else:
             words.append(_WORDS.get(w, w))
+    if len(words) > 1 and words[-1] == "Euler's":  # pole_speed_euler: Euler's pole speed
+        words = [words[-1], words[0].lower() if words[0][:1].isupper() and words[0][1:].islower() else words[0],
+                 *words[1:-1]]
     text = " ".join(words)
     text = capitalised(text)  # β stays β
     return f"{text} ({unit})" if unit else text

@@ -630,3 +630,14 @@ def test_what_is_drawn_offers_only_what_the_scene_draws():
         shown = {k for k, cb in s.toggles.items() if cb.visible}
         assert {"axes", "vectors", "polhode", "herpolhode", "energy_ellipsoid"} <= shown and s.exag.visible
         assert "bodies" not in shown  # a free body has no other body
+
+
+def test_a_rate_of_change_is_not_named_as_the_quantity():
+    """pole-near-axis listed dγ′/dt, in rad/s², as "Spin rate (rad/s²)": a spin rate in the wrong
+    unit to a reader. It is the rate of change of the spin; Euler's value of it says so first."""
+    from theoria.app.panel import metric_label
+
+    assert metric_label("dspin_dt", "rad/s^2") == "Rate of change of spin (rad/s²)"
+    assert metric_label("dspin_dt_euler", "rad/s^2") == "Euler's rate of change of spin (rad/s²)"
+    assert metric_label("pole_speed_euler", "rad/s") == "Euler's pole speed (rad/s)"
+    assert metric_label("forced_floquet_half_trace", "") == "Forced Floquet half trace"
