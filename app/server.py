@@ -433,6 +433,9 @@ def _quiet_libraries(log: RateLimitedLog) -> None:
     # a message field of the wrong type is warned about with the whole value (a camera message of
     # 100,000 numbers wrote 11 MB): the gate refuses such messages itself, with one line
     warnings.filterwarnings("ignore", message=r"\[viser\] .* does not match annotation")
+    # a tab closed while its scene was being drawn: the rest of that drawing goes nowhere, as it
+    # should (viser warns, with its source line, on the teacher's console)
+    warnings.filterwarnings("ignore", message=r"Queued a .* on a closed connection")
 
 
 class _RichThroughLog:
