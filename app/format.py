@@ -38,6 +38,11 @@ def number(x, digits: int = 6) -> str:
     return f"{v:.{digits}g}"
 
 
+def superscript(n: int) -> str:
+    """An exponent as it is written: −3 → "⁻³"."""
+    return str(int(n)).translate(_SUP)
+
+
 def human_number(x, digits: int = 4) -> str:
     """`digits` significant digits; plain decimals from 10⁻³ to 10⁶, else "2.80 × 10⁻¹¹"; a true
     minus sign; "–" for a missing or non-finite value. Vectors: comma-separated."""
@@ -61,7 +66,7 @@ def human_number(x, digits: int = 4) -> str:
     else:
         mant, exp = f"{v:.{digits - 1}e}".split("e")
         mant = mant.rstrip("0").rstrip(".") if "." in mant else mant
-        text = f"{mant} × 10{str(int(exp)).translate(_SUP)}"
+        text = f"{mant} × 10{superscript(int(exp))}"
     return text.replace("-", MINUS, 1) if text.startswith("-") else text
 
 

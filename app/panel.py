@@ -15,7 +15,7 @@ import numpy as np
 
 from ..scenarios.units import NAME_SUFFIXES, unit_in_name
 from . import gallery
-from .format import capitalised, human_number, readable
+from .format import capitalised, human_number, readable, superscript
 
 UPLOT_POINTS = 2000  # points per series in the live plot
 
@@ -38,6 +38,25 @@ def y_axis_px(series_values, px_per_char: float = 7.2, min_px: int = 50) -> int:
         text = f"{x:,.{decimals}f}"
         widest = max(widest, len(text))
     return int(max(min_px, np.ceil(widest * px_per_char + 15)))
+
+
+_PREFIXED_SECONDS = {3: "ms", 6: "µs", 9: "ns"}
+
+
+def time_axis(x: np.ndarray, words: str) -> tuple[np.ndarray, str]:
+    """A plot's time axis in a unit its ticks can show: uPlot labels ticks with at most three
+    decimals, so a run of 0.001 s read "0 0 0 0.001 0.001 0.001"; a span under 0.05 is shown in
+    thousandths (ms, µs for seconds; "10⁻³ days" for others). Returns the values and the unit's
+    words."""
+    x = np.asarray(x, float)
+    finite = x[np.isfinite(x)]
+    span = float(finite.max() - finite.min()) if finite.size else 0.0
+    if not 0.0 < span < 0.05:
+        return x, words
+    e = int(3 * math.ceil(-math.log10(span) / 3))
+    if words == "s" and e in _PREFIXED_SECONDS:
+        return x * 10.0 ** e, _PREFIXED_SECONDS[e]
+    return x * 10.0 ** e, f"10{superscript(-e)} {words}".strip()
 
 
 # ---- numbers as a person reads them ----------------------------------------------------------

@@ -45,7 +45,7 @@ from .controls import ParamControls, PerThread, number_param, on_typed
 from .export_html import configure_scene
 from .format import capitalised, human_number, readable
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
-                    read_markdown, y_axis_px)
+                    read_markdown, time_axis, y_axis_px)
 from .scene import SceneView
 from .worker import SimulationWorker, drawing_of, limits_text, timing_log
 
@@ -1081,8 +1081,9 @@ class ClientSession:
         series = dict(d.plot) or {"energy": self.result.trajectory.energy}
         idx = np.unique(np.linspace(0, len(t) - 1, min(UPLOT_POINTS, len(t))).round().astype(int))
         c = d.clock
-        data = (np.asarray(t)[idx] * c.scale,) + tuple(np.asarray(v, float)[idx] for v in series.values())
-        ser = ({"label": f"{c.name} ({c.words})" if c.words else c.name},) + tuple(
+        x, words = time_axis(np.asarray(t)[idx] * c.scale, c.words)
+        data = (x,) + tuple(np.asarray(v, float)[idx] for v in series.values())
+        ser = ({"label": f"{c.name} ({words})" if words else c.name},) + tuple(
             {"label": series_label(k), "stroke": "rgb(%d,%d,%d)" % palette(i), "width": 1.5}
             for i, k in enumerate(series))
         key = tuple(s["label"] for s in ser)

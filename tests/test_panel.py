@@ -641,3 +641,16 @@ def test_a_rate_of_change_is_not_named_as_the_quantity():
     assert metric_label("dspin_dt_euler", "rad/s^2") == "Euler's rate of change of spin (rad/s²)"
     assert metric_label("pole_speed_euler", "rad/s") == "Euler's pole speed (rad/s)"
     assert metric_label("forced_floquet_half_trace", "") == "Forced Floquet half trace"
+
+
+def test_a_short_runs_time_axis_is_in_a_unit_its_ticks_can_show():
+    """uPlot labels ticks with at most three decimals: a run of 0.001 s read "0 0 0 0.001 0.001
+    0.001" under its plot. Spans under 0.05 are shown in thousandths."""
+    from theoria.app.panel import time_axis
+
+    x, words = time_axis(np.linspace(0.0, 0.001, 11), "s")
+    assert words == "ms" and x[-1] == pytest.approx(1.0) and len({f"{v:.3f}" for v in x}) == 11
+    assert time_axis(np.linspace(0.0, 2e-7, 3), "s")[1] == "ns"
+    assert time_axis(np.linspace(0.0, 0.01, 3), "days")[1] == "10⁻³ days"
+    x, words = time_axis(np.linspace(0.0, 30.0, 3), "s")  # a span its ticks show already: as it is
+    assert words == "s" and x[-1] == 30.0
