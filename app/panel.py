@@ -151,9 +151,12 @@ def metric_label(key: str, unit: str | None = None) -> str:
             words.append(f"§{w}" if len(w) == 3 else w)
         else:
             words.append(_WORDS.get(w, w))
-    if len(words) > 1 and words[-1] == "Euler's":  # pole_speed_euler: Euler's pole speed
-        words = [words[-1], words[0].lower() if words[0][:1].isupper() and words[0][1:].islower() else words[0],
-                 *words[1:-1]]
+    if len(words) > 1 and words[-1] == "Euler's":
+        if words[-2] in ("from", "to", "of", "vs", "than", "with"):  # axis_angle_from_euler: from Euler
+            words[-1] = "Euler"
+        else:  # pole_speed_euler: Euler's pole speed
+            words = [words[-1], words[0].lower() if words[0][:1].isupper() and words[0][1:].islower() else words[0],
+                     *words[1:-1]]
     text = " ".join(words)
     text = capitalised(text)  # β stays β
     return f"{text} ({unit})" if unit else text

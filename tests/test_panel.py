@@ -641,6 +641,7 @@ def test_a_rate_of_change_is_not_named_as_the_quantity():
     assert metric_label("dspin_dt_euler", "rad/s^2") == "Euler's rate of change of spin (rad/s²)"
     assert metric_label("pole_speed_euler", "rad/s") == "Euler's pole speed (rad/s)"
     assert metric_label("forced_floquet_half_trace", "") == "Forced Floquet half trace"
+    assert metric_label("axis_angle_from_euler_rad", "rad") == "Axis angle from Euler (rad)"
 
 
 def test_a_short_runs_time_axis_is_in_a_unit_its_ticks_can_show():
