@@ -155,8 +155,7 @@ def metric_label(key: str, unit: str | None = None) -> str:
         if words[-2] in ("from", "to", "of", "vs", "than", "with"):  # axis_angle_from_euler: from Euler
             words[-1] = "Euler"
         else:  # pole_speed_euler: Euler's pole speed
-            words = [words[-1], words[0].lower() if words[0][:1].isupper() and words[0][1:].islower() else words[0],
-                     *words[1:-1]]
+            words = [words[-1], *words[:-1]]
     text = " ".join(words)
     text = capitalised(text)  # β stays β
     return f"{text} ({unit})" if unit else text

@@ -66,7 +66,7 @@ def rotation_units(time_unit: str, moment_unit: str) -> dict[str, str]:
     """The units of a rotating body's ω, L = Iω and kinetic energy ½ω·L, with the time of its
     trajectory in `time_unit` and its principal moments in `moment_unit` ("kg m^2", or "C" where
     the largest moment is the unit). Radians are left out of L and E, as SI leaves them out of the
-    joule. None where the trajectory's variable is not a time."""
+    joule. Empty where the trajectory's variable is not a time (a sweep of sizes)."""
     rate = RATE_OF_TIME_UNIT.get(time_unit)
     if rate is None and time_unit not in TIME_UNITS:  # the run's "time" is not one (a sweep of sizes)
         return {}

@@ -90,8 +90,8 @@ def test_every_column_of_a_rotating_body_has_a_unit_in_the_dataframe():
     assert df.attrs["units"] == run.column_units()
     assert {c: df.attrs["units"][c] for c in ("t_s", "q_w", "omega_body_x", "L_body_y", "energy")} == {
         "t_s": "s", "q_w": "1", "omega_body_x": "rad/s", "L_body_y": "kg m^2/s", "energy": "J"}
-    moon = th.scenario("earth").simulate(years=1)  # moments as fractions of C, time in years
-    assert {k: v for k, v in moon.column_units().items() if k in ("L_body_z", "obliquity − ε₀ (arcsec)")} == {
+    earth = th.scenario("earth").simulate(years=1)  # moments as fractions of C, time in years
+    assert {k: v for k, v in earth.column_units().items() if k in ("L_body_z", "obliquity − ε₀ (arcsec)")} == {
         "L_body_z": "C/yr", "obliquity − ε₀ (arcsec)": "arcsec"}
 
 
