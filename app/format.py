@@ -8,9 +8,10 @@ from numbers import Integral
 
 import numpy as np
 
+from ..physics.params import SUPERSCRIPT
+
 MISSING = "–"
 MINUS = "−"
-_SUP = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
 
 
 def number(x, digits: int = 6) -> str:
@@ -40,7 +41,7 @@ def number(x, digits: int = 6) -> str:
 
 def superscript(n: int) -> str:
     """An exponent as it is written: −3 → "⁻³"."""
-    return str(int(n)).translate(_SUP)
+    return str(int(n)).translate(SUPERSCRIPT)
 
 
 def human_number(x, digits: int = 4) -> str:

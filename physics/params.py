@@ -134,7 +134,8 @@ class Param:
             raise ParameterError(self.name, whole, self.allowed())
 
 
-_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+# exponents as they are written, both ways: "-3" ↔ "⁻³" (also app/format.py's read-outs)
+SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
 _FROM_SUPERSCRIPT = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻⁺", "0123456789-+")
 # "2.5 × 10⁶", "2.5×10^6", "1 x 10^-3": a power of ten as people (and the app's own read-outs) write it
 _TIMES_TEN = re.compile(r"(?:([+-]?(?:\d+\.?\d*|\.\d+))\s*[×xX*·]\s*)?10\s*(?:\^\s*([+-]?\d+)|([⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+))")
@@ -202,7 +203,7 @@ def pretty_unit(unit: str) -> str:
         return ""
     if u in _UNIT_WORDS:
         return _UNIT_WORDS[u]
-    u = re.sub(r"\^(-?\d+)", lambda m: m.group(1).translate(_SUPERSCRIPT), u)
+    u = re.sub(r"\^(-?\d+)", lambda m: m.group(1).translate(SUPERSCRIPT), u)
     return re.sub(r"(?<=[A-Za-z²³])\s+(?=[A-Za-z])", "·", u)
 
 
