@@ -37,10 +37,12 @@ from viser import _messages
 #   and visibility of frame k, where k follows the clock the server last sent (extrapolated at
 #   its rate while playing, exactly the server's frame while paused), and asks for the next frame
 #   while playing. Chunks of a path: chunk j is shown from its start frame on. Per-frame props
-#   (label text, segment and arrow points) change only while playing: the player hands viser the
-#   same node update the server would send (a SceneNodeUpdateMessage in viser's own queue, under
-#   the node's owner), once each time the frame it has them for changes. Paused, the server sets
-#   them, exactly; the next play starts from whatever the server set.
+#   change only while playing: a line's points are written into its geometry in the same frame as
+#   the poses (`linePoints`); label text and arrow points go as the same node update the server
+#   would send (a SceneNodeUpdateMessage in viser's own queue, under the node's owner), once each
+#   time the frame it has them for changes. Paused, the server sets them, exactly; the next play
+#   starts from whatever the server set. World matrices are brought up to date before viser's
+#   labels read them, so a label on a moving frame is drawn where the frame is in this frame.
 SETUP = r"""
 (() => {
   if (window.theoria) return;
@@ -270,10 +272,12 @@ SETUP = r"""
       else if (tr.attr === 'visible') o.visible = on(tr.group) && v[i] > 0;
       if (!o.matrixAutoUpdate) o.updateMatrix();
     }
-    if (P.playing && d.props && m.messageQueue) {
+    if (d.props && m.messageQueue) {
       for (const pr of d.props) {
-        const j = Math.floor(k / pr.stride);
-        if (j === pr.last || !on(pr.group)) continue;
+        if (!on(pr.group)) continue;
+        const j = P.playing ? Math.floor(k / pr.stride) : -1;
+        if (pr.prop === 'points' && T.linePoints(pr, R[pr.node], j)) continue;
+        if (j < 0 || j === pr.last) continue;
         pr.last = j;
         const value = pr.prop === 'text' ? pr.strings[pr.v[j]] : pr.v.subarray(j * pr.per, (j + 1) * pr.per);
         m.messageQueue.push({type: 'SceneNodeUpdateMessage', name: pr.node, owner: d.owner,
@@ -286,7 +290,34 @@ SETUP = r"""
       while (n < c.starts.length && c.starts[n] <= k) n++;
       for (let j = 0; j < c.nodes.length; j++) { const o = R[c.nodes[j]]; if (o) o.visible = j < n; }
     }
+    // viser's labels take their place from their parent's world matrix, which three.js brings up to
+    // date only as it renders: without this, a label on a turning body was drawn where the body had
+    // been the frame before (on a fast spin, far from its axis)
+    if (state && state.scene) state.scene.updateMatrixWorld();
     if (P.playing && state && state.invalidate) state.invalidate();
+  };
+  // A line's points of frame j (of its stride), written into the line's own geometry in this frame,
+  // where viser's node update took effect a frame or more later (a new geometry made by React): the
+  // line to F pointed away from F while playing. Paused (j < 0), the line is given back the points
+  // the server last set (it sets the paused frame's, exactly). False: not a line (arrows).
+  T.linePoints = (pr, o, j) => {
+    if (!o) return true;  // not made yet: the server's first points come with it
+    let line = null;  // the node's own line, below viser's group(s) for it
+    if (o) o.traverse((c) => { if (!line && c.isLineSegments2) line = c; });
+    const g = line && line.geometry, a = g && g.attributes && g.attributes.instanceStart;
+    if (!a || a.data.array.length !== pr.per) return false;
+    if (j < 0) {
+      if (g.__theoriaServer) { a.data.array.set(g.__theoriaServer); g.__theoriaServer = null; }
+      else return true;
+    } else {
+      if (j === pr.last && g === pr.geometry) return true;
+      if (!g.__theoriaServer) g.__theoriaServer = a.data.array.slice();
+      a.data.array.set(pr.v.subarray(j * pr.per, (j + 1) * pr.per));
+      pr.last = j; pr.geometry = g;
+    }
+    a.data.needsUpdate = true;
+    g.computeBoundingSphere();
+    return true;
   };
   T.hook = () => {
     if (T.P.hooked) return;
