@@ -69,9 +69,18 @@ def forced_solution(gamma, e, n, progress=None) -> ForcedSolution:
     return ForcedSolution(gamma, e, n, progress=progress)
 
 
+def signed_amplitude(a, b) -> float:
+    """The amplitude of a sin M + b cos M with the sign of a: Euler's ζ = m sin M (§833) has m < 0
+    above the resonance ((B−A)/C > 1/3, A² < 2N: the swing is opposite to the orbit's), and the
+    forced solution started at periapse is a sin M with b ≈ 0. Unsigned, the two agreed in size and
+    read as "200 % off"."""
+    return float(np.copysign(np.hypot(a, b), a))
+
+
 def _forced_amplitude_of_run(t, zeta, n, period, free_period):
     """First harmonic (frequency n) of ζ(t) from the rigid-body run, fitted over its whole orbits
-    with the 2nd and 3rd harmonics and, when the run has a free swing, sin/cos at its period."""
+    with the 2nd and 3rd harmonics and, when the run has a free swing, sin/cos at its period; with
+    the sign of its sin M part (`signed_amplitude`)."""
     keep = t - t[0] <= period * np.floor((t[-1] - t[0]) / period + 1e-9)
     if np.count_nonzero(keep) < 16:  # less than one whole orbit: fit what there is
         keep = np.ones_like(t, bool)
@@ -81,7 +90,7 @@ def _forced_amplitude_of_run(t, zeta, n, period, free_period):
         w = 2 * np.pi / free_period
         cols += [np.sin(w * tt), np.cos(w * tt)]
     coef, *_ = np.linalg.lstsq(np.stack(cols, 1), z, rcond=None)
-    return float(np.hypot(coef[1], coef[2]))
+    return signed_amplitude(coef[1], coef[2])
 
 
 def _setup(values, progress=None):
@@ -153,7 +162,7 @@ def _finish(values, s, t, L, q):
             e, g, -lib.equilibrium_zeta(g), fdot0 - m1, fs.lam0, orbits=EULER_START_ORBITS))
     mt = {
         "forced_amplitude_rad": amp_run,
-        "forced_amplitude_periodic_rad": float(np.hypot(a[0], b[0])),
+        "forced_amplitude_periodic_rad": signed_amplitude(a[0], b[0]),
         "forced_amplitude_euler_rad": float(m1),
         "forced_amplitude_rel_error": float(abs(amp_run / m1 - 1)) if m1 else np.nan,
         "forced_second_harmonic_rad": float(a[1]),
@@ -195,7 +204,8 @@ def _finish(values, s, t, L, q):
             f"near it drifts away (this one has not yet, in {values['orbits']:g} orbits); Euler's §838 free libration "
             "about it does not exist.")
     if not tumbles:
-        off = abs(m1 / mt["forced_amplitude_periodic_rad"] - 1) if mt["forced_amplitude_periodic_rad"] else np.inf
+        # (an orbit without eccentricity forces nothing: both are 0, the periodic one to round-off)
+        off = abs(m1 - mt["forced_amplitude_periodic_rad"]) / max(abs(mt["forced_amplitude_periodic_rad"]), 1e-9)
         if euler_left or off > EULER_AMPLITUDE_TOLERANCE:
             why = []
             if off > EULER_AMPLITUDE_TOLERANCE:

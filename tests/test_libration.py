@@ -254,6 +254,58 @@ def test_forced_amplitude_matches_euler_for_small_e_and_free_part_separates():
     assert abs(m["forced_amplitude_rad"] / m["forced_amplitude_periodic_rad"] - 1) < 1e-3
 
 
+def _periodic_forced_sin_coefficient(gamma, e):
+    """Independent of theoria: the sin M coefficient of ζ = f − λ on the periodic solution of
+    λ̈ = (3/2)γ n²(a/r)³ sin 2(f − λ) (n = a = 1), found by Newton (scipy fsolve) on one orbit
+    integrated by DOP853 at rtol 1e-12, Kepler's equation solved by Newton here."""
+    from scipy.optimize import fsolve
+
+    def anomalies(t):
+        M = np.asarray(t, float)
+        E = M.copy()
+        for _ in range(50):
+            E = E - (E - e * np.sin(E) - M) / (1 - e * np.cos(E))
+        f = 2 * np.arctan2(np.sqrt(1 + e) * np.sin(E / 2), np.sqrt(1 - e) * np.cos(E / 2))
+        return f, 1 - e * np.cos(E)
+
+    def rhs(t, y):
+        f, r = anomalies(t)
+        return [y[1], 1.5 * gamma / r**3 * np.sin(2 * (f - y[0]))]
+
+    P = 2 * np.pi
+    def miss(y0):
+        y = solve_ivp(rhs, (0, P), y0, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
+        return [y[0] - y0[0] - 2 * np.pi, y[1] - y0[1]]
+
+    lam0 = 0.0 if gamma > 0 else -np.pi / 2  # A toward F; B < A: B toward F (§827)
+    y0 = fsolve(miss, [lam0, (1 + e) ** 2 / (1 - e * e) ** 1.5], xtol=1e-10)
+    t = np.linspace(0, P, 1025)[:-1]
+    lam = solve_ivp(rhs, (0, P), y0, method="DOP853", rtol=1e-12, atol=1e-14, t_eval=t).y[0]
+    a, _ = lib.harmonics(t, anomalies(t)[0] - lam, 1.0, 3)
+    return float(a[0])
+
+
+@pytest.mark.parametrize("gamma,e", [(0.4, 0.001), (-0.4, 0.001), (0.2, 0.05), (-0.2, 0.05)])
+def test_the_forced_amplitude_has_its_sign_on_both_sides_of_the_resonance(gamma, e):
+    """Above (B−A)/C = 1/3 (A² < 2N) Euler's m = 2e/(1 − 3γ) of §833 is negative: the forced swing is
+    opposite to the orbit's. The simulated and periodic amplitudes carry the same sign as an
+    independent periodic solution, and Euler's formula is not called "200 % off" where it holds."""
+    r = get("libration-eccentric").simulate({"asymmetry": gamma, "eccentricity": e, "free_zeta0_deg": 0.0,
+                                             "orbits": 2})
+    m, ref = r.metrics, _periodic_forced_sin_coefficient(gamma, e)
+    assert abs(m["forced_amplitude_periodic_rad"] / ref - 1) < 1e-6, (m["forced_amplitude_periodic_rad"], ref)
+    assert abs(m["forced_amplitude_rad"] / ref - 1) < 1e-6, (m["forced_amplitude_rad"], ref)
+    assert np.sign(m["forced_amplitude_euler_rad"]) == np.sign(ref)
+    assert m["forced_amplitude_rel_error"] < 10 * e  # first order in e
+    assert not any("off the forced solution" in w for w in r.warnings), r.warnings
+
+
+def test_a_circular_orbit_forces_nothing_and_euler_is_not_called_off():
+    r = get("libration-eccentric").simulate({"eccentricity": 0.0, "free_zeta0_deg": 0.0, "orbits": 2})
+    assert abs(r.metrics["forced_amplitude_periodic_rad"]) < 1e-12 and r.metrics["forced_amplitude_euler_rad"] == 0
+    assert not any("off the forced solution" in w for w in r.warnings), r.warnings
+
+
 @pytest.mark.slow
 def test_euler_forced_amplitude_fails_as_e_squared_and_near_resonance():
     es = np.array([0.05, 0.1, 0.2])
