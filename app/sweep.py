@@ -799,10 +799,11 @@ class Summary:
     signal: str = ""
     cluster: str = ""
     kept: str = ""  # where an interrupted sweep's finished chunks are (OUT itself, OUT.parts/, OUT.new/)
-    complete: bool = False  # resumed, and found already finished: nothing was run or written
+    complete: bool = False  # OUT holds the whole sweep (every chunk done), now or before
+    found_complete: bool = False  # resumed, and found already finished: nothing was run or written
 
     def line(self) -> str:
-        if self.complete:
+        if self.found_complete:
             return (f"sweep: {self.runs} runs in {self.chunks} chunks; computed 0 chunks now, "
                     f"{self.chunks_done_before} were done before: the sweep is complete, left as it is → {self.out}")
         st = ", ".join(f"{v} {k}" for k, v in self.statuses.items() if v)
@@ -1086,7 +1087,7 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
     if not todo and writer.in_place:
         # a finished sweep resumed: it is complete, and left byte for byte as it is
         summary.seconds = time.perf_counter() - t0
-        summary.complete = True
+        summary.complete = summary.found_complete = True
         with signals_held() as held:
             mark_written(out)
             result = writer.open()
@@ -1136,7 +1137,7 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
         summary.seconds = time.perf_counter() - t0
         summary.statuses = counts
         summary.interrupted = interrupted
-        summary.kept = writer.kept
+        summary.kept = writer.kept if interrupted else ""
         held = held or to_the_end.enter_context(signals_held())
         writer.session({"started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                         "chunks_computed": summary.chunks_computed, "chunks_done_before": summary.chunks_done_before,
@@ -1149,6 +1150,7 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
         # (the sweep is reported done)
         writer.finish()
         mark_written(out)
+        summary.complete = True
         result = writer.open()
         held.drop()
     return summary, result

@@ -235,6 +235,7 @@ def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_pat
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)
     assert s["chunks_done_before"] == done and s["chunks_computed"] == total - done, s
+    assert s["complete"] and not s["found_complete"] and not s["interrupted"] and s["kept"] == "", s
     ds = xr.open_zarr(out, consolidated=False)
     sessions = ds.attrs["sessions"]
     assert [x["chunks_computed"] for x in sessions] == [done, total - done]
@@ -254,7 +255,8 @@ def test_sweep_killed_midway_resumes_without_recomputing_finished_chunks(tmp_pat
     assert ds.attrs["theoria_version"] == th.__version__
     # a resume of a complete sweep computes nothing
     r = cli(*args, "--resume", "--json", "--quiet")
-    assert json.loads(r.stdout)["chunks_computed"] == 0
+    s = json.loads(r.stdout)
+    assert s["chunks_computed"] == 0 and s["complete"] and s["found_complete"], s
     # the values are the scenario's own, run by run (one point, recomputed here)
     sc = th.scenario("libration-eccentric")
     i, j = 1, 2
@@ -304,6 +306,7 @@ def test_the_same_sweep_on_a_separately_started_scheduler_with_two_workers(tmp_p
         assert r.returncode == 0, r.stderr
         s = json.loads(r.stdout)
         assert s["cluster"] == f"scheduler {addr}" and s["chunks_computed"] == 3
+        assert s["complete"] and s["kept"] == "", s  # a finished sweep keeps no parts aside
         import xarray as xr
 
         ds = xr.open_zarr(out, consolidated=False)
@@ -800,11 +803,13 @@ def test_resuming_a_finished_sweep_leaves_it_byte_for_byte_and_says_it_is_comple
     """--resume of a finished Zarr sweep rewrote it: a new `sessions` entry in zarr.json each time."""
     sc = th.scenario("free-tumble")
     out = tmp_path / f"f.{suffix}"
-    sw.run_sweep(sc, out=out, cluster=in_process_client, progress=False, **TINY)
+    summary, _ = sw.run_sweep(sc, out=out, cluster=in_process_client, progress=False, **TINY)
+    # what `--json` prints of a sweep just finished: whole, nothing kept aside for a resume
+    assert summary.complete and not summary.found_complete and summary.kept == "", summary
     before = _files(tmp_path)
     for _ in range(2):
         summary, result = sw.run_sweep(sc, out=out, cluster=in_process_client, resume=True, progress=False, **TINY)
-        assert summary.complete and summary.chunks_computed == 0
+        assert summary.found_complete and summary.complete and summary.chunks_computed == 0
         assert "complete" in summary.line() and "left as it is" in summary.line()
         assert len(result["status"]) == 2 if suffix == "parquet" else result.sizes["step"] == 2
         del result
