@@ -24,6 +24,18 @@ class ParameterError(ValueError):
         self.allowed = allowed
         super().__init__(f"{show_value(name)}={show_value(value)}: {allowed}")  # a name typed by hand is cut too
 
+    def __reduce__(self):
+        # unpickled as it was (a refusal from a worker process, a joblib or Dask task), every field
+        # and subclass included: not through __init__, whose arguments a subclass changes
+        return (_restored, (type(self), self.args, dict(self.__dict__)))
+
+
+def _restored(cls, args, state):
+    error = cls.__new__(cls)
+    error.args = args
+    error.__dict__.update(state)
+    return error
+
 
 class Diverged(ParameterError):
     """The run has no finite sample at all: these parameter values cannot be simulated."""
@@ -46,7 +58,8 @@ def show_value(value: Any) -> str:
     if isinstance(value, (list, tuple)):
         text = ",".join(show_value(v) for v in value[:8]) + (",…" if len(value) > 8 else "")
     elif isinstance(value, float):
-        text = f"{value:g}"
+        # short where that is exact: 50.0000001 refused must not read as the allowed 50
+        text = next((t for t in (f"{value:g}", f"{value:.12g}") if float(t) == value), repr(value))
     elif isinstance(value, str) and len(value) > 4 * SHOW_MAX:
         text = value[: 4 * SHOW_MAX]
     else:

@@ -78,7 +78,7 @@ def jsonable(v):
     return v
 
 
-@dataclass
+@dataclass(eq=False)  # one run is itself (its arrays have no single truth value to compare)
 class Run:
     """One simulation: parameters, trajectory, metrics, the Euler / simulated / modern table and
     the warnings. Every consumer (CLI, app, recorder, HTML replay, a notebook) reads this object.
@@ -438,6 +438,11 @@ class Scenario:
         object.__setattr__(self, "options", types.MappingProxyType(dict(self.options)))
         object.__setattr__(self, "preview", types.MappingProxyType(dict(self.preview)))
         object.__setattr__(self, "simulate_fn", self._guarded(self.simulate_fn))
+
+    def __reduce__(self):
+        # a scenario travels by its name (a pickled run, a joblib or Dask task, copy.copy): the one
+        # registered under it is the same code and the same data
+        return (get, (self.name,))
 
     def _guarded(self, fn):
         """Every caller (front door, CLI, app, record, export, checks, tests) gets the same contract:

@@ -270,3 +270,42 @@ def test_a_path_with_a_nul_character_is_refused_by_name(tmp_path):
             call(str(tmp_path / "a\0b"))
         assert e.value.name == name
     assert list(tmp_path.iterdir()) == []
+
+
+def _free_tumble_run(duration):
+    return th.scenario("free-tumble").simulate(duration=duration)
+
+
+def test_runs_and_refusals_cross_a_process_boundary_whole():
+    """A researcher's pool (multiprocessing, joblib, Dask) sends runs and errors between processes
+    by pickling them: no run could be pickled (a scenario's wrapped simulate function), a refusal
+    came back without its parameter, and `run == run` raised on its arrays."""
+    import copy
+    import pickle
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
+    from theoria.physics.errors import BudgetExceeded
+    from theoria.scenarios.base import all_scenarios
+
+    with ProcessPoolExecutor(1, mp_context=get_context("spawn")) as pool:
+        run = pool.submit(_free_tumble_run, 20.0).result()
+        with pytest.raises(th.ParameterError) as refused:
+            pool.submit(_free_tumble_run, -1.0).result()
+    assert run.spec is th.scenario("free-tumble") and run.status == "ok"
+    assert run.metrics == th.scenario("free-tumble").simulate(duration=20.0).metrics
+    assert (refused.value.name, refused.value.value) == ("duration", -1.0) and "duration=-1" in str(refused.value)
+    assert run == run and run != copy.copy(run)
+    for sc in all_scenarios():  # every scenario's run, at its quick preview's values
+        r = sc.simulate(**dict(sc.preview))
+        back = pickle.loads(pickle.dumps(r))
+        assert back.spec is sc and back.metrics.keys() == r.metrics.keys() and back.warnings == r.warnings
+        assert np.array_equal(back.trajectory.t, r.trajectory.t) and back.to_dataframe().shape == r.to_dataframe().shape
+        assert copy.deepcopy(sc) is sc
+    e = pickle.loads(pickle.dumps(BudgetExceeded("step", 1e-9, "at least 0.01 fits", fit=("step", 0.01))))
+    assert type(e) is BudgetExceeded and e.fit == ("step", 0.01) and str(e) == "step=1e-09: at least 0.01 fits"
+
+
+def test_a_refused_value_is_shown_as_given_not_rounded_into_the_range():
+    with pytest.raises(th.ParameterError, match=r"spin=50\.0000001: allowed range"):
+        th.scenario("middle-axis-flip").simulate(spin=50.0000001)
