@@ -764,11 +764,15 @@ def _interactive() -> bool:
 
 
 def show_run(run, port: int = 8080, host: str = "127.0.0.1", block: bool | None = None):
-    """Serve `run` in the app. Blocks until Ctrl-C in a script; in an interactive session (a
-    notebook, the REPL) returns a `Shown` handle at once and serves in the background."""
+    """Serve `run` in the app. Blocks until Ctrl-C in a script (SIGTERM ends the script, exit
+    status 143); in an interactive session (a notebook, the REPL) returns a `Shown` handle at once
+    and serves in the background."""
     block = (not _interactive()) if block is None else block
     if block:
-        serve(port=port, host=host, run=run, precompute=False)
+        if serve(port=port, host=host, run=run, precompute=False) == "SIGTERM":
+            # a script asked to end ends (a batch job's kill, a container's stop): the code after
+            # show() does not run on as if a student had closed the app; Ctrl-C returns to it
+            raise SystemExit(128 + signal.SIGTERM)
         return None
     server, _ = make_server(port=port, host=host, verbose=False, run=run)
     shown = Shown(server)

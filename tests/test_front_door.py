@@ -159,6 +159,39 @@ def test_show_serves_the_run_in_the_app():
         shown.stop()
 
 
+@pytest.mark.parametrize("sig,status,after", [("SIGTERM", 143, False), ("SIGINT", 0, True)])
+def test_a_script_blocked_in_show_ends_on_sigterm_and_carries_on_after_ctrl_c(tmp_path, sig, status, after):
+    """A batch job's kill (SIGTERM) returned from show() and ran the rest of the script, exit 0."""
+    import signal
+    import socket
+    import time
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    script = tmp_path / "s.py"
+    script.write_text("import theoria as th\n"
+                      f"th.scenario('free-tumble').simulate(duration=2).show(port={port})\n"
+                      "print('after show')\n")
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        t_end = time.monotonic() + 120
+        while True:  # until the app answers
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                assert p.poll() is None and time.monotonic() < t_end, p.stderr.read() if p.poll() is not None else ""
+                time.sleep(0.3)
+        p.send_signal(getattr(signal, sig))
+        out, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == status, err
+    assert ("after show" in out) == after and "Traceback" not in err
+
+
 def test_a_preset_cannot_be_changed_for_the_whole_process():
     """sc.presets is read-only, and so is each preset: a notebook that assigned into one changed
     what every later run with that preset (and the app in the same process) started from."""
