@@ -87,21 +87,26 @@ def middle_axis_crossings(traj: Trajectory) -> np.ndarray:
 PERIOD_PRECISION = 1e-6
 
 
-def free_body_warnings(traj: Trajectory, fm, what: str = "the interval between flips") -> list[str]:
+def free_body_warnings(traj: Trajectory, fm, what: str = "the interval between flips", step: float | None = None) -> list[str]:
     """Validity of a free body's run: stored samples dense enough for the spin and the polhode
-    (aliasing), and 1 − k² fixed by the starting rates near the separatrix."""
+    (aliasing), and 1 − k² fixed by the starting rates near the separatrix. `step`: the
+    integrator's, to say what would help (a long run keeps MAX_SAMPLES states whatever the step)."""
     from . import _validity
 
     out: list[str] = []
     if len(traj.t) >= 2:
         spacing = float(np.max(np.diff(traj.t)))
+        remedy = None
+        if step is not None and spacing > 1.5 * step:
+            remedy = (f"A run keeps at most {MAX_SAMPLES:,} states (here {spacing:.3g} s apart, whatever the step): "
+                      "shorten the run.")
         w = float(np.max(np.linalg.norm(traj.omega_body, axis=1)))
         spin_period = 2 * np.pi / w if w > 0 else np.inf
         flip = fm.flip_interval if fm is not None else np.inf
         _validity.add(out, _validity.sparse_samples(spacing, spin_period, "the turn of the body about its axis",
-                                                    "s", "step"),
+                                                    "s", "step", remedy),
                       _validity.sparse_samples(spacing, flip, "the interval between sign changes of ω on the middle "
-                                               "axis, half the polhode period", "s", "step"))
+                                               "axis, half the polhode period", "s", "step", remedy))
     if fm is not None and fm.period_rel_uncertainty > PERIOD_PRECISION:
         out.append(
             f"Near the separatrix: 1 − k² = {fm.m1:.3g} is the difference of two terms "

@@ -28,9 +28,11 @@ def coarse_step(step: float, period: float, what: str, unit: str = "", param: st
             f"aliases and the results are not to be trusted. Lower {param}.")
 
 
-def sparse_samples(spacing: float, period: float, what: str, unit: str = "", param: str = "step") -> str | None:
+def sparse_samples(spacing: float, period: float, what: str, unit: str = "", param: str = "step",
+                   remedy: str | None = None) -> str | None:
     """The warning when stored samples `spacing` apart give fewer than MIN_SAMPLES_PER_PERIOD per
-    `period` (what is measured or drawn from them aliases), else None."""
+    `period` (what is measured or drawn from them aliases), else None. `remedy`: what to do, where
+    lowering `param` does not help (the samples kept are capped, not the step)."""
     if not (math.isfinite(spacing) and math.isfinite(period)) or period <= 0 or spacing <= 0:
         return None
     per = period / spacing
@@ -39,7 +41,7 @@ def sparse_samples(spacing: float, period: float, what: str, unit: str = "", par
     u = f" {unit}" if unit else ""
     return (f"The stored samples ({spacing:.3g}{u} apart) are too sparse for {what} ({period:.3g}{u}): "
             f"{per:.2g} per period, fewer than {MIN_SAMPLES_PER_PERIOD} (Nyquist), so it aliases in what is "
-            f"measured and drawn. Lower {param} or shorten the run.")
+            f"measured and drawn. " + (remedy or f"Lower {param} or shorten the run."))
 
 
 def add(warnings: list[str], *sentences: str | None) -> list[str]:

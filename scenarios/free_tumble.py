@@ -36,7 +36,7 @@ def _free_tumble(values, progress=None):
     warnings: list[str] = []
     try:
         fm = free_motion(I, w0)
-        warnings = free_body_warnings(traj, fm, "the polhode period")
+        warnings = free_body_warnings(traj, fm, "the polhode period", step=values["step"])
         m["polhode_period_s"] = fm.polhode_period
         circ = "ABC"[fm.circulation_axis]
         # Euler: §808's quadrature gives the time between two sign changes of ω on the middle axis,
@@ -65,7 +65,7 @@ def _free_tumble(values, progress=None):
                                 ("" if measured is not None else "; the run is too short to see two crossings")))
     except ValueError as e:  # a permanent rotation or a sphere has no polhode
         comps.append(Comparison("polhode", None, None, None, "", str(e)))
-        warnings = free_body_warnings(traj, None)
+        warnings = free_body_warnings(traj, None, step=values["step"])
     return Run("free-tumble", values, traj, m, comps, warnings=warnings,
                   plot_series={"ω₁": traj.omega_body[:, 0], "ω₂": traj.omega_body[:, 1],
                                "ω₃": traj.omega_body[:, 2]})

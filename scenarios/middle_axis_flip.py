@@ -40,11 +40,11 @@ def _middle_axis_flip(values, progress=None):
     euler = flip_interval_808(I, w0)
     tc = middle_axis_crossings(traj)
     measured = float(np.mean(np.diff(tc))) if len(tc) >= 2 else float("nan")
-    warnings = free_body_warnings(traj, fm)
+    warnings = free_body_warnings(traj, fm, step=values["step"])
+    seen = float(len(tc))
     if np.max(np.diff(traj.t), initial=0.0) > 0.5 * exact:  # flips between two stored samples go unseen
-        measured = float("nan")
-    m.update(flip_interval=measured, flip_interval_exact=exact, flip_interval_euler_808=euler,
-             flips_seen=float(len(tc)))
+        measured = seen = float("nan")
+    m.update(flip_interval=measured, flip_interval_exact=exact, flip_interval_euler_808=euler, flips_seen=seen)
     notes = []
     if len(tc) < 2:
         notes.append(f"fewer than two flips in {values['duration']:g} s: run longer than {2 * exact:.3g} s "
