@@ -163,18 +163,24 @@ def _check_table_out(path: str | None, force: bool) -> str | None:
 
 
 def write_table(run, path: str) -> int:
-    """The run's samples (Run.to_dataframe: one row per sample, units in the column names) as
-    Parquet or CSV, whole or absent (app/files.py `write_whole`: a full disk or a file-size
-    limit is one line naming the file, which stays as it was). Returns rows written."""
+    """The run's samples (Run.to_dataframe: one row per sample) as Parquet or CSV, whole or absent
+    (app/files.py `write_whole`: a full disk or a file-size limit is one line naming the file,
+    which stays as it was). Parquet keeps every column's unit as a sweep's table does (the schema's
+    "units", JSON; pandas reads them back into `df.attrs["units"]`). Returns rows written."""
     import io
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
 
     from theoria.app.files import write_whole
 
     df = run.to_dataframe()
     if path.lower().endswith(".parquet"):
-        df.attrs = {}
+        table = pa.Table.from_pandas(df, preserve_index=False)
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                               b"units": json.dumps(df.attrs["units"]).encode()})
         buf = io.BytesIO()
-        df.to_parquet(buf, index=False)
+        pq.write_table(table, buf)
         data = buf.getvalue()
     else:
         data = df.to_csv(index=False).encode()

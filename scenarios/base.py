@@ -27,7 +27,7 @@ from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
 from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
 from .drawing import Camera, Drawing, Option, View, declutter_labels, standard
-from .units import metric_unit as unit_of_metric, rotation_units, unit_in_label, unit_in_name
+from .units import metric_unit as unit_of_metric, rotation_units, unit_in_label
 
 
 @dataclass(frozen=True)
@@ -181,8 +181,9 @@ class Run:
                 units.update({f"omega_body_{c}": of["omega"] for c in "xyz"})
                 units.update({f"L_body_{c}": of["L"] for c in "xyz"})
                 units["energy"] = of["energy"]
+        declared = self._spec().series_units
         for name in self.columns():
-            unit = unit_in_label(name) or (named[1] if (named := unit_in_name(name)) else None)
+            unit = unit_in_label(name) or unit_of_metric(name, declared)
             if name not in units and unit is not None:
                 units[name] = unit
         return units
@@ -427,6 +428,9 @@ class Scenario:
     # the units of the metrics whose names do not end in one (scenarios.units): name or whole-name
     # pattern → unit as `Param.unit` writes it; "" for a pure number (a ratio, a cosine, a count)
     metric_units: Mapping[str, str] = field(default_factory=dict)
+    # the same for the per-sample columns of `Run.to_dataframe` that do not say theirs: the other
+    # bodies' positions ("attractor_[xyz]": "a", the orbit's semi-major axis) and the series
+    series_units: Mapping[str, str] = field(default_factory=dict)
 
     def __post_init__(self):
         for p in self.params:

@@ -263,6 +263,7 @@ def e8_moon_cassini():
 
 
 register(Scenario(
+    series_units={"earth_[xyz]": "km"},
     name="cassini",
     title="The Moon's Cassini state: three normals in one plane",
     section="Cassini's laws; Peale 1969 (beyond Euler, with §815)",

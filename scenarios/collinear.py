@@ -310,6 +310,9 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"[A-Za-z0-9_]+_[xyz]": "G=1 units", "spacing_AB": "G=1 units", "AB spacing .*": "G=1 units",
+                  "satellite drift .*": "G=1 units",  # lengths in the unit distance of the masses, G = 1
+                  "ratio_BC_over_AB": "", "BC/AB .*": "", "α .*": "", "L[1-5]_x_over_distance": ""},
     name="collinear",
     title="Three bodies on a line: Euler's quintic",
     section="Euler 1767, §1–§11",

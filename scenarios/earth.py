@@ -395,6 +395,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"(sun|moon)_[xyz]": "1"},  # directions
     name="earth",
     title="The Earth under the Sun and the Moon: precession and nutation",
     section="§844–849 (modern values)",

@@ -400,6 +400,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"(sun|moon)_[xyz]": "1"},  # directions
     name="earth-long-view",
     title="A whole precession cycle: the pole among the stars",
     section="§846 (modern values)",

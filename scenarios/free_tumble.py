@@ -72,6 +72,7 @@ def _free_tumble(values, progress=None):
 
 
 register(Scenario(
+    series_units={"ω[₁₂₃]": "rad/s"},  # Euler's p, q, r
     name="free-tumble",
     title="The body left to itself",
     section="§805, §808",

@@ -89,6 +89,8 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"attractor_[xyz]": "m", "omega_body_[xyz]": "rad/s", "L_body_[xyz]": "kg m^2/s", "energy": "J",
+                  "(torque|force)_rel_error": "", "ratio_squared": ""},  # a body at rest: ω, L, E are 0
     name="gravity-gradient-accuracy",
     title="How good is Euler's first-order torque?",
     section="§815–818",

@@ -100,6 +100,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"attractor_[xyz]": "m", "omega_[xyz]": "rad/s"},
     name="gravity-start",
     title="A body at rest pulled by a distant mass",
     section="§820–822",

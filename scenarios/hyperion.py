@@ -274,6 +274,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"attractor_[xyz]": "a"},  # the orbit's semi-major axis
     name="hyperion",
     title="Hyperion: chaotic tumbling (spin–orbit surface of section)",
     section="§833 (beyond Euler)",

@@ -96,6 +96,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={r"\|ω\|": "rad/s"},
     name="initial-axis",
     title="A body at rest set turning",
     section="§806, §807",

@@ -222,6 +222,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"attractor_[xyz]": "a", "zeta_dot": "rad/unit", "separatrix_zeta_dot_(plus|minus)": "rad/unit"},
     name="libration-circular",
     title="Libration in a circular orbit (Problem 93)",
     section="§825–831",

@@ -320,6 +320,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"attractor_[xyz]": "a"},  # the orbit's semi-major axis
     name="libration-eccentric",
     title="Forced libration in an eccentric orbit (Problem 94)",
     section="§833–838",

@@ -265,6 +265,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"(earth|moon|sun)_[xyz]": "LD", "eccentricity": "", "orbit_normal_[xyz]": "1"},  # the Sun's direction drawn at 3 LD
     name="lunar-perturbation",
     title="The Moon perturbed by the Sun, by its elements",
     section="Euler 1768, §XIII–§XXXIV",

@@ -58,6 +58,7 @@ def _middle_axis_flip(values, progress=None):
 
 
 register(Scenario(
+    series_units={"ω on .*": "rad/s"},
     name="middle-axis-flip",
     title="Brick: the flip about the middle axis",
     section="§805, §808",

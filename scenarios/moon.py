@@ -635,6 +635,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"(attractor|earth)_[xyz]": "km"},
     name="moon",
     title="The Moon's libration seen from the Earth",
     section="§833–839 (modern values)",

@@ -170,6 +170,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"centre_[xyz]": "1"},  # the direction of F
     name="pole-near-axis",
     title="The pole of rotation near a principal axis",
     section="§840–843",

@@ -263,6 +263,7 @@ def _cost(values):
 
 
 register(Scenario(
+    series_units={"centre_[xyz]": "1"},  # the direction of the centre
     name="precession-circular",
     title="Precession and nutation under a centre on a circle",
     section="§844–849",

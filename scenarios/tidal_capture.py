@@ -183,6 +183,7 @@ def _batch(values, swept):
 
 
 register(Scenario(
+    series_units={"attractor_[xyz]": "a", r"resonance_\d+_\d+": "n"},
     name="tidal-capture",
     title="Tidal despinning and capture into resonance (Mercury's 3:2, the Moon's 1:1)",
     section="§833 (beyond Euler)",

@@ -105,3 +105,15 @@ def test_every_metric_has_a_unit_and_every_declared_unit_a_metric(name):
     stale = [p for p in sc.metric_units if not any(k == p or re.fullmatch(p, k) for k in run.metrics)]
     assert not stale, f"{name}: metric_units names metrics the scenario does not return: {stale}"
     assert run.to_json()["metric_units"] == run.metric_units
+    # and every column of its table: t, the attitude, the rates, the other bodies and the series
+    missing = [c for c in run.columns() if c not in run.column_units()]
+    assert not missing, f"{name}: no unit in the name, the label or series_units for {missing}"
+    assert run.to_dataframe().attrs["units"] == run.column_units()
+
+
+def test_the_restricted_problems_columns_have_units_too():
+    """collinear's satellite at a Lagrange point adds columns of its own (in the turning frame)."""
+    run = th.scenario("collinear").simulate(preset="L2")
+    units = run.column_units()
+    assert [c for c in run.columns() if c not in units] == []
+    assert units["satellite_corotating_x"] == "G=1 units" and units["L2_x"] == "G=1 units"

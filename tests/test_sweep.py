@@ -401,6 +401,11 @@ def test_run_out_writes_the_samples_as_parquet_and_csv(tmp_path):
         ref = th.scenario("libration-circular").simulate(periods=1, steps_per_period=100).to_dataframe()
         assert list(df.columns) == list(ref.columns) and len(df) == len(ref)
         assert np.allclose(df["zeta_rad"], ref["zeta_rad"], rtol=1e-15, atol=1e-15)
+        if ext == "parquet":  # every column's unit, as a sweep's table keeps them (pandas: df.attrs)
+            import pyarrow.parquet as pq
+
+            assert json.loads(pq.read_schema(out).metadata[b"units"]) == ref.attrs["units"] == df.attrs["units"]
+            assert ref.attrs["units"]["zeta_dot"] == "rad/unit" and len(ref.attrs["units"]) == len(ref.columns)
     r = cli("run", "libration-circular", "--out", str(tmp_path / "r.txt"), timeout=120)
     assert r.returncode == 2 and "--out" in r.stderr and ".parquet or .csv" in r.stderr
 
