@@ -412,7 +412,7 @@ def earth_scene(run, spec, view: View, long_view: bool) -> Drawing:
             if np.any(sel):
                 d.add(Points(name=f"stars/mag_{lo:g}", points=R * sd[sel], colors=STAR_COLOR, size=size))
         for j in stars_to_label(cat):
-            d.add(Label(name=f"stars/label_{j}", text=cat.names[j], position=R * 1.03 * sd[j]))
+            d.add(Label(name=f"stars/label_{j}", text=cat.names[j], position=R * 1.03 * sd[j], yields=True))
     if view.option("cone", spec):
         axis = unit(tr.L_inertial if long_view else tr.figure_axis)
         # the long view samples every few years: no nutation to magnify

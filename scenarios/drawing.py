@@ -173,6 +173,9 @@ class Label(Item):
     text: Any  # str, or F strings
     position: np.ndarray = (0.0, 0.0, 0.0)
     anchor: str = "top-left"
+    # a background name (a star's) that gives way: left out of the drawing where, on every side of
+    # its point, it would still cover another text when the scene opens (declutter_labels)
+    yields: bool = False
     STATIC_NDIM: ClassVar[dict] = {"text": 0, "position": 1}
 
 
@@ -764,6 +767,7 @@ class _Text:
     anchor: str
     turn: Callable[[str], None]
     shown_first: bool = True  # its overlay is on when the scene opens
+    label: Label | None = None  # the label it is (None: an arrow's letter)
 
 
 def _texts(d: Drawing, ks) -> list[_Text]:
@@ -774,7 +778,7 @@ def _texts(d: Drawing, ks) -> list[_Text]:
         if isinstance(it, Label) and isinstance(it.text, str):
             pos, shown = _world(d, it, ks)
             out.append(_Text(it.text, pos, shown, _moves(d, it), it.anchor,
-                             lambda a, it=it: setattr(it, "anchor", a), d.overlays.get(it.group, True)))
+                             lambda a, it=it: setattr(it, "anchor", a), d.overlays.get(it.group, True), it))
         elif isinstance(it, Arrows) and len(it.labels):
             origins = np.asarray(it.origins, float).reshape(-1, 3)
             vectors = np.asarray(it.vectors, float)
@@ -818,7 +822,8 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0, t
     as many frames as were looked at. Each text in turn takes its best side against those placed
     before it (in the drawing's order, the texts of overlays that are off when the scene opens
     last), then each again against all the others, for at most four rounds (the scenes' own labels
-    settle in one or two; a crowd of random ones may not). `text_scale`: the labels'
+    settle in one or two; a crowd of random ones may not). A label that `yields` (a star's name)
+    and still covers another text when the scene opens is left out. `text_scale`: the labels'
     size against viser's at `width`×`height` (View.text_scale). Returns how many were turned."""
     ks = np.unique(np.linspace(0, max(d.n_frames - 1, 0), SWEPT_FRAMES).round().astype(int))
     texts = _texts(d, ks)
@@ -862,9 +867,24 @@ def declutter_labels(d: Drawing, width: float = 1280.0, height: float = 800.0, t
             side[i] = s
         if not moved:
             break
+    # a background name that still covers another text when the scene opens, or that another text
+    # already says, gives way: the star "Polaris" on the pole's "AD 2000", "Deneb" under "C = 1",
+    # "Vega" beside "Vega: AD 13695 (6.6°)"
+    kept = np.ones(len(texts), bool)
+    for i in everyone:
+        t = texts[i]
+        if t.label is None or not t.label.yields or not first[i]:
+            continue
+        mine, theirs = boxes[i, side[i], 0], boxes[everyone, side, 0]
+        others = kept & first & (everyone != i)
+        said = any(o.text.startswith(t.text + ":") for o, k in zip(texts, others) if k)  # "Vega: AD 13695 (6.6°)"
+        if said or np.any(others & (mine[0] < theirs[:, 2]) & (theirs[:, 0] < mine[2])
+                          & (mine[1] < theirs[:, 3]) & (theirs[:, 1] < mine[3])):
+            kept[i] = False
+            d.items.remove(t.label)
     turned = 0
-    for t, s in zip(texts, side):
-        if sides[s] != t.anchor:
+    for t, s, k in zip(texts, side, kept):
+        if k and sides[s] != t.anchor:
             t.turn(sides[s])
             turned += 1
     return turned

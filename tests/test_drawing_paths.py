@@ -367,3 +367,38 @@ def test_a_label_near_the_edge_of_the_canvas_is_written_inward():
     assert edge < xs[0] < edge + 40 and 1280 - edge - 40 < xs[1] < 1280 - edge  # inside, near the edges
     assert declutter_labels(d) == 2
     assert d.item("left").anchor.endswith("-left") and d.item("right").anchor.endswith("-right")
+
+
+def test_a_star_name_that_covers_a_texts_place_on_every_side_gives_way():
+    """The sky's star names crowded the pole of earth-long-view: the star "Polaris" written on the
+    pole's "AD 2000" (and beside "Polaris: AD 2100 (0.5°)"), "Deneb" under "C = 1". A name that
+    yields and covers another text on whichever side it is turned is left out; one that fits stays,
+    and a text that does not yield is never left out."""
+    from theoria.scenarios.drawing import Camera, Drawing, Label, _box, _overlap, _project, _texts, declutter_labels
+
+    cam = Camera(position=(0.0, -10.0, 0.0), look_at=(0.0, 0.0, 0.0), fov_deg=75.0)
+    d = Drawing(frames=np.arange(2), times=np.arange(2, dtype=float), time_unit="s", camera=cam)
+    # four texts around one point take its sides; a star name there has nowhere left to go
+    d.add(*[Label(name=f"pole/{k}", text=f"AD {2000 + 100 * k}", position=(0.0, 0.0, 1.0)) for k in range(4)],
+          Label(name="stars/Polaris", text="Polaris", position=(0.0, 0.0, 1.0), yields=True),
+          Label(name="stars/Vega", text="Vega", position=(6.0, 0.0, -3.0), yields=True),
+          Label(name="note", text="a scene's own note", position=(0.05, 0.0, 1.0)),
+          Label(name="stars/Thuban", text="Thuban", position=(-6.0, 0.0, -3.0), yields=True),
+          Label(name="thuban_then", text="Thuban: AD 22305 (1.4°)", position=(-3.0, 0.0, 3.0)))
+    declutter_labels(d)
+    names = [it.name for it in d.items]
+    assert "stars/Polaris" not in names and "stars/Vega" in names and "note" in names
+    assert "stars/Thuban" not in names and "thuban_then" in names  # said already, where the pole passes it
+    assert all(f"pole/{k}" in names for k in range(4))
+    import theoria as th
+
+    for name in ("earth", "earth-long-view"):  # the sky's names cover nothing when the scene opens
+        spec = th.scenario(name)
+        run = spec.simulate(**{k: v for k, v in spec.preview.items() if not isinstance(v, str)})
+        d = spec.drawing(run)
+        texts = [t for t in _texts(d, np.array([0])) if t.shown_first and t.shown[0]]
+        boxes = [(t, _box(_project(t.pos, d.camera)[0][0], t.text, t.anchor)) for t in texts]
+        for i, (a, b1) in enumerate(boxes):
+            for c, b2 in boxes[i + 1:]:
+                if (a.label is not None and a.label.yields) or (c.label is not None and c.label.yields):
+                    assert not _overlap(b1, b2), (name, a.text, c.text)
