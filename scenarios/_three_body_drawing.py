@@ -18,7 +18,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .drawing import Drawing, Frame, Label, ORBIT_RADIUS, Option, Path, Segments, Sphere, View, other_bodies
+from .drawing import Drawing, Frame, Label, ORBIT_RADIUS, Option, Path, Segments, Sphere, View, body_name, other_bodies
 
 TURNING = "turning"  # the Frame whose children are drawn in co-rotating coordinates
 MARKER_COLOR = (250, 250, 255)
@@ -163,7 +163,7 @@ def body_key(d: Drawing, names: Sequence[str], position) -> None:
     whose bodies would put their names on other labels."""
     colours = {it.name.split("/", 1)[1]: it.color for it in d.items if isinstance(it, Sphere) and
                it.name.startswith("bodies/") and it.name.count("/") == 1}
-    text = " · ".join(f"{colour_name(colours[n])}: {n}" for n in names if n in colours)
+    text = " · ".join(f"{colour_name(colours[n])}: {body_name(n)}" for n in names if n in colours)
     if text:
         d.add(Label(name="body_key", text=text, position=np.asarray(position, float)))
 

@@ -324,6 +324,17 @@ def frame_indices(n: int, max_frames: int = MAX_FRAMES) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, max_frames).round().astype(int))
 
 
+# the bodies a class knows, the same in every scene (by their key in Trajectory.bodies): the Sun
+# yellow, the Earth blue, the Moon pale grey; any other body takes the palette's colour of its place
+BODY_COLOURS: dict[str, RGB] = {"sun": (255, 196, 40), "earth": (70, 130, 230), "moon": (205, 205, 215)}
+BODY_NAMES = {"sun": "Sun", "earth": "Earth", "moon": "Moon", "attractor": "attracting body"}
+
+
+def body_name(key: str) -> str:
+    """A body's name as a class reads it: "Sun", "Moon", "Earth" (proper names), others as they are."""
+    return BODY_NAMES.get(key, key)
+
+
 def palette(k: int) -> RGB:
     r, g, b = colorsys.hsv_to_rgb((0.13 + 0.31 * k) % 1.0, 0.75, 0.95)
     return int(255 * r), int(255 * g), int(255 * b)
@@ -685,9 +696,9 @@ def other_bodies(d: Drawing, run, bodies: Mapping[str, np.ndarray] | None = None
     for j, (name, pos) in enumerate(bodies.items()):
         pos = np.asarray(pos, float)[f]
         pos = ORBIT_RADIUS * unit(pos) if directions else k * pos
-        col = palette(j)
+        col = BODY_COLOURS.get(name, palette(j))
         d.add(Sphere(name=f"bodies/{name}", group="bodies", radius=0.12, color=col, position=pos),
-              Label(name=f"bodies/{name}/label", group="bodies", text=name, position=(0.0, 0.0, 0.2)))
+              Label(name=f"bodies/{name}/label", group="bodies", text=body_name(name), position=(0.0, 0.0, 0.2)))
         if trails(name):
             d.add(Path(name=f"body_trails/{name}", group="bodies", points=pos, color=col, thickness=0.02, at=at))
     return k

@@ -402,3 +402,23 @@ def test_a_star_name_that_covers_a_texts_place_on_every_side_gives_way():
             for c, b2 in boxes[i + 1:]:
                 if (a.label is not None and a.label.yields) or (c.label is not None and c.label.yields):
                     assert not _overlap(b1, b2), (name, a.text, c.text)
+
+
+@pytest.mark.parametrize("name", ["earth", "lunar-perturbation", "syzygy", "moon"])
+def test_the_sun_earth_and_moon_look_and_are_named_alike_in_every_scene(name):
+    """The Moon was a large yellow ball in one scene and purple in another, the Earth green, and
+    the labels read "sun", "moon", "earth": the bodies a class knows keep one colour and their
+    proper names wherever they are drawn."""
+    import theoria as th
+    from theoria.scenarios.drawing import BODY_COLOURS, Label, Sphere
+
+    spec = th.scenario(name)
+    run = spec.simulate(**{k: v for k, v in spec.preview.items() if not isinstance(v, str)})
+    d = spec.drawing(run)
+    balls = {it.name.split("/")[1]: it for it in d.items if isinstance(it, Sphere) and it.name.startswith("bodies/")}
+    known = {k: v for k, v in balls.items() if k in BODY_COLOURS}
+    assert known, list(balls)
+    for key, ball in known.items():
+        assert tuple(ball.color) == BODY_COLOURS[key], (key, ball.color)
+    texts = {it.text for it in d.items if isinstance(it, Label) and isinstance(it.text, str)}
+    assert not texts & {"sun", "moon", "earth", "attractor"}, texts
