@@ -12,7 +12,7 @@ from ..physics.constants import EARTH_MOON_DISTANCE_KM, MOON_EARTH_MASS_RATIO
 from ..physics.params import Param, ParameterError
 from ..physics.three_body import collinear as col
 from ..physics.three_body.nbody import integrate_dop853
-from .drawing import Camera, Drawing, Label, ORBIT_RADIUS, Segments, View, new_drawing
+from .drawing import Camera, Drawing, Label, ORBIT_RADIUS, Segments, View, clock_of, new_drawing
 from . import _three_body_drawing as tbd
 from .base import Diverged, Comparison, Run, Scenario, get, register
 from .budget import Cost, trajectory_bytes
@@ -271,15 +271,19 @@ def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
                     if len(segs):
                         d.add(Segments(name=f"{tbd.TURNING}/zero_velocity/{name}", points=segs, colors=col,
                                        thickness=0.008))
-            d.add(Label(name="zero_velocity_key", text="zero-velocity curves 2Ω = C_J: L1 red, L2 orange, L3 blue",
+            d.add(Label(name="zero_velocity_key", text="zero-velocity curves (2Ω = the Jacobi constant): L1 red, L2 orange, L3 blue",
                         position=(-R, -R, 0.0)))
         tbd.body_key(d, list(bodies), (-R, 1.2 * R, 0.0))  # under the read-out
         tbd.line(d, f"{tbd.TURNING}/axis", (-1.25 * k, 0, 0), (1.25 * k, 0, 0), thickness=0.004)
         drift = run.plot_series.get("satellite drift from the point (distances)")
         where = run.params.get("lagrange_point", "its point")
-        texts = [f"t = {t[j]:.3g} {tr.time_unit}" +
-                 (f"   satellite {drift[i]:.3g} from {where}" if drift is not None else "")
-                 for j, i in enumerate(f)]
+        from ..app.format import human_number  # "2.24 × 10⁻⁷", as the panel writes numbers
+
+        orbits = clock_of(run).scale  # t in the turning frame's radians, read out in its turns
+        turns = [f"{x:.3g}" for x in np.asarray(t, float)[: len(f)] * orbits]
+        texts = [f"t = {n} orbit{'' if n == '1' else 's'}" +
+                 (f"   satellite {human_number(drift[i], 3)} from {where}" if drift is not None else "")
+                 for n, i in zip(turns, f)]
     else:
         # the line through the three bodies: they start on x and turn with the frame
         P = [np.asarray(tr.bodies[n], float) for n in ("A", "B", "C") if n in tr.bodies]

@@ -258,7 +258,8 @@ class Clock:
 # the trajectory's time unit → (words, name); a time in the unit of an orbital rate is counted in orbits
 _CLOCK_WORDS = {"s": ("s", "t"), "day": ("days", "t"), "d": ("days", "t"), "yr": ("years", "t"),
                 "size/distance": ("", "size/distance"), "G=1 units": ("time units (G = 1)", "t")}
-_PER_ORBITAL_RATE = ("1/n·rad", "1/δ·rad", "1/δ", "unit")  # "unit": a time unit of its own, δ in rad per unit
+# "unit": a time unit of its own, δ in rad per unit; "orbits/2π": the turning frame's radians (rate 1)
+_PER_ORBITAL_RATE = ("1/n·rad", "1/δ·rad", "1/δ", "unit", "orbits/2π")
 
 
 def clock_of(run) -> Clock:

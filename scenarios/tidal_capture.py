@@ -150,13 +150,14 @@ def _simulate(values, progress=None):
     notes = [f"This run: {what}.",
              "The tidal rate c is exaggerated so that despinning takes thousands of orbits rather than millions of "
              "years; the capture probability does not depend on it as long as it is weak (see the warning).",
-             "plot_series spin_rate_orbit_mean_n: the spin averaged over each orbit (exact: the periapse-to-periapse "
-             "turn / 2π), with the resonances and the pseudo-synchronous rate as lines."]
+             "The plot: the spin averaged over each orbit (exact: the periapse-to-periapse turn / 2π), with the "
+             "resonances and the pseudo-synchronous rate as lines."]
     n = len(t)
-    series = {"spin_rate_orbit_mean_n": np.concatenate([[values["spin_rate"]], rate]),
-              "resonance_3_2": np.full(n, 1.5), "resonance_1_1": np.full(n, 1.0),
-              "pseudo_synchronous_n": np.full(n, q)}
-    traj.series.update({"spin_rate_orbit_mean_n": series["spin_rate_orbit_mean_n"]})
+    mean_spin = np.concatenate([[values["spin_rate"]], rate])
+    series = {"spin rate, mean over each orbit (n)": mean_spin,
+              "3:2 resonance (n)": np.full(n, 1.5), "1:1 resonance (n)": np.full(n, 1.0),
+              "pseudo-synchronous rate (n)": np.full(n, q)}
+    traj.series.update({"spin_rate_orbit_mean_n": mean_spin})
     return Run("tidal-capture", values, traj, m, comps, notes, plot_series=series, warnings=warnings)
 
 
@@ -183,7 +184,7 @@ def _batch(values, swept):
 
 
 register(Scenario(
-    series_units={"attractor_[xyz]": "a", r"resonance_\d+_\d+": "n"},
+    series_units={"attractor_[xyz]": "a"},  # the orbit's semi-major axis
     name="tidal-capture",
     title="Tidal despinning and capture into resonance (Mercury's 3:2, the Moon's 1:1)",
     section="§833 (beyond Euler)",

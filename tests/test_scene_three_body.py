@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from theoria.app.format import human_number
 from theoria.app.scene import SceneView
 from theoria.physics import quaternion
 from theoria.physics.three_body import collinear as col
@@ -120,7 +121,9 @@ def test_collinear_restricted_points_and_zero_velocity_curves():
     drift = run.plot_series["satellite drift from the point (distances)"]
     texts = d.item("readout").text
     for j in (0, d.n_frames // 2, d.n_frames - 1):
-        assert texts[j].startswith(f"t = {tr.t[f[j]]:.3g} ") and f"satellite {drift[f[j]]:.3g} from L1" in texts[j]
+        # time in the frame's turns, the drift as the panel writes numbers ("5.62 × 10⁻⁹")
+        assert texts[j].startswith(f"t = {tr.t[f[j]] / (2 * np.pi):.3g} orbit")
+        assert f"satellite {human_number(drift[f[j]], 3)} from L1" in texts[j] and "e-" not in texts[j]
     _frames_consistent(d)
     _playback_only_moves(d)
 

@@ -215,7 +215,7 @@ def test_tidal_capture_single_runs_captured_or_passing_through():
     assert not any("weak-tide" in w for w in sc.simulate(orbits=200).warnings)  # the default tide is inside it
     assert r1.metrics["captured_resonance"] == 1.0 and r1.metrics["final_spin_rate_n"] == pytest.approx(1.0, abs=1e-3)
     assert r2.metrics["captured_resonance"] == 1.5 and r2.metrics["final_spin_rate_n"] == pytest.approx(1.5, abs=1e-3)
-    s = r2.plot_series["spin_rate_orbit_mean_n"]
+    s = r2.trajectory.series["spin_rate_orbit_mean_n"]
     assert s[0] == 1.8 and len(s) == len(r2.trajectory.t)
     with pytest.raises(th.ParameterError, match="orbits"):
         sc.simulate(orbits=5)
