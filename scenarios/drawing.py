@@ -30,6 +30,7 @@ from typing import Any, Callable, ClassVar, Mapping, Sequence
 
 import numpy as np
 
+from ..physics.constants import JULIAN_YEAR_DAYS
 from ..physics.inertia import ellipsoid_semi_axes
 
 Vec = tuple[float, float, float]
@@ -258,6 +259,7 @@ class Clock:
 # the trajectory's time unit → (words, name); a time in the unit of an orbital rate is counted in orbits
 _CLOCK_WORDS = {"s": ("s", "t"), "day": ("days", "t"), "d": ("days", "t"), "yr": ("years", "t"),
                 "size/distance": ("", "size/distance"), "G=1 units": ("time units (G = 1)", "t")}
+DAYS_READ_IN_YEARS = 1000.0  # a run in days longer than this is read out in years
 # "unit": a time unit of its own, δ in rad per unit; "orbits/2π": the turning frame's radians (rate 1)
 _PER_ORBITAL_RATE = ("1/n·rad", "1/δ·rad", "1/δ", "unit", "orbits/2π")
 
@@ -268,6 +270,9 @@ def clock_of(run) -> Clock:
     unit = run.trajectory.time_unit
     if unit in _PER_ORBITAL_RATE:
         return Clock(float(run.params.get("orbital_rate", 1.0)) / (2 * np.pi), "orbits")
+    t = np.asarray(run.trajectory.t, float)
+    if unit in ("day", "d") and len(t) and t[-1] - t[0] > DAYS_READ_IN_YEARS:  # Cassini's 74 years, not 27,175 days
+        return Clock(1.0 / JULIAN_YEAR_DAYS, "years")
     words, name = _CLOCK_WORDS.get(unit, (unit, "t"))
     return Clock(1.0, words, name)
 

@@ -613,6 +613,22 @@ def test_a_time_in_the_unit_of_an_orbital_rate_is_read_out_in_orbits(name, value
     assert d.clock.reading(0.0, d.times[-1], human_number).startswith("t = 0 of ")
 
 
+def test_a_run_of_decades_in_days_is_read_out_in_years_as_its_span_is_set():
+    """Cassini's span is set in years (74.4: four node cycles) and its run is counted in days: the
+    read-out said "t = 8816 of 27175 days". Runs in days longer than 1000 days read in years; a
+    month of the Moon stays in days."""
+    from theoria.app.format import human_number
+    from theoria.physics.constants import JULIAN_YEAR_DAYS
+
+    run = get("cassini").simulate()
+    d = get("cassini").drawing(run)
+    years = (d.times[-1] - d.times[0]) / JULIAN_YEAR_DAYS
+    assert 70 < years < 80 and d.clock.reading(d.times[-1], d.times[-1], human_number) == (
+        f"t = {human_number(d.times[-1] / JULIAN_YEAR_DAYS)} of {human_number(d.times[-1] / JULIAN_YEAR_DAYS)} years")
+    short = get("cassini").simulate(years=2)
+    assert get("cassini").drawing(short).clock.words == "days"
+
+
 def test_what_is_drawn_offers_only_what_the_scene_draws():
     """A three-body scene listed the rigid body's overlays (principal axes, polhode, Poinsot's
     ellipsoid …) and the shape's exaggeration, none of which it draws; a rotation scene offers
