@@ -49,6 +49,23 @@ class StepTooLarge(ValueError):
     """The free flow was asked for a step of thousands of turns (`free_flow.prepare`)."""
 
 
+def did_you_mean(word: Any, choices) -> str:
+    """" (did you mean 'spin'?)" for a name typed wrong: the choice it begins, or the nearest
+    spelling (difflib); "" when there is none or `word` is not text."""
+    import difflib
+
+    if not isinstance(word, str) or not word.strip():
+        return ""
+    choices = [c for c in choices if isinstance(c, str)]
+    w = word.strip().lower()
+    starts = [c for c in choices if c.lower().startswith(w)]
+    near = starts if len(starts) == 1 else difflib.get_close_matches(w, [c.lower() for c in choices], n=1, cutoff=0.6)
+    if not near:
+        return ""
+    best = next(c for c in choices if c.lower() == near[0].lower())
+    return f" (did you mean '{best}'?)"
+
+
 SHOW_MAX = 60  # characters of a value shown in a message: a pasted paragraph is cut, never echoed
 
 

@@ -12,7 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import ParameterError, did_you_mean
 
 MAX_TEXT_CHARS = 200  # a value given as longer text is refused before it is parsed (a pasted paragraph)
 
@@ -213,7 +213,8 @@ def resolve(params: Sequence[Param], given: dict[str, Any] | None) -> dict[str, 
     known = {p.name: p for p in params}
     for key in given:
         if key not in known:
-            raise ParameterError(key, given[key], "unknown parameter; known: " + ", ".join(known))
+            raise ParameterError(key, given[key], "unknown parameter" + did_you_mean(key, known) + "; known: "
+                                 + ", ".join(known))
     out = {}
     for p in params:
         out[p.name] = p.parse(given[p.name]) if p.name in given else p.parse(p.default)

@@ -22,7 +22,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..physics.errors import Diverged, ParameterError
+from ..physics.errors import Diverged, ParameterError, did_you_mean
 from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
 from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
@@ -619,8 +619,11 @@ def get(name: str) -> Scenario:
     load_all()
     if isinstance(name, Scenario):  # already one (th.scenario(sc))
         return name
+    if isinstance(name, str) and name not in REGISTRY:  # "Middle-Axis-Flip", "middle_axis_flip"
+        name = {k.lower(): k for k in REGISTRY}.get("-".join(name.strip().lower().replace("_", " ").split()), name)
     if not isinstance(name, str) or name not in REGISTRY:
-        raise ParameterError("scenario", name, "one of " + ", ".join(s.name for s in all_scenarios()))
+        raise ParameterError("scenario", name, "one of " + ", ".join(s.name for s in all_scenarios())
+                             + did_you_mean(name, REGISTRY).replace(" (", "; ", 1).rstrip(")"))
     return REGISTRY[name]
 
 

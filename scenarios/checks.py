@@ -58,10 +58,13 @@ def select(ids: list[str] | None) -> list[Check]:
     if not ids:
         return checks
     known = {c.id for c in checks} | {c.id.split(".")[0] for c in checks}
+    spelt = {k.lower(): k for k in known}  # "e2", "e8.Moon": as the ids are written
+    wanted = []
     for i in ids:
-        if not isinstance(i, str) or i not in known:
+        if not isinstance(i, str) or i.strip().lower() not in spelt:
             raise ParameterError("check", i, "one of " + ", ".join(sorted(known, key=lambda s: (len(s), s))))
-    return [c for c in checks if c.id in ids or c.id.split(".")[0] in ids]
+        wanted.append(spelt[i.strip().lower()])
+    return [c for c in checks if c.id in wanted or c.id.split(".")[0] in wanted]
 
 
 def run_check(c: Check) -> Comparison:

@@ -342,3 +342,21 @@ def test_runs_and_refusals_cross_a_process_boundary_whole():
 def test_a_refused_value_is_shown_as_given_not_rounded_into_the_range():
     with pytest.raises(th.ParameterError, match=r"spin=50\.0000001: allowed range"):
         th.scenario("middle-axis-flip").simulate(spin=50.0000001)
+
+
+def test_a_name_written_another_way_is_found_and_a_misspelt_one_gets_a_suggestion():
+    """A researcher's `th.scenario("Middle-Axis-Flip")`, `simulate(spn=1)` or `th.check("e2")` got the
+    whole list and no hint."""
+    assert th.scenario("Middle-Axis-Flip").name == th.scenario("middle_axis_flip").name == "middle-axis-flip"
+    with pytest.raises(th.ParameterError, match="did you mean 'hyperion'"):
+        th.scenario("hyperon")
+    with pytest.raises(th.ParameterError, match="did you mean 'middle-axis-flip'"):
+        th.scenario("middle")
+    with pytest.raises(th.ParameterError, match=r"spn=1: unknown parameter \(did you mean 'spin'\?\); known: inertia"):
+        th.scenario("middle-axis-flip").simulate(spn=1)
+    with pytest.raises(th.ParameterError) as e:
+        th.scenario("middle-axis-flip").simulate(xyz=1)
+    assert "did you mean" not in str(e.value)  # nothing near: no guess
+    assert [r.id for r in th.check("e2")] == [r.id for r in th.check("E2")]
+    r = _cli("run", "hyperon")
+    assert r.returncode == 2 and "did you mean 'hyperion'" in r.stderr and len(r.stderr.strip().splitlines()) == 1
