@@ -235,7 +235,8 @@ class Run:
             raise ParameterError("frames", frames, "a whole number from 2 to 100000")
         if isinstance(fps, bool) or not isinstance(fps, (int, float, np.integer, np.floating)) or not 0 < fps <= 240:
             raise ParameterError("fps", fps, "frames a second, above 0 and at most 240")
-        return export_run(self, _out_path(path, ".html", force), frames=int(frames), fps=float(fps), view=_view(view))
+        return export_run(self, _out_path(path, (".html", ".htm"), force), frames=int(frames), fps=float(fps),
+                          view=_view(view))
 
     def show(self, port: int = 8080, host: str = "127.0.0.1", block: bool | None = None):
         """Serve this run in the app (http://127.0.0.1:8080 by default) with its parameters. Blocks
@@ -246,13 +247,15 @@ class Run:
         return show_run(self, port=port, host=host, block=block)
 
 
-def _out_path(path, suffix: str, force: bool):
-    """A file `Run.record` / `Run.export_html` may write (app/files.py `check_out`), named `path`."""
+def _out_path(path, suffixes: str | tuple[str, ...], force: bool):
+    """A file `Run.record` / `Run.export_html` may write (app/files.py `check_out`), named `path`
+    with one of `suffixes` (those `theoria record` / `export` take)."""
     from ..app.files import check_out
 
+    suffixes = (suffixes,) if isinstance(suffixes, str) else tuple(suffixes)
     if not isinstance(path, (str, bytes)) and not hasattr(path, "__fspath__"):
-        raise ParameterError("path", path, f"a file name ending in {suffix}")
-    return check_out(path, (suffix,), force=bool(force), what="path")
+        raise ParameterError("path", path, f"a file name ending in {' or '.join(suffixes)}")
+    return check_out(path, suffixes, force=bool(force), what="path")
 
 
 def _view(view):

@@ -222,6 +222,9 @@ def test_record_and_export_from_python_check_what_they_write(tmp_path):
     assert page.read_bytes() == kept
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.html"]
     assert run.record(tmp_path / "a.rrd")["bytes"] > 0
+    # .htm as `theoria export` takes it (it was refused from Python only)
+    assert run.export_html(tmp_path / "a.htm")["bytes"] > 10_000
+    assert _cli("replay", str(tmp_path / "a.htm"), "--check").returncode == 0
 
 
 @pytest.mark.parametrize("kw, says", [
