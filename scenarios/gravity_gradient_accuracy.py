@@ -49,12 +49,13 @@ def _gg_accuracy(values, progress=None):
     return Run("gravity-gradient-accuracy", values, traj, m, comps, notes, plot_series=series)
 
 
-F_VIEW = 2.8  # scene units (the body's largest semi-axis is 1): a farther F waits here, on its direction
+F_VIEW = 2.8  # scene units (the body's largest semi-axis is 1): the farthest F of a sweep is drawn here
 
 
 def _draw(run, spec, view):
     """The run is a sweep of F's distance s (trajectory.t = size/s), so playback brings F in from
-    far away: F at its true distance once in view (beyond F_VIEW it waits there, and says so),
+    far away: F nearer at every frame, at its true distance at the nearest (`drawn_distance`; the
+    caption says where it is drawn nearer),
     labelled with the relative errors of Euler's torque and of the §818 force at that distance
     (the run's plot_series)."""
     d, _ = body_scene(run, spec, view, bodies={})  # F is drawn at its distance, not on a sphere of directions
@@ -63,17 +64,31 @@ def _draw(run, spec, view):
         return d
     f = d.frames
     dist = 1.0 / np.asarray(tr.t, float)[f]  # in sizes (largest semi-axis) from the centre
-    pos = unit(np.asarray(tr.bodies["attractor"], float)[f]) * np.minimum(dist, F_VIEW)[:, None]
+    drawn = drawn_distance(dist)
+    pos = unit(np.asarray(tr.bodies["attractor"], float)[f]) * drawn[:, None]
     nan = np.full(len(tr.t), np.nan)
     et = np.asarray(run.plot_series.get("torque_rel_error", nan), float)[f]
     ef = np.asarray(run.plot_series.get("force_rel_error", nan), float)[f]
-    text = [f"F at s = {s:.3g} sizes{' (drawn nearer)' if s > F_VIEW else ''}: torque error {100 * a:.2g} %, "
-            f"force error {100 * b:.2g} %" for s, a, b in zip(dist, et, ef)]
+    text = [f"F at s = {s:.3g} sizes{' (drawn nearer, on a log scale)' if s > 1.001 * r else ''}: torque error "
+            f"{100 * a:.2g} %, force error {100 * b:.2g} %" for s, r, a, b in zip(dist, drawn, et, ef)]
     d.add(Sphere(name="F", radius=0.1, color=F_COLOR, position=pos),
           Label(name="F/label", text="F", position=(0.0, 0.0, 0.22)),
           Label(name="F_readout", text=text, position=readout_position(d, down=2.0, left=1.8)),
           Segments(name="F_direction", points=line_from_centre(pos), colors=F_COLOR, thickness=0.012))
     return d
+
+
+def drawn_distance(s: np.ndarray) -> np.ndarray:
+    """Where F is drawn for true distances `s` (in sizes): the nearest at its true distance (or at
+    0.75 F_VIEW if that is farther), the farthest at F_VIEW, those between on a log scale, so that F
+    comes in at every frame of the sweep (100 sizes to 2: it waited at F_VIEW for all but the last
+    frames while only the caption changed)."""
+    s = np.asarray(s, float)
+    near, far = float(np.min(s)), float(np.max(s))
+    lo = min(near, 0.75 * F_VIEW)
+    if far <= near * (1 + 1e-12):
+        return np.full_like(s, lo)
+    return lo + (F_VIEW - lo) * np.log(s / near) / np.log(far / near)
 
 
 def _check_ratios(v):

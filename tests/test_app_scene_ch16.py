@@ -392,10 +392,13 @@ def test_gravity_accuracy_brings_f_in_at_its_distance_with_the_errors_there(runs
     err = run.plot_series["torque_rel_error"][d.frames[last]]
     text = own["F_readout"].text[last]
     assert f"s = {1 / tr.t[d.frames[last]]:.3g} sizes" in text and f"{100 * err:.2g} %" in text
-    # far away: F waits at F_VIEW on its direction, and says so
+    # far away: F at F_VIEW on its direction, and says so; between, nearer at every frame (it waited
+    # at F_VIEW for all but the last frames while only the caption changed)
     from theoria.scenarios.gravity_gradient_accuracy import F_VIEW
 
     assert np.linalg.norm(own["F"].position[0]) == pytest.approx(F_VIEW) and "drawn nearer" in own["F_readout"].text[0]
+    r = np.linalg.norm(np.asarray(own["F"].position, float), axis=1)
+    assert np.all(np.diff(r) < 0) and d.n_frames >= 10, r
 
 
 def test_session_applies_the_moons_camera_and_gives_the_view_back():
