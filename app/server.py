@@ -705,26 +705,27 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, on_term)
     t0 = time.perf_counter()
-    # the pool starts with the child that draws the first scene (a sweep's scenario is read later)
-    pool = shared_pool(run.scenario if run is not None else scenario if scenario or sweep else "free-tumble")
-    server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False, run=run, limits=limits, pool=pool,
-                            sweep=sweep)
-    sweep = server._theoria_sweep
-    port = server.get_port()
-    if host in ("0.0.0.0", "::", ""):
-        import socket
+    pool = server = None
+    try:  # from here a Ctrl-C (as soon as the URL is printed) stops whatever has started, and only that
+        # the pool starts with the child that draws the first scene (a sweep's scenario is read later)
+        pool = shared_pool(run.scenario if run is not None else scenario if scenario or sweep else "free-tumble")
+        server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False, run=run, limits=limits,
+                                pool=pool, sweep=sweep)
+        sweep = server._theoria_sweep
+        port = server.get_port()
+        if host in ("0.0.0.0", "::", ""):
+            import socket
 
-        print(f"theoria: listening on all interfaces, port {port}; open http://{socket.gethostname()}:{port}/ "
-              f"(or http://127.0.0.1:{port}/ on this machine). Ctrl-C to stop.", flush=True)
-    else:
-        print(f"theoria: open http://{host}:{port}/ in a browser (Ctrl-C to stop)", flush=True)
-    if precompute:
-        first = run.scenario if run is not None else (scenario or (sweep.scenario.name if sweep else "free-tumble"))
-        n = pool.precompute(all_scenarios(), first=first)
-        if n:
-            print(f"theoria: preparing {n} scenes in the background (defaults and presets, kept for the next "
-                  f"start); started in {time.perf_counter() - t0:.1f} s", flush=True)
-    try:
+            print(f"theoria: listening on all interfaces, port {port}; open http://{socket.gethostname()}:{port}/ "
+                  f"(or http://127.0.0.1:{port}/ on this machine). Ctrl-C to stop.", flush=True)
+        else:
+            print(f"theoria: open http://{host}:{port}/ in a browser (Ctrl-C to stop)", flush=True)
+        if precompute:
+            first = run.scenario if run is not None else (scenario or (sweep.scenario.name if sweep else "free-tumble"))
+            n = pool.precompute(all_scenarios(), first=first)
+            if n:
+                print(f"theoria: preparing {n} scenes in the background (defaults and presets, kept for the next "
+                      f"start); started in {time.perf_counter() - t0:.1f} s", flush=True)
         announced = not precompute
         while True:
             time.sleep(1.0)
@@ -735,10 +736,12 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
     except KeyboardInterrupt:
         pass
     finally:
-        with contextlib.redirect_stdout(io.StringIO()):
-            server.stop()
-        pool.close()
-        if sweep is not None:
+        if server is not None:
+            with contextlib.redirect_stdout(io.StringIO()):
+                server.stop()
+        if pool is not None:
+            pool.close()
+        if sweep is not None and server is not None:
             sweep.close()
     return ended["by"]
 
