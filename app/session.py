@@ -295,7 +295,8 @@ class ClientSession:
                 self.present_cb.on_update(self._on(self._on_present_cb))
                 self.class_html = gui.add_html("")
                 self.limits_md = gui.add_markdown(limits_text())
-        self._present_hidden = [self.draw_folder, self.speed, self.scrub]
+        # projected, the panel shows what the class reads: not the server's limits for the teacher
+        self._present_hidden = [self.draw_folder, self.speed, self.scrub, self.limits_md]
 
     def _make_controls(self) -> ParamControls:
         tab = getattr(self, "_explore", None)

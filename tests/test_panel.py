@@ -270,8 +270,10 @@ def test_session_typed_values_reset_step_and_presenter_mode(monkeypatch):
         assert s.clock == pytest.approx(0.01) and not s.playing and s.view.frame > 0
         s._set_present(True)
         assert s.view.label_scale > 1 and all(not h.visible for h in s.controls._containers)
+        # projected: the server's limits (--host, steps, memory) are the teacher's, not the class's
+        assert not s.limits_md.visible and s.present_cb.visible
         s._set_present(False)
-        assert all(h.visible for h in s.controls._containers)
+        assert all(h.visible for h in s.controls._containers) and s.limits_md.visible
 
 
 def test_presenter_mode_keeps_labels_apart_at_its_size_and_through_a_scenario_switch():
