@@ -75,6 +75,10 @@ def verdict(c) -> tuple[str, str]:
     when there is nothing to compare or one side is exactly 0 (no percentage of a zero: a residual
     against DE421's 0, a run's outcome 0 beside a probability)."""
     e, s = c.euler, c.simulated
+    if "probability" in str(c.label).lower() and _finite(s) and float(s) in (0.0, 1.0) and not _finite(e):
+        # one run's outcome (captured or not) beside a probability over many: no percentage of that
+        return (f"This run: {'yes' if float(s) == 1.0 else 'no'} (1 or 0); the probability is over many starts "
+                f"(a sweep measures it)"), ""
     if not _finite(e) or not _finite(s):
         if _finite(s) and _finite(c.modern):
             return _versus(("the simulation", "the modern value"), s, c.modern)

@@ -46,6 +46,10 @@ def test_verdicts_say_how_far_euler_is_from_the_simulation():
     assert verdict(Comparison("x", None, 1.2137, 0.0)) == ("The modern value: exactly 0; the simulation: 1.214", "")
     assert verdict(Comparison("x", None, 0.0, 0.5)) == ("The simulation: exactly 0; the modern value: 0.5", "")
     assert verdict(Comparison("x", 2.0, 1.0, 9.0))[0] == "Euler and the simulation differ by 50 %"
+    # a run's outcome (captured: 1) beside a probability over many starts "differed by 12 %"
+    words, tone = verdict(Comparison("probability of ending in 1:1", None, 1.0, 0.8751))
+    assert tone == "" and "%" not in words and words.startswith("This run: yes")
+    assert verdict(Comparison("probability of capture into 3:2", None, 0.0, 0.13))[0].startswith("This run: no")
 
 
 def test_metric_keys_become_words_with_units():
