@@ -303,7 +303,7 @@ SETUP = r"""
   T.linePoints = (pr, o, j) => {
     if (!o) return true;  // not made yet: the server's first points come with it
     let line = null;  // the node's own line, below viser's group(s) for it
-    if (o) o.traverse((c) => { if (!line && c.isLineSegments2) line = c; });
+    o.traverse((c) => { if (!line && c.isLineSegments2) line = c; });
     const g = line && line.geometry, a = g && g.attributes && g.attributes.instanceStart;
     if (!a || a.data.array.length !== pr.per) return false;
     if (j < 0) {

@@ -50,8 +50,8 @@ class StepTooLarge(ValueError):
 
 
 def did_you_mean(word: Any, choices) -> str:
-    """" (did you mean 'spin'?)" for a name typed wrong: the choice it begins, or the nearest
-    spelling (difflib); "" when there is none or `word` is not text."""
+    """The hint for a name typed wrong, " (did you mean 'spin'?)": the one choice it begins, or the
+    nearest spelling (difflib); "" when there is none or `word` is not text."""
     import difflib
 
     if not isinstance(word, str) or not word.strip():

@@ -240,8 +240,9 @@ class Run:
 
     def show(self, port: int = 8080, host: str = "127.0.0.1", block: bool | None = None):
         """Serve this run in the app (http://127.0.0.1:8080 by default) with its parameters. Blocks
-        until Ctrl-C in a script (SIGTERM ends the script: exit status 143); returns at once in an interactive session (the server runs on
-        in the background: call `.stop()` on what this returns)."""
+        until Ctrl-C in a script (SIGTERM ends the script: exit status 143); returns at once in an
+        interactive session (the server runs on in the background: call `.stop()` on what this
+        returns)."""
         from ..app.server import show_run
 
         return show_run(self, port=port, host=host, block=block)

@@ -281,8 +281,8 @@ def _cost(values):
 
 
 register(Scenario(
-    series_units={"(earth|moon|moon_corotating)_[xyz]": "LD", "sun_[xyz]": "LD", "distance_over_b": "",
-                  "v/b .*": ""},  # the Sun's direction drawn at 3 LD
+    series_units={"(earth|moon|moon_corotating|sun)_[xyz]": "LD", "distance_over_b": "",
+                  "v/b .*": ""},  # lunar distances; the Sun's direction drawn at 3 of them
     name="syzygy",
     title="The Moon kept in syzygy with the Sun",
     section="Euler 1766, §5–§16",
