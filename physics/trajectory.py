@@ -13,8 +13,14 @@ import numpy as np
 from . import quaternion as quat
 
 
-@dataclass
+@dataclass(repr=False)
 class Trajectory:
+    """The samples of one run: times `t` (in `time_unit`), the attitude `quat_wxyz` (body → space),
+    the angular momentum `L_body` on the body axes and the principal moments `inertia` (in
+    `moment_unit`); the other bodies' positions (`bodies`) and extra series (`series`) on the same
+    times. Derived once: `omega_body` (the polhode), `omega_inertial` (the herpolhode), `L_inertial`,
+    `energy`, `momentum_norm`, `rotation_axis`, `figure_axis`."""
+
     t: np.ndarray  # (N,) times
     quat_wxyz: np.ndarray  # (N,4) attitude, body → inertial
     L_body: np.ndarray  # (N,3) angular momentum, body frame
@@ -53,6 +59,12 @@ class Trajectory:
 
     def __len__(self) -> int:
         return len(self.t)
+
+    def __repr__(self) -> str:
+        """One line (the arrays are in the fields): samples, span, what else it carries."""
+        span = f"{self.t[0]:g}–{self.t[-1]:g} {self.time_unit}" if len(self.t) else "empty"
+        extra = "".join(f"; {what}: {', '.join(d)}" for what, d in (("bodies", self.bodies), ("series", self.series)) if d)
+        return f"<Trajectory of {len(self.t):,} samples, t = {span}{extra}>"
 
     def final_state(self) -> dict:
         return {

@@ -172,7 +172,10 @@ def test_a_script_blocked_in_show_ends_on_sigterm_and_carries_on_after_ctrl_c(tm
     script.write_text("import theoria as th\n"
                       f"th.scenario('free-tumble').simulate(duration=2).show(port={port})\n"
                       "print('after show')\n")
-    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # as from a terminal: SIGINT at its default (a child inherits an ignored one, as the suite's
+    # process may have it after an in-process command, and Python then never raises Ctrl-C)
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         first = p.stdout.readline()  # the URL: the signal comes at once (a Ctrl-C there was a traceback)
         assert "open http" in first, (first, p.stderr.read() if p.poll() is not None else "")
@@ -357,3 +360,16 @@ def test_a_name_written_another_way_is_found_and_a_misspelt_one_gets_a_suggestio
     assert [r.id for r in th.check("e2")] == [r.id for r in th.check("E2")]
     r = _cli("run", "hyperon")
     assert r.returncode == 2 and "did you mean 'hyperion'" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_a_trajectory_is_one_line_and_the_listed_range_is_the_refused_one():
+    """repr(run.trajectory) printed every array; precession-circular listed its length as (0, 10⁵]
+    revolutions and refused 0.0001 with "allowed range [0.5, …]"."""
+    tr = th.scenario("moon").simulate(years=1).trajectory
+    text = repr(tr)
+    assert "\n" not in text and len(text) < 200 and f"{len(tr):,} samples" in text and "earth" in text, text
+    orbits = th.scenario("precession-circular").parameters["orbits"]
+    assert orbits.minimum == 0.5 and not orbits.exclusive_min
+    with pytest.raises(th.ParameterError, match=r"^orbits=0\.0001: .*0\.5"):
+        th.scenario("precession-circular").simulate(orbits=0.0001)
+    assert th.scenario("precession-circular").simulate(orbits=0.5, steps_per_orbit=50).status == "ok"
