@@ -677,3 +677,20 @@ def test_a_short_runs_time_axis_is_in_a_unit_its_ticks_can_show():
     assert time_axis(np.linspace(0.0, 0.01, 3), "days")[1] == "10⁻³ days"
     x, words = time_axis(np.linspace(0.0, 30.0, 3), "s")  # a span its ticks show already: as it is
     assert words == "s" and x[-1] == 30.0
+
+
+def test_hyperions_table_and_tidal_captures_plot_are_in_words():
+    """Hyperion's table said "(1966, to e^3)" and "−0.00%" beside the series' half-width;
+    tidal-capture's legend read "Spin rate orbit mean", "Pseudo synchronous" (code names made
+    words) and a note named the series "plot_series spin_rate_orbit_mean_n"."""
+    import re
+
+    spec = get("hyperion")
+    run = spec.simulate(**{k: v for k, v in spec.preview.items() if not isinstance(v, str)})
+    notes = [c.note for c in run.comparisons if "half-width" in c.label]
+    assert notes and all("^" not in n and not re.search(r"[−-]0\.00\s?%", n) for n in notes), notes
+    assert all(re.search(r"to e[²³⁴⁵⁶]", n) for n in notes), notes
+    run = get("tidal-capture").simulate(orbits=200)
+    assert "spin rate, mean over each orbit (n)" in run.plot_series
+    assert not [k for k in run.plot_series if "_" in k], list(run.plot_series)
+    assert not [n for n in run.notes if "plot_series" in n or "_n" in n], run.notes
