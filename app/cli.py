@@ -97,8 +97,9 @@ def _parse_sets(items: list[str] | None, spec=None) -> dict[str, str]:
 
 
 def _scenario_values(name: str, sets: list[str] | None, duration: str | None, preset: str | None = None):
-    """The scenario and its values from --preset, --set and --duration (text, parsed as a --set
-    value is: an error shows what was typed, not what a float made of it)."""
+    """The scenario, its values from --preset, --set and --duration (text, parsed as a --set
+    value is: an error shows what was typed, not what a float made of it), and a sentence for each
+    value given that these values leave unused (`Scenario.unused`)."""
     from theoria.scenarios import get
 
     sc = get(name)
@@ -117,7 +118,8 @@ def _scenario_values(name: str, sets: list[str] | None, duration: str | None, pr
             raise ParameterError("--duration", duration, f"the same as --set duration={sets['duration']}, "
                                  "or one of the two")
         given["duration"] = duration
-    return sc, sc.resolve(given)
+    values = sc.resolve(given)
+    return sc, values, sc.unused(values, given)
 
 
 SECTION_COLUMN = 26  # `theoria list`: the width of the § column
@@ -190,10 +192,11 @@ def write_table(run, path: str) -> int:
 
 def cmd_run(args) -> int:
     table_out = _check_table_out(getattr(args, "out", None), getattr(args, "force", False))
-    sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
+    sc, values, unused = _scenario_values(args.name, args.set, args.duration, args.preset)
     sc.check_budget(values, **_limits(args))  # before the run: a run of hours is refused at once
     prog = Progress(f"run {sc.name}", quiet=False)
     result = sc.simulate_fn(values, progress=prog)
+    result.warnings.extend(unused)
     prog.done()
     if table_out is not None:
         n = _put_in_place(table_out, lambda: write_table(result, table_out))
@@ -344,9 +347,11 @@ def _write_command(args, suffixes, write, what: str, how: str) -> int:
     file written whole or not at all (app/files.py), and where it went said."""
     from theoria.app.files import check_out
 
-    sc, values = _scenario_values(args.name, args.set, args.duration, args.preset)
+    sc, values, unused = _scenario_values(args.name, args.set, args.duration, args.preset)
     sc.check_budget(values, **_limits(args))
     check_out(args.out, suffixes, force=args.force)
+    for sentence in unused:
+        sys.stderr.write(f"note: {sentence}\n")
     _put_in_place(args.out, lambda: write(sc.name, args.out, values))
     _wrote(args.out, f"{what} of {sc.name}", how)
     return 0
@@ -562,6 +567,8 @@ def _main(argv: list[str] | None) -> int:
         except BrokenPipeError:  # `theoria … | head`: the reader has what it wanted
             _drop_stdout()
             return 1
+        except WriteError as e:  # an OSError whose message already says which file and why
+            return _fail(f"error: {e}", 1)
         except OSError as e:
             if e.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO):
                 raise
@@ -569,8 +576,6 @@ def _main(argv: list[str] | None) -> int:
             return _fail(f"error: cannot write the output ({e.strerror})", 1)
         except ParameterError as e:
             return _fail(f"error: {e}", 2)
-        except WriteError as e:
-            return _fail(f"error: {e}", 1)
         except KeyboardInterrupt:
             return _fail("interrupted", EXIT_INTERRUPTED)
         except Terminated:

@@ -12,6 +12,9 @@
   into a field made with 1000 it shows 1 and sends 0.)
 - A choice → a dropdown of the choices' words (`Param.choice_labels`).
 
+A control that the chosen values leave unused (`Param.applies`: collinear's energy while the line
+turns) is hidden until a choice uses it.
+
 Labels are `Param.display()` ("Spin rate about the middle axis (rad/s)"), never the keys.
 Numerical settings and modelling details (`Param.advanced`: steps, sample spacings, which
 ephemeris) go into a folder kept folded ("More settings").
@@ -156,6 +159,7 @@ class ParamControls:
         # wrap(fn) → a viser callback calling fn() (the session's: one browser event at a time)
         self._wrap = wrap or (lambda fn: (lambda event: fn()))
         self._removed = False
+        self.hidden = False  # all of them, as presenter mode has it (`show_applicable`)
         self.gui = gui
         self.on_change, self.on_error = on_change, on_error
         self.handles: dict[str, Any] = {}
@@ -178,6 +182,7 @@ class ParamControls:
             with advanced:
                 self._add(extra, vals)
         self._top = True
+        self.show_applicable()
 
     def _next(self) -> float | None:
         if self._order is None:
@@ -228,6 +233,8 @@ class ParamControls:
             return
         p = self.spec.param(name)
         self._values[name] = p.choice_of(shown) if p.kind == "choice" else shown
+        if p.kind == "choice":
+            self.show_applicable()
         if self.on_change is not None:
             self.on_change(name, debounce)
 
@@ -282,8 +289,31 @@ class ParamControls:
                 if name in values:
                     self._values[name] = values[name]
                     self._show(name, values[name])
+            self.show_applicable()
         finally:
             self._guard = False
+
+    def set_hidden(self, on: bool) -> None:
+        """Every control hidden (presenter mode: the keys play, step and choose presets) or shown
+        again, each as the values use it."""
+        self.hidden = on
+        for c in self._containers:
+            try:
+                c.visible = not on
+            except Exception:
+                pass
+        self.show_applicable()
+
+    def show_applicable(self) -> None:
+        """Only the controls these values use are shown (collinear's energy while the bodies fly
+        apart, its turns while they turn): a field that changes nothing is not offered. With
+        `hidden` (presenter mode) none of them is."""
+        for p in self.spec.params:
+            if p.applies and p.name in self.handles:
+                shown = self.forms.get(p.name, self.handles[p.name])
+                on = not self.hidden and p.applies_to(self._values)
+                if shown.visible != on:
+                    shown.visible = on
 
     def _show(self, name: str, v) -> None:
         p = self.spec.param(name)

@@ -30,8 +30,13 @@ _WRITTEN: set[str] = set()
 _NEW_ONLY: dict[str, str] = {}  # key → how to ask for the replacement
 
 
-class WriteError(Exception):
-    """The file could not be written; the target is as it was. Message: one line."""
+class WriteError(OSError):
+    """The file could not be written; the target is as it was. Message: one line; `errno` the
+    system's reason when there was one (ENOSPC for a full disk), as an OSError carries it."""
+
+    def __init__(self, message: str, errno: int | None = None):
+        super().__init__(message)
+        self.errno = errno
 
 
 def check_out(path: str | os.PathLike, suffixes: tuple[str, ...], force: bool = False, what: str = "--out",
@@ -170,10 +175,10 @@ def write_whole(path: str | os.PathLike, data: bytes) -> int:
                 except OSError:
                     pass
             if isinstance(e, AppearedMeanwhile):
-                raise WriteError(f"{path}: {e.strerror}; the new result was not written") from None
+                raise WriteError(f"{path}: {e.strerror}; the new result was not written", e.errno) from None
             if isinstance(e, OSError):
                 reason = e.strerror or str(e) or type(e).__name__
-                raise WriteError(f"{path}: cannot write ({reason}); nothing was changed") from None
+                raise WriteError(f"{path}: cannot write ({reason}); nothing was changed", e.errno) from None
             raise
     try:  # the rename itself is durable once the directory is
         dfd = os.open(target.parent, os.O_RDONLY)

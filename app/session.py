@@ -638,8 +638,7 @@ class ClientSession:
         self.controls.remove()
         self.controls = self._make_controls()
         if self.present:
-            for h in self.controls._containers:
-                h.visible = False
+            self.controls.set_hidden(True)
         self._pguard = True
         try:
             options = self._preset_options(self.spec)
@@ -867,11 +866,12 @@ class ClientSession:
     def _apply_present(self) -> None:
         """Presenter mode: large type in the panel and the scene, controls hidden (the keys play,
         step and pick presets)."""
-        for h in self._present_hidden + list(self.controls._containers):
+        for h in self._present_hidden:
             try:
                 h.visible = not self.present
             except Exception:
                 pass
+        self.controls.set_hidden(self.present)
         self.view.label_scale = PRESENT_LABEL_SCALE if self.present else 1.0
         # the scene grows with the screen's rows, the labels by their scale: kept apart at that size
         self.view_opts.text_scale = PRESENT_LABEL_SCALE * APP_ROWS / PRESENT_ROWS if self.present else 1.0

@@ -607,7 +607,7 @@ class ZarrWriter:
             if older is not None and not os.path.lexists(self.path):
                 os.rename(older, self.path)  # the older store back in its place
             raise WriteError(f"cannot put the finished sweep in place of {self.path} ({e.strerror or e}); it is "
-                             f"whole in {self.store}") from None
+                             f"whole in {self.store}", e.errno) from None
         if older is not None:
             if os.path.islink(older) or not os.path.isdir(older):
                 os.remove(older)
@@ -755,7 +755,7 @@ class ParquetWriter:
                 os.remove(tmp)
             if isinstance(e, OSError):
                 raise WriteError(f"{self.path}: cannot write ({e.strerror or e}); the finished chunks are kept in "
-                                 f"{self.parts}, --resume joins them") from None
+                                 f"{self.parts}, --resume joins them", e.errno) from None
             raise
         shutil.rmtree(self.parts)
 

@@ -223,8 +223,9 @@ def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-
                 break
             step, r_new, J_new = first
         y, r, J = y - step, r_new, J_new
-    raise ParameterError("eccentricity", orbit.e, f"no forced (periodic) libration found with (B−A)/C = {gamma:g}: "
-                         "too close to the resonance (B−A)/C = ±1/3 or too eccentric; lower one of them")
+    raise ParameterError("eccentricity", orbit.e, f"small enough for a forced (periodic) libration with asymmetry "
+                         f"(B−A)/C = {gamma:g}; none was found: lower eccentricity, or move asymmetry away from "
+                         "the resonance (B−A)/C = ±1/3")
 
 
 def free_libration_floquet(orbit, gamma, gm, lam0, lamdot0, rtol=1e-12, atol=1e-13, d=1e-6):

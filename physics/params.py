@@ -40,6 +40,22 @@ class Param:
     label: str = ""
     choice_labels: tuple = field(default_factory=tuple)
     advanced: bool = False
+    # used only with these values of choice parameters: {"motion": ("rotating", "restricted")},
+    # kept as ((name, values), ...); elsewhere the app hides the control and a run says it is unused
+    applies: Any = ()
+
+    def __post_init__(self):
+        if isinstance(self.applies, dict):
+            pairs = tuple((k, tuple(v) if isinstance(v, (tuple, list)) else (v,)) for k, v in self.applies.items())
+            object.__setattr__(self, "applies", pairs)
+
+    def applies_to(self, values: dict[str, Any]) -> bool:
+        """Whether these values (all of a scenario's) use this parameter."""
+        return all(str(values.get(k)) in map(str, allowed) for k, allowed in self.applies)
+
+    def applies_text(self) -> str:
+        """Where it is used, in words: "with motion = rotating or restricted"."""
+        return " and ".join(f"with {k} = {' or '.join(map(str, allowed))}" for k, allowed in self.applies)
 
     def title(self) -> str:
         """The human name: `label`, else the key with its underscores as spaces."""

@@ -22,7 +22,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..physics.errors import Diverged, ParameterError, did_you_mean
+from ..physics.errors import Diverged, ParameterError, did_you_mean, show_value
 from ..physics.params import Param, resolve
 from ..physics.trajectory import Trajectory
 from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
@@ -371,8 +371,6 @@ RESERVED = ("progress", "preset", "max_steps", "max_memory")  # keywords of Scen
 def in_python_words(e: ParameterError) -> ParameterError:
     """A ParameterError of the command line's (`--out=…`, `--set=k=v`, `--resume=--force`) as a
     Python caller reads it: the keywords for the flags (`out=…`, `k=v`, `resume=True, force=True`)."""
-    from ..physics.errors import show_value
-
     name, value, allowed = e.name, e.value, str(e.allowed)
     if not (isinstance(name, str) and name.startswith("--")):
         return e
@@ -440,6 +438,11 @@ class Scenario:
         for p in self.params:
             if p.name in RESERVED:
                 raise ValueError(f"scenario {self.name}: a parameter may not be called {p.name!r}")
+            for k, allowed in p.applies:
+                choice = next((q for q in self.params if q.name == k and q.kind == "choice"), None)
+                if choice is None or not set(map(str, allowed)) <= set(map(str, choice.choices)):
+                    raise ValueError(f"scenario {self.name}: {p.name} applies with {k} = {allowed}, "
+                                     f"which is not a choice parameter's choices")
         presets = self.presets.items() if isinstance(self.presets, Mapping) else self.presets
         object.__setattr__(self, "presets", types.MappingProxyType({n: types.MappingProxyType(dict(v)) for n, v in presets}))
         object.__setattr__(self, "overlays", types.MappingProxyType(dict(self.overlays)))
@@ -493,9 +496,18 @@ class Scenario:
         A run that would need more than `max_steps` integrator steps or keep more than
         `max_memory` bytes is refused before it starts (`BudgetExceeded`, a ParameterError naming
         the parameter that drives the cost and the value that fits); None lifts a limit."""
-        resolved = self.resolve(self._merge(given, preset, values))
+        merged = self._merge(given, preset, values)
+        resolved = self.resolve(merged)
         check_budget(self, resolved, max_steps, max_memory)
-        return self.simulate_fn(resolved, progress=progress)
+        run = self.simulate_fn(resolved, progress=progress)
+        run.warnings.extend(self.unused(resolved, merged))
+        return run
+
+    def unused(self, values: Mapping[str, Any], given) -> list[str]:
+        """One sentence for each parameter named in `given` that these values leave unused
+        (collinear's turns when the line collapses): a value typed for nothing is said, not lost."""
+        return [f"{p.name} = {show_value(values[p.name])} is not used here: it applies only {p.applies_text()}"
+                for p in self.params if p.name in given and not p.applies_to(values)]
 
     def metric_unit(self, key: str) -> str | None:
         """The unit of metric `key` ("" for a pure number; None when neither its name nor the

@@ -373,3 +373,54 @@ def test_a_trajectory_is_one_line_and_the_listed_range_is_the_refused_one():
     with pytest.raises(th.ParameterError, match=r"^orbits=0\.0001: .*0\.5"):
         th.scenario("precession-circular").simulate(orbits=0.0001)
     assert th.scenario("precession-circular").simulate(orbits=0.5, steps_per_orbit=50).status == "ok"
+
+
+def test_a_value_given_for_a_part_the_run_does_not_use_is_said_not_lost():
+    """collinear's turns mean nothing while the line collapses from rest: a run given them says so
+    (Python and the command line alike), and the defaults and presets of every scenario set no
+    value their own choices leave unused."""
+    sc = th.scenario("collinear")
+    run = sc.simulate(preset="collapse", turns=5, phi_max_deg=60)
+    said = [w for w in run.warnings if "turns" in w]
+    assert len(said) == 1 and "motion = rotating or restricted" in said[0]
+    assert not any("phi_max_deg" in w for w in run.warnings)
+    assert not any("is not used" in w for w in sc.simulate(turns=1).warnings)
+    for s in map(th.scenario, th.scenarios()):
+        for given in [{}, *s.presets.values()]:
+            assert s.unused(s.resolve(given), given) == [], (s.name, given)
+    out = subprocess.run([sys.executable, "-m", "theoria", "run", "collinear", "--json", "--set", "motion=expansion",
+                          "--set", "lagrange_point=L4"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert any("lagrange_point = L4 is not used" in w for w in json.loads(out.stdout)["warnings"])
+
+
+def test_a_parameter_can_only_depend_on_a_choice_that_exists():
+    from theoria.physics.params import Param
+    from theoria.scenarios.base import Scenario
+
+    bad = Param("x", 1.0, 0, 2, applies={"mode": "fast"})
+    with pytest.raises(ValueError, match="x applies with mode"):
+        Scenario(name="t-bad", title="t", section="§0", group="ch. 15", summary="", params=(bad,), simulate_fn=lambda v, progress=None: None)
+
+
+def test_a_full_disk_is_an_oserror_a_script_can_catch_and_the_old_file_stays(tmp_path, monkeypatch):
+    """From Python a failed write is one line naming the file, catchable as the OSError it is
+    (`except OSError`, errno ENOSPC), and the file that was there is left whole."""
+    import errno
+
+    from theoria.app import files
+
+    run = th.scenario("free-tumble").simulate(duration=2)
+    page = tmp_path / "a.html"
+    run.export_html(page)
+    kept = page.read_bytes()
+
+    def full(fd, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(files, "_write_all", full)
+    with pytest.raises(OSError) as e:
+        run.export_html(page, force=True)
+    assert isinstance(e.value, th.WriteError) and e.value.errno == errno.ENOSPC
+    assert str(e.value).startswith(str(page)) and "No space left" in str(e.value) and "\n" not in str(e.value)
+    assert page.read_bytes() == kept and sorted(p.name for p in tmp_path.iterdir()) == ["a.html"]

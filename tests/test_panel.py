@@ -563,6 +563,29 @@ def test_a_browsers_change_is_taken_while_another_thread_puts_a_control_back():
         assert ctl.values()["spin"] == 4.0 and changes == ["spin"]
 
 
+def test_only_the_controls_the_chosen_motion_uses_are_shown_and_presenter_mode_hides_them_all():
+    from theoria.app.controls import ParamControls
+    from test_gallery import FakeGui
+
+    spec = get("collinear")
+    ctl = ParamControls(FakeGui(), spec)
+
+    def shown():
+        return {n for n in ("turns", "phi_max_deg", "energy", "lagrange_point", "masses")
+                if ctl.forms.get(n, ctl.handles[n]).visible}
+
+    assert shown() == {"turns", "masses"}  # the line turns
+    ctl.handles["motion"].value = spec.param("motion").choice_text("collapse")  # the student's choice
+    assert shown() == {"phi_max_deg", "masses"}
+    ctl.set_values({"motion": "restricted"})  # a preset
+    assert shown() == {"turns", "lagrange_point", "masses"}
+    ctl.set_hidden(True)  # presenter mode
+    ctl.set_values({"motion": "expansion"})  # its key for a preset
+    assert shown() == set()
+    ctl.set_hidden(False)
+    assert shown() == {"energy", "masses"}
+
+
 def test_export_says_where_the_file_went_and_its_size(tmp_path, capsys):
     from theoria.app.cli import main
 
