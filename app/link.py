@@ -32,6 +32,8 @@ class LinkState:
     overlays: dict[str, bool] = field(default_factory=dict)
     present: bool = False
     speed: float | None = None
+    exaggerate: float | None = None  # the body's shape exaggerated (the panel's "Exaggerate the shape")
+    dropped: list = field(default_factory=list)  # (key, value, what it takes) of values not taken
 
 
 def _finite(text: str) -> float:
@@ -78,6 +80,8 @@ def to_query(state: LinkState, spec=None) -> str:
         q.append(("play", "0"))
     if state.speed is not None and state.speed != 1.0:
         q.append(("speed", _num(state.speed, 4)))
+    if state.exaggerate is not None and state.exaggerate != 1.0:
+        q.append(("exag", _num(state.exaggerate, 4)))
     if state.camera is not None:
         q.append(("cam", ",".join(_num(x, 5) for x in state.camera)))
     for k, on in sorted(state.options.items()):
@@ -98,6 +102,7 @@ def from_address(address: str | None) -> LinkState:
     query = urlsplit(address).query if ("?" in address or "://" in address) else address
     for k, v in parse_qsl(query, keep_blank_values=True):
         if len(v) > 400:  # nothing in a link of ours is this long
+            st.dropped.append((k, v, "a value of at most 400 characters"))
             continue
         try:
             if k == "s":
@@ -110,12 +115,16 @@ def from_address(address: str | None) -> LinkState:
                 st.playing = v not in ("0", "false", "no")
             elif k == "speed":
                 st.speed = _finite(v)
+            elif k == "exag":
+                st.exaggerate = _finite(v)
             elif k == "cam":
                 c = tuple(_finite(x) for x in v.split(","))
                 # a camera the view can take: apart from where it looks, and an up that is a direction
                 if len(c) in (6, 9) and all(abs(x) < 1e9 for x in c) and _apart(c[0:3], c[3:6]) \
                         and (len(c) == 6 or _apart(c[6:9], (0.0, 0.0, 0.0))):
                     st.camera = c
+                else:
+                    raise ValueError(v)
             elif k.startswith("o."):
                 st.options[k[2:]] = v not in ("0", "false", "no")
             elif k.startswith("v."):
@@ -123,8 +132,12 @@ def from_address(address: str | None) -> LinkState:
             elif k == "present":
                 st.present = v not in ("0", "false", "no")
         except ValueError:
-            continue
+            st.dropped.append((k, v, _TAKES.get(k, "a finite number")))
     return st
+
+
+_TAKES = {"cam": "six numbers: where the camera is and where it looks (two different points), and "
+                 "optionally three more for its up direction"}
 
 
 def link_values(spec, st: LinkState) -> tuple[dict[str, Any], list[ParameterError]]:

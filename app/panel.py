@@ -31,6 +31,10 @@ def y_axis_px(series_values, px_per_char: float = 7.2, min_px: int = 50) -> int:
         return min_px
     lo, hi = float(v.min()), float(v.max())
     span = hi - lo or abs(hi) or 1.0
+    # uPlot's y range: the data padded by a tenth of their span, out to a multiple of a tenth of
+    # its power of ten (its rangeNum): data down to -700 get a tick at "-1,000"
+    grid = 10 ** np.floor(np.log10(span)) / 10
+    lo, hi = np.floor((lo - 0.1 * span) / grid) * grid, np.ceil((hi + 0.1 * span) / grid) * grid
     step = 10 ** np.floor(np.log10(span / 5))
     decimals = int(max(0, -np.floor(np.log10(step))))
     widest = 0

@@ -41,7 +41,7 @@ from theoria.scenarios.drawing import OVERLAYS, View, palette
 
 from . import browser, gallery, page, playback
 from . import link as linkmod
-from .controls import ParamControls, PerThread, number_param, on_typed
+from .controls import ParamControls, PerThread, format_value, number_param, on_typed
 from .export_html import configure_scene
 from .format import capitalised, human_number, readable
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
@@ -60,6 +60,7 @@ SCRUB_HOLD_S = 3.0
 PAGE_TICK_HZ = 1.0 / CLOCK_TEXT_EVERY
 LINK_ERRORS_SHOWN = 3  # a link's refused values, each in a notification of its own; the rest counted
 SLIDER_DEBOUNCE_S = 0.15  # slider moves closer than this are a drag: only its last value is simulated
+EXAGGERATE_RANGE = (1.0, 20.0)  # the shape exaggeration: 1 is the body as it is
 STEP_FRACTION = 0.01  # ← / → move the clock by this fraction of the run
 LINK_EVERY_S = 0.5  # the address bar follows the view at most this often (1 s while playing)
 PRESENT_LABEL_SCALE = 1.6  # labels in the scene in presenter mode
@@ -148,6 +149,8 @@ class ClientSession:
         self.view.page_plays = self.page_plays
         self._server_moves = True  # the scene shown has something only the server can move
         self.view_opts = View(options=dict(self.link.options) if self.link.scenario else {})
+        if self.link.exaggerate is not None and EXAGGERATE_RANGE[0] <= self.link.exaggerate <= EXAGGERATE_RANGE[1]:
+            self.view_opts.exaggerate = float(self.link.exaggerate)
         self._restore = self.link if (self.link.scenario or self.link.params) else None
         self.drawing = None
         self.drawing_spec: str | None = None  # the scenario whose drawing is shown
@@ -193,6 +196,12 @@ class ClientSession:
         if unknown:
             self._notify_bad(ParameterError("scenario", unknown, "the name of one of the scenes (the list at the top "
                                                           f"of the panel); {self.spec.title} is shown"))
+        for key, value, takes in self.link.dropped[:LINK_ERRORS_SHOWN]:
+            self._notify_bad(ParameterError(key, value, takes), " (from the link: not used)")
+        exag = self.link.exaggerate
+        if exag is not None and not EXAGGERATE_RANGE[0] <= exag <= EXAGGERATE_RANGE[1]:
+            self._notify_bad(ParameterError("exaggerate", exag, "allowed range [%g, %g]" % EXAGGERATE_RANGE),
+                             " (from the link: the default is used)")
         speed = self._restore.speed if self._restore is not None else None
         if speed is not None and not self.speed.min <= speed <= self.speed.max:
             self._notify_bad(ParameterError("speed", speed, f"allowed range [{self.speed.min:g}, {self.speed.max:g}]"),
@@ -270,7 +279,8 @@ class ClientSession:
                     cb = gui.add_checkbox(capitalised(label), initial_value=True)
                     cb.on_update(self._on(self._on_toggle, key))
                     self.toggles[key] = cb
-                self.exag = gui.add_slider("Exaggerate the shape", min=1.0, max=20.0, step=0.5, initial_value=1.0,
+                self.exag = gui.add_slider("Exaggerate the shape", min=EXAGGERATE_RANGE[0], max=EXAGGERATE_RANGE[1],
+                                           step=0.5, initial_value=float(self.view_opts.exaggerate),
                                            hint="multiplies the departures of the semi-axes from their mean")
                 self.exag.on_update(self._on(self._on_exaggerate))
                 on_typed(self.exag, self._typed_into(self.exag))
@@ -465,7 +475,13 @@ class ClientSession:
     def _words_for(self, e: ParameterError, spec=None) -> tuple[str, str]:
         """(the control's name in words, what is allowed) for a refused value."""
         spec = spec or self.spec
-        allowed = str(e.allowed)
+        # the limits are the server's, set by whoever started it: no keyword or flag to a class
+        allowed = re.sub(r" \((?:max_steps, --max-steps|max_memory, --max-memory)\)", " set for this server",
+                         str(e.allowed))
+        for q in sorted(spec.params, key=lambda q: -len(q.name)):  # a key in a formula: its words
+            title = q.title()
+            allowed = re.sub(rf"\b{re.escape(q.name)}\b" + ("" if "_" in q.name else r"(?=\s*[=≤≥<>+])"),
+                             lambda m: title, allowed)
         try:
             p = spec.param(e.name)
             who = p.display()
@@ -473,12 +489,19 @@ class ClientSession:
                 allowed = allowed.replace(f" {p.unit}", f" {p.unit_text()}" if p.unit_text() else "")
         except KeyError:
             who = {"parameters": "These values", "preset": "Preset", "scenario": "Scene",
-                   "speed": "Playback speed"}.get(e.name, e.name)
+                   "speed": "Playback speed", "exaggerate": "Exaggerate the shape", "exag": "Exaggerate the shape",
+                   "cam": "Camera", "t": "Time", "play": "Playing"}.get(e.name, e.name)
         return who, readable(allowed)
 
     def _notify_bad(self, e: ParameterError, tail: str = "", spec=None) -> None:
         who, allowed = self._words_for(e, spec)
-        self.notify(f"Not allowed: {who}", f"“{show_value(e.value)}”: {allowed}{tail}")
+        shown = show_value(e.value)  # what was typed, when it was text
+        if isinstance(e.value, (int, float)) and not isinstance(e.value, bool):
+            try:  # a number as its field shows it (1000000, not 1e+06)
+                shown = show_value(format_value((spec or self.spec).param(e.name), e.value))
+            except (KeyError, TypeError, ValueError, ArithmeticError):
+                pass
+        self.notify(f"Not allowed: {who}", f"“{shown}”: {allowed}{tail}")
 
     def _restore_control(self, name: str) -> bool:
         """A refused value leaves its control: it shows the value of the last good run again (or
@@ -871,6 +894,7 @@ class ClientSession:
                 h.visible = not self.present
             except Exception:
                 pass
+        self._show_class_link()
         self.controls.set_hidden(self.present)
         self.view.label_scale = PRESENT_LABEL_SCALE if self.present else 1.0
         # the scene grows with the screen's rows, the labels by their scale: kept apart at that size
@@ -910,8 +934,8 @@ class ClientSession:
                 self.request()
                 return
             self._notify_bad(e, " — keeping the last good state", spec=req.spec)
-            if req.spec.name == self.spec.name:
-                self._restore_control(e.name)
+            if req.spec.name == self.spec.name and self._restore_control(e.name):
+                self._set_preset_for(self.controls.values())  # back to the preset's values: its name again
             self._status(f"Not allowed: {who} ({allowed}); the scene shows the last good values.")
         else:
             self.notify(f"Error in {req.spec.title}", f"{type(e).__name__}: {e} — keeping the last good state")
@@ -927,7 +951,7 @@ class ClientSession:
             self.progress.value = pct
             if not self.progress.visible:
                 self.progress.visible = True
-            self._status(text or f"Computing the scene… {pct:.0f} %")
+            self._status(capitalised(text) if text else f"Computing the scene… {pct:.0f} %")
             if self.updates == 0:  # nothing drawn yet: the line over the page says what is happening
                 page.set_loading(self.client, "theoria — " + (text or f"computing the scene… {pct:.0f} %"))
         except Exception:
@@ -996,9 +1020,12 @@ class ClientSession:
                 self._restore_view(restore, drawing)
                 # a quick preview's frames are not the full run's: the link's time once more on it
                 self._linked_time = restore.time if preview else None
+                if not preview and restore.time is not None:
+                    self._say_if_outside(restore.time, drawing)
             elif self._linked_time is not None and not preview and drawing.n_frames > 1:
                 linked, self._linked_time = self._linked_time, None
                 self._set_clock_at(linked, drawing)
+                self._say_if_outside(linked, drawing)
             self.view.set_frame(self._frame_index())
             self._follow_camera()
             self._time_gui()
@@ -1097,8 +1124,11 @@ class ClientSession:
         if self.plot is not None:
             self.plot.remove()
         with self.plot_folder:
-            # x is the simulation time, not a date (uPlot's default x scale is a clock)
-            self.plot = self.client.gui.add_uplot(data, ser, aspect=1.6, scales={"x": {"time": False}}, axes=axes)
+            # x is the simulation time, not a date (uPlot's default x scale is a clock); the legend
+            # names the curves without values ("--" beside each name until the pointer is on the plot)
+            # the top tick's label and the last time's sit half outside the plot: room for them
+            self.plot = self.client.gui.add_uplot(data, ser, aspect=1.6, scales={"x": {"time": False}}, axes=axes,
+                                                  legend={"live": False}, padding=(10, 16, 0, 0))
 
     # ---- playback ----------------------------------------------------------------------------
     def _frame_index(self) -> int:
@@ -1179,6 +1209,17 @@ class ClientSession:
             self.clock = float(np.clip(fraction, 0.0, 1.0))
             self._last_tick = None
 
+    def _say_if_outside(self, t: float, drawing) -> None:
+        """A link's time outside the run (t=999 of a 30-s run, t=-5) is shown at the run's end or
+        start, and the class is told so."""
+        t0, t1 = float(drawing.times[0]), float(drawing.times[-1])
+        if t0 - 1e-9 * abs(t1 - t0) <= t <= t1 + 1e-9 * abs(t1 - t0):
+            return
+        c = drawing.clock
+        where = "its end" if t > t1 else "its start"
+        span = f"{c.name} = {human_number(t0 * c.scale)} to {human_number(t1 * c.scale)}{' ' + c.words if c.words else ''}"
+        self.notify("Not allowed: Time", f"“{show_value(t)}”: outside the run ({span}); from the link: {where} is shown")
+
     def _set_clock_at(self, t: float, drawing) -> None:
         """Put the clock at time `t` of `drawing` (in its time unit)."""
         t0, t1 = drawing.times[0], drawing.times[-1]
@@ -1248,7 +1289,8 @@ class ClientSession:
         return linkmod.LinkState(scenario=self.spec.name, params=params,
                                  time=float(d.times[min(self.view.frame, d.n_frames - 1)]),
                                  playing=self.playing, camera=cam, options=options, overlays=overlays,
-                                 present=self.present, speed=float(self.speed.value))
+                                 present=self.present, speed=float(self.speed.value),
+                                 exaggerate=float(self.view_opts.exaggerate))
 
     def link_query(self) -> str | None:
         st = self.link_state()
@@ -1277,6 +1319,7 @@ class ClientSession:
         if key == self._class_key:
             return
         self._class_key = key
+        self._show_class_link()
         if base is None:
             self.class_html.content = ("<p style='color:#666;font-size:0.9em'>Students on the same network can open "
                                        "this scene when the server is started with <b>--host 0.0.0.0</b>.</p>")
@@ -1287,6 +1330,15 @@ class ClientSession:
             f"<a href='{_attr(url)}' style='word-break:break-all'>{_html(url)}</a><br>"
             f"<img alt='QR code of the class link' src='{linkmod.qr_svg_uri(url)}' "
             "style='width:180px;height:180px;margin-top:4px;image-rendering:pixelated'></div>")
+
+    def _show_class_link(self) -> None:
+        """The class link and its QR code are for the projector too; the note on how to start a
+        server students can reach is the teacher's, not shown there."""
+        local = self._class_key is None or self._class_key[0] is None
+        try:
+            self.class_html.visible = not (self.present and local)
+        except AttributeError:  # made before the panel's Read tab
+            pass
 
     def close(self) -> None:
         if not self._closed:

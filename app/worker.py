@@ -1391,7 +1391,12 @@ class SimulationWorker:
             req = Request(self._gen, spec, dict(given), stamps={"request": time.perf_counter()})
             self.last = req
             self._release_jobs()
-            self._shown = {"t": 0.0, "pct": -1.0}
+            shown, self._shown = self._shown["pct"] >= 0, {"t": 0.0, "pct": -1.0}
+        if shown:  # the bar of the run this one replaces (cancelled): this one shows its own
+            try:
+                self.on_progress(None, None)
+            except Exception:
+                pass
         try:
             check_text_lengths(req.given)
             req.values = spec.resolve(req.given)
@@ -1429,7 +1434,7 @@ class SimulationWorker:
                 return
             self._shown.update(t=time.perf_counter(), pct=0.0)
         try:
-            self.on_progress(0.0, f"simulating {req.spec.name}…")
+            self.on_progress(0.0, f"computing “{req.spec.title}”…")
         except Exception:
             pass
 
@@ -1496,7 +1501,7 @@ class SimulationWorker:
             return
         self._shown.update(t=now, pct=pct)
         try:
-            self.on_progress(pct, f"simulating {req.spec.name}… {pct:.0f}%")
+            self.on_progress(pct, f"computing “{req.spec.title}”… {pct:.0f} %")
         except Exception:
             pass
 

@@ -18,7 +18,7 @@ from ..physics import quaternion as quat
 from ..physics.euler_equations import direction_cosines_dot, omega_dot
 from ..physics.torque_free_exact import exact_free_motion
 from .checks import register_check
-from ._rigid_body import (DRIFT_UNITS, INERTIA_PARAM, body_cost, check_body, drift_metrics, free_body_warnings,
+from ._rigid_body import (DRIFT_UNITS, INERTIA_PARAM, MAX_SAMPLES, body_cost, check_body, drift_metrics, free_body_warnings,
                           integrate_body, middle_axis_crossings)
 
 
@@ -54,15 +54,18 @@ def _free_tumble(values, progress=None):
         euler = float(euler) if np.isfinite(euler) else None
         tc = middle_axis_crossings(traj)
         measured = 2.0 * float(np.mean(np.diff(tc))) if len(tc) >= 2 else None
+        why = "; the run is too short to see two crossings"
         if np.max(np.diff(traj.t), initial=0.0) > 0.25 * fm.polhode_period:  # sign changes between samples unseen
             measured = None
+            why = ("; the kept states are too far apart to see each crossing (a long run keeps at most "
+                   f"{MAX_SAMPLES:,} states: shorten the run)")
         if euler is not None:
             m["polhode_period_euler_808_s"] = euler
         if measured is not None:
             m["polhode_period_measured_s"] = measured
         comps.append(Comparison("polhode period", euler, measured, fm.polhode_period, "s",
                                 f"ω circulates about the {circ} axis; {how}; modern: 4K(k)/λ, k² = {fm.m:.6g}" +
-                                ("" if measured is not None else "; the run is too short to see two crossings")))
+                                ("" if measured is not None else why)))
     except ValueError as e:  # a permanent rotation or a sphere has no polhode
         comps.append(Comparison("polhode", None, None, None, "", str(e)))
         warnings = free_body_warnings(traj, None, step=values["step"])

@@ -424,3 +424,13 @@ def test_a_full_disk_is_an_oserror_a_script_can_catch_and_the_old_file_stays(tmp
     assert isinstance(e.value, th.WriteError) and e.value.errno == errno.ENOSPC
     assert str(e.value).startswith(str(page)) and "No space left" in str(e.value) and "\n" not in str(e.value)
     assert page.read_bytes() == kept and sorted(p.name for p in tmp_path.iterdir()) == ["a.html"]
+
+
+def test_a_long_free_tumble_says_its_states_are_too_sparse_not_its_run_too_short():
+    """150,000 s are ~40,000 polhode periods, kept as 20,000 states 7.5 s apart: the comparison
+    gives no simulated period because the states are too sparse, which is what it must say."""
+    run = th.scenario("free-tumble").simulate(duration=150000)
+    note = next(c.note for c in run.comparisons if c.label == "polhode period")
+    assert "too far apart" in note and "too short" not in note
+    assert "too short" in next(c.note for c in th.scenario("free-tumble").simulate(duration=0.5).comparisons
+                               if c.label == "polhode period")

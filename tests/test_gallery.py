@@ -380,6 +380,35 @@ def test_long_run_without_progress_reports_still_shows_the_bar(monkeypatch):
         assert [v for k, v in s.progress.history if k == "visible"] == []
 
 
+def test_the_bar_of_a_run_replaced_while_it_computed_goes_with_it(monkeypatch):
+    """A long run showing its bar, then a quick one asked for (another preset, a value typed): the
+    long run is cancelled, the quick one drawn, and its bar hidden (it stayed at its last percent)."""
+    from theoria.app import worker as server_mod
+
+    def slow_or_quick(values, progress=None):
+        steps = 100 if values["x"] == 1.0 else 0
+        for k in range(steps):
+            time.sleep(0.03)
+            if progress is not None:
+                progress((k + 1) / steps)
+        return get("free-tumble").simulate_fn(get("free-tumble").resolve({"duration": 2.0}))
+
+    spec = scen_base.Scenario("test-replaced", "replaced", "§0", "ch. 15", "a run replaced", (Param("x", 2.0, 0.0, 2.0),),
+                              slow_or_quick, euler_formula="x = 1", presets=(("Replaced: quick", {}),))
+    monkeypatch.setitem(scen_base.REGISTRY, "test-replaced", spec)
+    monkeypatch.setattr(server_mod, "PROGRESS_SHOW_AFTER", 0.1)
+    with _session("test-replaced") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        s.controls.enter("x", "1")
+        _wait(lambda: s.progress.visible is True and s.progress.value > 0)
+        assert "“replaced”" in s.status.content and "test-replaced" not in s.status.content  # its title, not its key
+        n = s.updates
+        s.controls.enter("x", "0.5")
+        _wait(lambda: s.updates > n and s.good_values["x"] == 0.5)
+        time.sleep(0.5)
+        assert s.progress.visible is False
+
+
 def test_a_playing_session_advances_its_clock_and_a_paused_one_does_not():
     """The one playback thread (app/playback.py) moves every playing session's clock by real time;
     a paused session's clock stays where it is."""

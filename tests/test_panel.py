@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import re
 import threading
 import time
 from html.parser import HTMLParser
@@ -201,6 +202,7 @@ def test_a_link_with_a_camera_the_view_cannot_take_still_shows_the_scene(monkeyp
         _wait(lambda: s.updates >= 1, 300)
         assert s.spec.name == "middle-axis-flip" and not s.playing
         assert np.linalg.norm(np.subtract(client.camera.position, client.camera.look_at)) > 0.1
+        assert any(n[0] == "Not allowed: Camera" and "six numbers" in n[1] for n in client.notes)  # and it is said
 
 
 def test_a_link_whose_values_together_go_over_the_budget_still_shows_its_scene(monkeypatch):
@@ -276,8 +278,9 @@ def test_session_typed_values_reset_step_and_presenter_mode(monkeypatch):
         assert s.view.label_scale > 1 and all(not h.visible for h in s.controls._containers)
         # projected: the server's limits (--host, steps, memory) are the teacher's, not the class's
         assert not s.limits_md.visible and s.present_cb.visible
+        assert not s.class_html.visible  # "started with --host 0.0.0.0": the teacher's note, not the class's
         s._set_present(False)
-        assert all(h.visible for h in s.controls._containers) and s.limits_md.visible
+        assert all(h.visible for h in s.controls._containers) and s.limits_md.visible and s.class_html.visible
 
 
 def test_presenter_mode_keeps_labels_apart_at_its_size_and_through_a_scenario_switch():
@@ -313,7 +316,7 @@ def test_session_restores_a_link(monkeypatch):
     from test_gallery import _session, _wait
 
     spec = get("middle-axis-flip")
-    q = "s=middle-axis-flip&p.spin=4.5&p.perturbation=0.002&t=10&play=0&cam=4,1,2,0,0,0&v.axes=0"
+    q = "s=middle-axis-flip&p.spin=4.5&p.perturbation=0.002&t=10&play=0&cam=4,1,2,0,0,0&v.axes=0&exag=3.5"
     monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: "http://127.0.0.1:1/?" + q)
     with _session("free-tumble") as (s, client):
         _wait(lambda: s.updates >= 1, 300)
@@ -324,6 +327,26 @@ def test_session_restores_a_link(monkeypatch):
         assert s.toggles["axes"].value is False
         st = s.link_state()
         assert st.params["spin"] == "4.5" and st.camera[:3] == (4.0, 1.0, 2.0) and st.overlays == {"axes": False}
+        # the shape as exaggerated when the link was copied: drawn so, and the slider says so
+        assert s.view_opts.exaggerate == 3.5 and s.exag.value == 3.5 and "exag=3.5" in s.link_query()
+        s.exag.value = 2.0
+        _wait(lambda: s.view_opts.exaggerate == 2.0, 60)
+        assert "exag=2&" in s.link_query() + "&"
+
+
+@pytest.mark.parametrize("t, end", [("999", True), ("-5", False)])
+def test_a_linked_time_outside_the_run_is_shown_at_its_end_and_said(monkeypatch, t, end):
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    q = f"s=middle-axis-flip&p.duration=30&t={t}&play=0"
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: "http://127.0.0.1:1/?" + q)
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1 and s.spec.name == "middle-axis-flip", 300)
+        _wait(lambda: any(n[0] == "Not allowed: Time" for n in client.notes), 30)
+        text = next(n[1] for n in client.notes if n[0] == "Not allowed: Time")
+        assert text.startswith(f"“{t}”: outside the run (t = 0 to 30 s)") and ("its end" if end else "its start") in text
+        assert s.view.frame == (s.drawing.n_frames - 1 if end else 0)
 
 
 def test_a_link_to_a_scene_that_does_not_exist_says_so(monkeypatch):
@@ -561,6 +584,32 @@ def test_a_browsers_change_is_taken_while_another_thread_puts_a_control_back():
     with _raised_on_another_thread(ctl):
         ctl.handles["spin"].value = 4.0  # the browser's change; its callback runs on this thread
         assert ctl.values()["spin"] == 4.0 and changes == ["spin"]
+
+
+def test_a_plots_y_axis_has_room_for_the_ticks_uplot_puts_beyond_the_data():
+    """lunar-perturbation's node runs down to -680°: uPlot pads the range by a tenth of the span
+    and rounds it out to a hundred, and labels its lowest tick "-1,000", whose minus sign was cut."""
+    from theoria.app.panel import y_axis_px
+
+    assert y_axis_px([np.array([-679.5, 1736.9])]) >= len("-1,000") * 7.2 + 15
+    assert y_axis_px([np.array([0.2, 0.8])]) == 50  # "0.1" … "0.9": the narrowest axis
+
+
+def test_a_run_over_the_budget_is_refused_in_the_panels_words_and_keeps_its_preset():
+    """A class reads the refusal: the control's name for the key, the number as typed, no flag of
+    the command line (the limits are the server's); the values are the preset's again, and so is
+    the name shown under "Start from"."""
+    from test_gallery import _session, _wait
+
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        preset = s.presets.value
+        s.controls.enter("duration", "1e6")
+        _wait(lambda: client.notes and "Length of the run" in client.notes[-1][0], 60)
+        title, text = client.notes[-1]
+        assert text.startswith("“1000000”:") and "Length of the run ≤ 200000 s fits" in text, text
+        assert not re.search(r"max_steps|--max|\bduration\b|e\+0", text + s.status.content), text
+        assert s.presets.value == preset and s.controls.values()["duration"] == s.good_values["duration"]
 
 
 def test_only_the_controls_the_chosen_motion_uses_are_shown_and_presenter_mode_hides_them_all():

@@ -113,6 +113,7 @@ def raw_identifiers(text: str, spec, run) -> list[str]:
                 or re.fullmatch(r"[+-]?\d+(?:\.\d+)?[eE][+-]?\d+", tok)):  # a programmer's 1e-06
             found.append(tok)
     found += re.findall(r"[<>]=|`", text)  # ">=" for ≥, code in backquotes
+    found += re.findall(r"(?:^|(?<=\s))--(?=\s|$)", text)  # a value no one has: a plot legend's "--"
     return found
 
 
