@@ -53,11 +53,16 @@ def _unsafe(frame) -> bool:
     LLVM through ctypes while numba compiles or loads compiled code (its object cache: an
     exception raised there is printed as "Exception ignored on calling ctypes callback function"
     and lost, and the command ran on to the end and exited 0), or a descriptor's `__set_name__`
-    (Python 3.11 turns its exception into a RuntimeError). (The whole chain: a signal handled
-    inside another handler, itself inside numba's code, is as unsafe.)"""
+    (Python 3.11 turns its exception into a RuntimeError), or a module being imported (the
+    commands import scipy, numba and the scenarios as they need them: a KeyboardInterrupt inside
+    a compiled module's initialisation comes back as "ImportError: initialization failed", a
+    traceback, and code that imports something optionally swallows it, so the command ran on and
+    exited 0). (The whole chain: a signal handled inside another handler, itself inside numba's
+    code, is as unsafe.)"""
     while frame is not None:
         code = frame.f_code
         if (code.co_name in ("__del__", "__set_name__") or "llvmlite" in code.co_filename
+                or code.co_filename.startswith("<frozen importlib")
                 or (code.co_name == "_numba_unpickle" and "numba" in code.co_filename)):
             return True
         frame = frame.f_back

@@ -634,6 +634,30 @@ def test_a_signal_inside_set_name_is_not_turned_into_a_runtime_error():
     assert made == []
 
 
+def test_a_signal_while_a_module_imports_is_raised_once_the_import_is_done(tmp_path, monkeypatch):
+    """The commands import scipy, numba and the scenarios as they need them. A Ctrl-C raised inside
+    a compiled module's initialisation came back as "ImportError: initialization failed" (a
+    traceback, exit 1: 3 of 150 stops in an outside probe), and where the import was optional it
+    was swallowed and the command ran to the end (exit 0, 2 of 150). It is raised once the
+    import is done, where it can propagate, and the module is whole."""
+    from theoria.app import interrupt
+
+    (tmp_path / "slow_to_import.py").write_text(textwrap.dedent("""
+        import os, signal, time
+        os.kill(os.getpid(), signal.SIGINT)  # the Ctrl-C, while this module is being imported
+        time.sleep(0.05)
+        WHOLE = True
+        """))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    after = []
+    with pytest.raises(KeyboardInterrupt):
+        with interrupt.cli_signals():
+            import slow_to_import  # noqa: F401
+            after.append("the line after the import")
+    assert sys.modules["slow_to_import"].WHOLE and after == []
+    sys.modules.pop("slow_to_import")
+
+
 @pytest.mark.parametrize("reached", ["the exec'd code", "the command"])
 def test_a_ctrl_c_that_passed_through_code_made_from_text_still_exits_130(tmp_path, reached):
     """`python -m theoria`: a Ctrl-C raised inside code that Python ran from source text (here an
