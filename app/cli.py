@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 import time
 
@@ -113,7 +114,9 @@ def _scenario_values(name: str, sets: list[str] | None, duration: str | None, pr
     given.update(sets)
     if duration is not None:
         if not any(p.name == "duration" for p in sc.params):
-            raise ParameterError("--duration", duration, f"not a parameter of {name}")
+            lengths = [p.name for p in sc.params if re.match(r"(duration|years|orbits|periods|.*turns)", p.name)]
+            raise ParameterError("--duration", duration, f"not a parameter of {sc.name}" + (
+                f"; its length is --set {lengths[0]}=…" if lengths else ""))
         if "duration" in sets and sc.param("duration").parse(sets["duration"]) != sc.param("duration").parse(duration):
             raise ParameterError("--duration", duration, f"the same as --set duration={sets['duration']}, "
                                  "or one of the two")
@@ -125,6 +128,18 @@ def _scenario_values(name: str, sets: list[str] | None, duration: str | None, pr
 SECTION_COLUMN = 26  # `theoria list`: the width of the § column
 
 
+def _param_json(p) -> dict:
+    """A parameter as `list --json` gives it: what a script needs to pass a value that is taken
+    (the choices, whether the minimum itself is allowed, where it applies)."""
+    out = {"name": p.name, "label": p.display(), "default": p.default, "min": p.minimum, "max": p.maximum,
+           "exclusive_min": p.exclusive_min, "allowed": p.allowed(), "unit": p.unit, "kind": p.kind, "help": p.help}
+    if p.kind == "choice":
+        out["choices"] = list(p.choices)
+    if p.applies:
+        out["applies"] = {k: list(v) for k, v in p.applies}
+    return out
+
+
 def cmd_list(args) -> int:
     from theoria.scenarios import all_scenarios
 
@@ -133,8 +148,7 @@ def cmd_list(args) -> int:
         print(json.dumps({"scenarios": [
             {"name": s.name, "title": s.title, "section": s.section, "group": s.group, "kind": s.kind,
              "summary": s.summary, "presets": [n for n in s.presets],
-             "params": [{"name": p.name, "default": p.default, "min": p.minimum, "max": p.maximum,
-                         "unit": p.unit, "kind": p.kind, "help": p.help} for p in s.params]}
+             "params": [_param_json(p) for p in s.params]}
             for s in items]}, indent=2))
         return 0
     w = max(len(s.name) for s in items)

@@ -98,10 +98,12 @@ class Param:
         """Parse a string (or a value) and check it against the range."""
         if isinstance(text, str) and len(text) > MAX_TEXT_CHARS:
             raise ParameterError(self.name, text, f"a value of at most {MAX_TEXT_CHARS} characters")
-        if self.kind == "choice":
-            if str(text) not in map(str, self.choices):
-                raise ParameterError(self.name, text, self.allowed())
-            return str(text)
+        if self.kind == "choice":  # as the scenario names are: "DE421" is de421, " Full" is full
+            given = str(text).strip().lower()
+            for c in self.choices:
+                if str(c).lower() == given:
+                    return str(c)
+            raise ParameterError(self.name, text, self.allowed() + did_you_mean(str(text), map(str, self.choices)))
         if self.kind == "vec3":
             if isinstance(text, str):
                 parts = [p for p in text.replace(" ", "").split(",")]

@@ -168,7 +168,12 @@ def _cassini(values, progress=None):
     extras = {"orbit_normal": nrm, "spin_axis": spin, "node_line": node_line, "ecliptic_pole": k}
     plot = {"obliquity (deg)": np.degrees(obl), "obliquity, Peale (deg)": np.full_like(obl, I_peale),
             "out of plane (arcsec)": off / ARCSEC_RAD}
-    return Run("cassini", values, traj, m, comps, notes, plot_series=plot, extras=extras)
+    # the mean over less than a node cycle still carries the free precession about the state
+    warnings = [] if whole >= 1 else [
+        f"The run ({t[-1] / JULIAN_YEAR_DAYS:.3g} yr) is shorter than one regression of the node "
+        f"({values['node_period_yr']:g} yr): the mean obliquity is over part of a cycle, so the axis's circling "
+        "about Cassini's state is not averaged out. Run at least one node period."]
+    return Run("cassini", values, traj, m, comps, notes, plot_series=plot, extras=extras, warnings=warnings)
 
 
 def _cost(values):

@@ -26,6 +26,9 @@ def _gg_accuracy(values, progress=None):
     d = np.array(values["direction"], float)
     if not np.linalg.norm(d) > 0:
         raise ParameterError("direction", values["direction"], "not the zero vector")
+    if np.ptp(a) == 0:  # a homogeneous sphere: no torque, and its pull is a point mass's exactly
+        raise ParameterError("semi_axes", values["semi_axes"], "semi-axes not all equal (a sphere feels no "
+                             "torque and pulls as a point mass: there is no error to measure)")
     u = d / np.linalg.norm(d)
     ratios = np.geomspace(values["min_ratio"], values["max_ratio"], values["n_points"])
     et = torque_error_vs_size(a, u, ratios)
@@ -46,7 +49,26 @@ def _gg_accuracy(values, progress=None):
              "over the homogeneous ellipsoid (16×16×32 points; converged to ~1e-6 relative at s = 1.25 sizes)."]
     series = {"torque_rel_error": et, "force_rel_error": ef, "ratio_squared": ratios**2}
     traj.series.update(series)
-    return Run("gravity-gradient-accuracy", values, traj, m, comps, notes, plot_series=series)
+    warnings = [f"The {what} error does not fall on a straight line against size/s (its points {off:.2f} decades "
+                f"off the fitted line): for a body this near a sphere (semi-axes {_axes(a)}) the error at small sizes "
+                "is the rounding of the exact quadrature, not the approximation's, so the fitted order is not its "
+                "order. Make the semi-axes differ more."
+                for what, err in (("torque", et), ("force", ef)) if (off := _off_line(ratios[sel], err[sel])) > OFF_LINE]
+    return Run("gravity-gradient-accuracy", values, traj, m, comps, notes, plot_series=series, warnings=warnings)
+
+
+OFF_LINE = 0.05  # decades: an error curve further than this from its fitted power law is not one
+
+
+def _off_line(ratios, errors) -> float:
+    """The largest distance (decades) of log10(error) from its least-squares line in log10(ratio)."""
+    x, y = np.log10(ratios), np.log10(np.maximum(errors, 1e-300))
+    fit = np.polyval(np.polyfit(x, y, 1), x)
+    return float(np.max(np.abs(y - fit)))
+
+
+def _axes(a) -> str:
+    return ", ".join(f"{v:.8g}" for v in a)
 
 
 F_VIEW = 2.8  # scene units (the body's largest semi-axis is 1): the farthest F of a sweep is drawn here

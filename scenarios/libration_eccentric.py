@@ -233,7 +233,7 @@ def _finish(values, s, t, L, q):
                    "Euler keeps only the 1/s³ modulation β; the ellipse adds (5/4)e² sin 2M to the true anomaly, "
                    "which gives 5e²A²/(4A²−2N) — larger than Euler's term"),
         Comparison("free libration period 2π/√(2N) (§838)", mt["free_period_euler"], mt["free_period"],
-                   mt.get("free_period_modern"), "1/n",
+                   mt.get("free_period_modern"), "unit",
                    "modern: Floquet period of small swings about the forced libration (the ellipse to all orders) "
                    "× (1 + φ²/4) for the free amplitude φ"),
     ]

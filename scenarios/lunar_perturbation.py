@@ -144,6 +144,15 @@ def _lunar(values, progress=None):
     T_fast = le.MOON_J2000["sidereal_month_days"] * (1 - e * e) ** 1.5 / (1 + e) ** 2
     warnings = _validity.add([], _validity.coarse_step(values["step_days"], T_fast,
                                                        "the Moon's passage through perigee", "d", "step_days"))
+    # the node's and the apse's mean rates are read from the run: over less than one turn of the
+    # apse line the Sun's monthly and yearly swings of both are not averaged out (1 yr: apse
+    # period 11.3 yr against 8.85; 3 yr: 1 % off; 20 yr: 0.02 %)
+    shortest, line = min((metrics["apse_period_yr"], "the apse line"), (metrics["node_period_yr"], "the node"))
+    if np.isfinite(shortest) and values["duration_yr"] < shortest:
+        warnings.append(f"A run of {values['duration_yr']:g} yr is shorter than one turn of {line} "
+                        f"({shortest:.3g} yr): the periods measured from it still carry the Sun's monthly and "
+                        "yearly swings of the node and the apse (1 yr: 28 % off; 3 yr: 1 %). Runs of 20 years or "
+                        "more measure them to 0.1 %.")
     return Run("lunar-perturbation", values, traj, metrics, comps, notes, plot_series=plot, warnings=warnings)
 
 

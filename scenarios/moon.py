@@ -152,25 +152,52 @@ TERM_2D2M = "2D−2M'"
 J2000_YEAR = 2000.0
 
 
+def resolvable(frequencies, span: float) -> list[bool]:
+    """Which of these frequencies (cycles per unit of `span`, largest term first) a fit over `span`
+    can measure: at least one cycle in the span, and a cycle apart from each larger term kept
+    (Rayleigh's criterion; closer, two terms trade their amplitudes freely: a 0.2-yr run gave the
+    anomalistic-month term as 3.9e7″ against its 16.8″)."""
+    kept: list[float] = []
+    out = []
+    for f in frequencies:
+        ok = abs(f) * span >= 1.0 and all(abs(abs(f) - g) * span >= 1.0 for g in kept)
+        if ok:
+            kept.append(abs(f))
+        out.append(ok)
+    return out
+
+
 def fit_physical_libration(t, tau, free_periods=np.linspace(800.0, 1400.0, 61)):
-    """τ(t) ≈ c₀ + c₁t + Σ_k (a_k sin arg_k + b_k cos arg_k) + free term at period P (scanned).
-    Returns ({label: a_k}, P_free, free amplitude, rms residual), all in radians/days."""
+    """τ(t) ≈ c₀ + c₁t + Σ_k (a_k sin arg_k + b_k cos arg_k) + free term at period P (scanned),
+    with only the terms the span can tell apart (`resolvable`; the others NaN, the free amplitude
+    NaN when its period is longer than the span). Returns ({label: a_k}, P_free, free amplitude,
+    rms residual), all in radians/days."""
     terms = moon.longitude_terms()
+    span = float(np.max(t) - np.min(t))
+    fit_free = span >= float(np.max(free_periods))
+    freqs = [A / (2 * np.pi) for _, _, A, _, _ in terms] + ([1.0 / float(np.max(free_periods))] if fit_free else [])
+    use = resolvable(freqs, span)
+    fit_free = fit_free and use[-1]
     _, _, _, _, _, _, E = moon.fundamental_arguments(t)
     base = [np.ones_like(t), (t - t.mean()) / 1000.0]
-    for _, _, _, arg, mM in terms:
-        a = arg(t)
-        base += [E ** abs(mM) * np.sin(a), E ** abs(mM) * np.cos(a)]
+    for (_, _, _, arg, mM), ok in zip(terms, use):
+        if ok:
+            a = arg(t)
+            base += [E ** abs(mM) * np.sin(a), E ** abs(mM) * np.cos(a)]
     best = None
-    for P in free_periods:
-        X = np.stack(base + [np.sin(2 * np.pi * t / P), np.cos(2 * np.pi * t / P)], 1)
+    for P in (free_periods if fit_free else [np.nan]):
+        free = [np.sin(2 * np.pi * t / P), np.cos(2 * np.pi * t / P)] if fit_free else []
+        X = np.stack(base + free, 1)
         c, *_ = np.linalg.lstsq(X, tau, rcond=None)
         r = float(np.sqrt(np.mean((X @ c - tau) ** 2)))
         if best is None or r < best[0]:
             best = (r, P, c)
     r, P, c = best
-    coef = {lab: float(c[2 + 2 * k]) for k, (lab, *_rest) in enumerate(terms)}
-    return coef, float(P), float(np.hypot(c[-2], c[-1])), r
+    coef, k = {}, 2
+    for (lab, *_rest), ok in zip(terms, use):
+        coef[lab] = float(c[k]) if ok else float("nan")
+        k += 2 if ok else 0
+    return coef, float(P), float(np.hypot(c[-2], c[-1])) if fit_free else float("nan"), r
 
 
 GM_SUN_KM3_DAY2 = C.GM_SUN_KM3_S2 * C.SECONDS_PER_DAY**2
@@ -490,6 +517,15 @@ def _moon(values, progress=None):
         "axes like the run's body axes (the often quoted 7.9° and 6.8° are the uniformly rotating Moon's, "
         "Meeus ch. 53, and short of the real Moon's).",
     ]
+    unmeasured = [name for name, key in (("the anomalistic-month term (27.6 d)", "M'"), ("the annual term (1 yr)", "M"),
+                                         ("the evection term (31.8 d)", "2D−M'")) if not np.isfinite(coef[key])]
+    if not np.isfinite(free_amp):
+        unmeasured.append(f"the free libration ({P_euler / JULIAN_YEAR_DAYS:.1f} yr)")
+    unresolved = []
+    if unmeasured:
+        unresolved.append(f"A span of {values['years']:g} yr cannot tell " + ", ".join(unmeasured) + " apart from the "
+                        "other terms (a term needs a whole cycle in the span, and a cycle apart from its neighbours): "
+                        "not measured; 3 years or more measure them all.")
     if short:
         notes.append("Span under 3 years: the free libration is fitted at Euler's period 2π/√(2N), not measured, "
                      "and the annual term is less certain.")
@@ -506,9 +542,9 @@ def _moon(values, progress=None):
     traj.series.update({"libration_longitude_deg": series["libration_longitude_deg"],
                         "libration_latitude_deg": series["libration_latitude_deg"]})
     # the step against the fastest forcing: the Earth's pull on the Moon's figure repeats twice a month
-    warnings = _validity.add([], _validity.coarse_step(values["step_days"], C.SIDEREAL_MONTH_DAYS / 2,
-                                                       "the Earth's pull on the Moon's figure, which repeats twice "
-                                                       "a month", "d", "step_days"))
+    warnings = _validity.add(unresolved, _validity.coarse_step(values["step_days"], C.SIDEREAL_MONTH_DAYS / 2,
+                                                               "the Earth's pull on the Moon's figure, which repeats "
+                                                               "twice a month", "d", "step_days"))
     return Run("moon", values, traj, m, comps, notes, plot_series=series, warnings=warnings)
 
 

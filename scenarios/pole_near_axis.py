@@ -69,8 +69,12 @@ def _pole_near_axis(values, progress=None):
     # F is fixed in space, the body turns: F's inertial position (initial body frame = space)
     traj = Trajectory(t, q, L, I, time_unit="s", bodies={"centre": np.tile(u, (len(t), 1))},
                       figure_axis_index=0)
-    # the momentary rates: a separate short run over 1/200 turn, finely sampled
-    ts, Ls, qs = integrate(I, w0, T / 200, T / 20000, masses=[PointMass(tidal, _fixed_direction(u))],
+    # the momentary rates: a separate short run, finely sampled, over 1/200 turn or less: short
+    # against the time the pull takes to turn the pole (1/√(3·tidal·ΔI/I)); at tidal = 10⁶ the pole
+    # swung in 1/200 turn, the quartic through it gave |Oo|/dt 20× too slow and §841's 0 as 87.6
+    pull = np.sqrt(3.0 * tidal * np.ptp(I) / np.min(I))
+    window = min(T / 200, 0.02 / pull) if pull > 0 else T / 200
+    ts, Ls, qs = integrate(I, w0, window, window / 100, masses=[PointMass(tidal, _fixed_direction(u))],
                            scheme="yoshida4")
     dspin, dbeta, dgamma = measure_pole_rates(ts, Ls / I)
     e = pole_rates_840(I, spin, (cz, ce, ct), tidal)

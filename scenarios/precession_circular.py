@@ -9,7 +9,7 @@ import numpy as np
 from ..physics import quaternion as quat
 from ..physics.integrator import PointMass, integrate, samples_kept
 from ..physics.kept import kept
-from ..physics.params import Param, ParameterError
+from ..physics.params import Param
 from ..physics.precession import (TYPOS_844_849, euler_N, fit_pole, linear_theory,
                           pole_angles, resonance_849)
 from ..physics.trajectory import Trajectory
@@ -126,12 +126,6 @@ def resonance_sweep(flattening, obliquity, ratios=(20.0, 8.0, 4.0, 3.0, 2.5, 2.2
         out.append((r, -fit.obliquity["2phi"][1], linear_theory(N, r, 1.0, obliquity).obliquity_amplitude,
                     corr.obliquity_amplitude))
     return tuple(out)
-
-
-def _check_circular(values):
-    if values["orbits"] * values["steps_per_orbit"] > 5e6:
-        raise ParameterError("steps_per_orbit", values["steps_per_orbit"],
-                             f"orbits × steps_per_orbit ≤ 5e6 (here {values['orbits']:g} orbits)")
 
 
 def _precession_circular(values, progress=None):
@@ -302,7 +296,6 @@ register(Scenario(
              "wiggle": Option("nutation wiggle, magnified"),
              "centre": Option("direction to the centre of force")},
     cost_fn=_cost,
-    check=_check_circular,
     euler_formula=("ZA = n − εN sin n (ε + 2δ cos n) / (2δ(εε − 4δδ)) · cos 2φ + h sin(ε/δ · (φ + ζ)) (§844)\n"
                    "XZA = m − Nt cos n + εN (ε cos n + 2δ) / (2δ(εε − 4δδ)) · sin 2φ + h/sin n · cos(ε/δ · (φ + ζ))\n"
                    "N = 3gee (aa − cc) / (ε cc s³) (§847)"),

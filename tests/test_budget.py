@@ -245,3 +245,17 @@ def test_a_limit_that_is_not_a_positive_number_is_refused_by_name(kw, allowed):
     assert str(e.value).startswith(f"{name}=") and str(e.value).endswith(": " + allowed), str(e.value)
     for words in ("none", "1e7") if name == "max_steps" else ("none", "4GB", "1e9"):  # as the flags take them
         assert get("free-tumble").simulate(duration=1, **{name: words}).status == "ok"
+
+
+def test_precession_circulars_longest_runs_are_held_to_the_budget_the_limits_lift():
+    """precession-circular listed orbits up to 10⁵ but refused anything over 5e6 steps in all, by a
+    cap of its own that named steps_per_orbit (left at its default) and that --max-steps none did
+    not lift. Its runs are held to the budget as every scenario's are."""
+    from theoria.scenarios import get
+
+    sc = get("precession-circular")
+    sc.check_budget(sc.resolve({"orbits": 60000}))  # 6e6 steps: within the default 2e7
+    with pytest.raises(ParameterError) as e:
+        sc.check_budget(sc.resolve({"orbits": 100000, "steps_per_orbit": 1000}))
+    assert e.value.name in ("orbits", "steps_per_orbit") and "fits" in str(e.value)
+    sc.check_budget(sc.resolve({"orbits": 100000, "steps_per_orbit": 1000}), max_steps=None, max_memory=None)

@@ -68,3 +68,12 @@ def test_bad_values_are_refused_naming_the_parameter():
     with pytest.raises(ParameterError) as e:
         get("cassini").simulate({"node_period_yr": 0.5})
     assert e.value.name == "node_period_yr"
+
+
+def test_a_run_shorter_than_a_node_cycle_says_its_mean_obliquity_is_not_one():
+    from theoria.scenarios import get
+
+    short = get("cassini").simulate(years=0.5)
+    assert short.metrics["node_cycles_averaged"] == 0
+    assert any("shorter than one regression of the node" in w for w in short.warnings)
+    assert not any("regression of the node" in w for w in get("cassini").simulate().warnings)

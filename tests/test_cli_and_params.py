@@ -163,6 +163,18 @@ def test_list_json_has_every_scenario(cli_process):
     assert {"free-tumble", "middle-axis-flip", "initial-axis"} <= names
     flip = next(s for s in json.loads(out)["scenarios"] if s["name"] == "middle-axis-flip")
     assert "Brick: the flip" in flip["presets"]
+    # what a script needs to pass a value that is taken: a choice's choices, whether the minimum
+    # itself is allowed (gravity-start's distance 0.001 was listed as the minimum and refused)
+    from theoria.scenarios import all_scenarios
+
+    listed = {s["name"]: {p["name"]: p for p in s["params"]} for s in json.loads(out)["scenarios"]}
+    for spec in all_scenarios():
+        for p in spec.params:
+            got = listed[spec.name][p.name]
+            assert got["exclusive_min"] == p.exclusive_min and got["allowed"] == p.allowed()
+            assert got.get("choices") == (list(p.choices) if p.kind == "choice" else None)
+    assert listed["gravity-start"]["distance"]["exclusive_min"] is True
+    assert listed["collinear"]["energy"]["applies"] == {"motion": ["expansion"]}
 
 
 def test_preset_flag_gives_the_preset_values_and_set_overrides_them(cli):
@@ -321,3 +333,14 @@ def test_a_whole_number_given_as_text_is_read_exactly():
     for bad in (b"1_0", bytearray(b"10"), "1_0", "２", "2.5", True):
         with pytest.raises(ValueError):
             whole_number(bad)
+
+
+def test_a_choice_is_taken_in_any_case_and_duration_points_to_the_scenarios_own_length(cli):
+    from theoria.scenarios import get
+
+    assert get("moon").param("start").parse("DE421") == "de421"
+    assert get("earth-long-view").param("model").parse(" Full ") == "full"
+    with pytest.raises(ParameterError, match="did you mean 'de421'"):
+        get("moon").param("start").parse("de42")
+    code, _, err = cli("run", "syzygy", "--duration", "1")
+    assert code == 2 and "its length is --set duration_yr=" in err

@@ -602,3 +602,33 @@ def test_libration_times_are_in_the_scenes_time_unit_for_any_orbital_rate():
         assert row.unit == run.metric_units["libration_period"] == "unit" and run.trajectory.time_unit == "unit"
         assert row.euler == pytest.approx(2 * np.pi / (rate * np.sqrt(3 * 0.2)), rel=1e-12)
         assert row.simulated == pytest.approx(row.euler, rel=2e-4)  # 1° of swing: the pendulum's own correction
+
+
+@pytest.mark.parametrize("rate", [1e-6, 1e-9, 100.0])
+def test_the_modern_free_period_does_not_depend_on_the_unit_of_time(rate):
+    """The planar equation has no time scale of its own: every period × n is the same number at any
+    orbital rate n. The Floquet period nudged λ̇ by 10⁻⁶ whatever n: at n = 10⁻⁶ that was a swing
+    as fast as the orbit, and the modern period came out 27.3/n against 16.3/n (the run's and
+    Euler's agreeing with each other)."""
+    sc = get("libration-eccentric")
+    ref = sc.simulate(orbital_rate=1.0).metrics
+    m = sc.simulate(orbital_rate=rate).metrics
+    for key in ("free_period_modern", "free_period_floquet", "free_period"):
+        assert m[key] * rate == pytest.approx(ref[key], rel=1e-5), key
+    assert m["forced_floquet_half_trace"] == pytest.approx(ref["forced_floquet_half_trace"], abs=1e-5)
+
+
+def test_a_sphere_is_refused_and_a_near_sphere_told_its_fitted_order_is_rounding():
+    """semi_axes 1,1,1 gave a torque error order of 0.0025 (0/0) and 1,0.999999,1 of −1.19, against
+    Euler's 2, with no warning; every preset's error curves are straight lines of slope 2."""
+    import theoria as th
+
+    sc = get("gravity-gradient-accuracy")
+    with pytest.raises(th.ParameterError, match="^semi_axes=1,1,1: semi-axes not all equal"):
+        sc.simulate(semi_axes=(1.0, 1.0, 1.0))
+    near = sc.simulate(semi_axes=(1.0, 0.999999, 1.0))
+    assert sum("not the approximation's" in w for w in near.warnings) == 2
+    for name in [None, *sc.presets]:
+        run = sc.simulate(preset=name) if name else sc.simulate()
+        assert run.warnings == [], (name, run.warnings)
+        assert run.metrics["torque_error_order"] == pytest.approx(2.0, abs=0.02)

@@ -166,8 +166,8 @@ def test_scenario_metrics_and_notes_near_resonance():
     assert set(r.plot_series) >= {"obliquity p (rad)", "obliquity p, Euler §847 (rad)"}
     with pytest.raises(ParameterError):
         s.resolve({"eps_over_delta": "0"})
-    with pytest.raises(ParameterError):
-        s.resolve({"orbits": 1e5, "steps_per_orbit": 1000})
+    with pytest.raises(ParameterError):  # 10⁸ steps: over the budget, refused before it runs
+        s.check_budget(s.resolve({"orbits": 1e5, "steps_per_orbit": 1000}))
 
 
 def test_the_quick_preview_leaves_out_the_table_toward_the_resonance_and_nothing_else():
@@ -443,3 +443,27 @@ def test_earth_nutation_is_in_phase_with_iau2000a(earth):
     iau = np.array([erfa.nut00a(j, 0.0)[0] for j in jd]) / ARCSEC_RAD
     left = dpsi - (c[0] + c[1] * t + c[2] * t * t) - iau  # the precession's trend taken out
     assert np.sqrt(np.mean((left - left.mean()) ** 2)) < 0.15, np.sqrt(np.mean(left ** 2))
+
+
+def test_an_obliquity_close_to_the_nodding_of_the_pole_is_warned_of():
+    """At 0.001° the pole's circle about the ecliptic pole (3.6″) is smaller than its nodding
+    (~9″): its longitude moved 76″/yr against the formula's 55, and
+    nothing said so. At the Earth's 23.4° nothing is said."""
+    from theoria.scenarios import get
+
+    low = get("earth").simulate(obliquity_deg=0.001, years=2)
+    assert any("less than 20× the nodding" in w for w in low.warnings), low.warnings
+    assert not any("nodding" in w for w in get("earth").simulate(years=2).warnings)
+
+
+@pytest.mark.parametrize("tidal", [1e4, 1e6])
+def test_the_momentary_pole_rates_are_measured_before_a_strong_pull_has_turned_the_pole(tidal):
+    """The rates at t = 0 are read from a short run; at tidal = 10⁶ the pole swung within its
+    1/200 turn, and |Oo|/dt came out 1,486 against §842's 29,544 (which holds at the instant:
+    10⁻⁹ at tidal = 1), §841's dβ cos η + dγ cos θ = 0 as 87.6."""
+    from theoria.scenarios import get
+
+    m = get("pole-near-axis").simulate(tidal=tidal).metrics
+    assert m["pole_speed"] == pytest.approx(m["pole_speed_euler_842"], rel=1e-3)
+    assert abs(m["perpendicularity_841"]) < 1e-3 * m["pole_speed"]
+    assert abs((m["pole_direction_deg"] - m["pole_direction_deg_euler"] + 180) % 360 - 180) < 0.05

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from theoria import ParameterError
+from theoria.scenarios import get
 from theoria.physics import constants as C
 from theoria.physics import quaternion as quat
 from theoria.physics import real_moon
@@ -194,3 +195,23 @@ def test_the_span_the_moon_scene_states_is_de421s():
     help_text = get("moon").param("start_year").help
     lo, hi = map(float, re.search(r"covers (\d{4}\.\d+)–(\d{4}\.\d+)", help_text).groups())
     assert lo == pytest.approx(erfa.epj(e.jalpha, 0.0), abs=0.005) and hi == pytest.approx(erfa.epj(e.jomega, 0.0), abs=0.005)
+
+
+@pytest.mark.parametrize("years, unmeasured", [(0.2, ("annual", "evection", "free")), (2.0, ("free",))])
+def test_a_short_moon_run_measures_only_the_terms_its_span_tells_apart(years, unmeasured):
+    """Fitted together over 0.2 yr, the libration terms traded amplitudes: the anomalistic-month
+    term came out 3.9e7″ (Eckhardt 1981: −16.8″), the annual 2.2e8″, and no warning said so. A
+    term is measured only when the span holds a whole cycle of it and a cycle apart from each
+    larger neighbour; the others have no value, and the run says which."""
+    from theoria.scenarios.moon import resolvable
+
+    assert resolvable([1 / 13.777, 1 / 13.606], 1000.0) == [True, False]  # 2M′ and 2F: 3 yr to part them
+    assert resolvable([1 / 13.777, 1 / 13.606], 1200.0) == [True, True]
+    run = get("moon").simulate(years=years)
+    m = run.metrics
+    assert abs(m["physical_libration_mprime_arcsec"] / -16.8 - 1) < 0.25  # the published term, not 10⁷″
+    keys = {"annual": "physical_libration_annual_arcsec", "evection": "physical_libration_evection_arcsec",
+            "free": "free_libration_amplitude_arcsec"}
+    for name, key in keys.items():
+        assert np.isnan(m[key]) == (name in unmeasured), (name, m[key])
+    assert any(f"span of {years:g} yr cannot tell" in w for w in run.warnings)
