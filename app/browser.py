@@ -218,8 +218,16 @@ SETUP = r"""
     if (e === 0) return s * f * 5.960464477539063e-8;
     return e === 31 ? (f ? NaN : s * Infinity) : s * (1 + f / 1024) * Math.pow(2, e - 15);
   };
+  T.pointsOf = (o) => {  // the geometry of a point cloud node's own points
+    if (o.__theoriaPoints && o.__theoriaPoints.parent) return o.__theoriaPoints.geometry;
+    let p = null;
+    o.traverse((c) => { if (!p && c.isPoints) p = c; });
+    o.__theoriaPoints = p;
+    return p && p.geometry;
+  };
   T.tracks = (d) => {
     d.t = d.times ? b64(d.times, Float32Array) : new Float32Array([0]);
+    for (const c of d.chunks || []) c.grow = (c.grow || []).map((s) => b64(s, Uint16Array));
     for (const tr of d.tracks) {
       tr.dim = tr.attr === 'wxyz' ? 4 : tr.attr === 'position' ? 3 : 1;
       tr.v = b64(tr.data, tr.attr === 'wxyz' ? Int16Array : tr.attr === 'visible' ? Uint8Array : Float32Array);
@@ -288,7 +296,16 @@ SETUP = r"""
       if (!on(c.group)) continue;
       let n = 0;
       while (n < c.starts.length && c.starts[n] <= k) n++;
-      for (let j = 0; j < c.nodes.length; j++) { const o = R[c.nodes[j]]; if (o) o.visible = j < n; }
+      for (let j = 0; j < c.nodes.length; j++) {
+        const o = R[c.nodes[j]];
+        if (!o) continue;
+        o.visible = j < n;
+        // the chunk being drawn shows its points up to this frame: the trail ends at the body
+        const g = c.grow && c.grow[j] && T.pointsOf(o);
+        if (!g) continue;
+        const count = j < n - 1 ? Infinity : j === n - 1 ? c.grow[j][Math.min(k - c.starts[j], c.grow[j].length - 1)] : 0;
+        if (g.drawRange.count !== count) g.setDrawRange(0, count);
+      }
     }
     // viser's labels take their place from their parent's world matrix, which three.js brings up to
     // date only as it renders: without this, a label on a turning body was drawn where the body had

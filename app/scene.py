@@ -40,7 +40,7 @@ import json
 import threading
 import weakref
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -246,7 +246,8 @@ def drop_repeats(path: np.ndarray, idx: np.ndarray, cell: float):
 
 def path_chunks(it: Path, grow_trails: bool = True):
     """The points a path is drawn with, as (chunks of float32 points, first frame of each chunk,
-    precision), or None for a path of fewer than two points. Computed once per Path item and kept
+    precision, the frame at which each chunk's each point appears), or None for a path of fewer
+    than two points. Computed once per Path item and kept
     on it: a drawing shared by many browsers (the server caches runs and their drawings) is
     densified and thinned once, not once per browser (17 ms a path)."""
     key = (grow_trails, MAX_DRAW_POINTS, TRAIL_CHUNKS, REPEAT_CELL, float(it.thickness))
@@ -268,12 +269,13 @@ def path_chunks(it: Path, grow_trails: bool = True):
         grid = np.linspace(at[0], at[-1], k + 1)
         bounds = np.concatenate([[0], np.searchsorted(at, grid[1:-1], side="left"), [len(path)]]).astype(int)
         prec = PATH_PRECISION if np.all(np.abs(path) < FLOAT16_MAX / 8) else "float32"
-        pieces, starts = [], []
+        pieces, starts, ats = [], [], []
         for j in range(k):
             a, b = bounds[j], bounds[j + 1]
             pieces.append(_f32(path[a:b] if b > a else path[max(a - 1, 0):max(a - 1, 0) + 1]))
             starts.append(int(np.ceil(grid[j])) if grow else 0)
-        out = (pieces, np.asarray(starts), prec)
+            ats.append(np.maximum(at[a:b], starts[-1]) if (grow and b > a) else np.full(len(pieces[-1]), starts[-1]))
+        out = (pieces, np.asarray(starts), prec, ats)
     it.__dict__["_theoria_chunks"] = (key, out)
     return out
 
@@ -368,8 +370,21 @@ class _Chunks:
 
     handles: list
     starts: np.ndarray
+    ats: list = field(default_factory=list)  # the frame at which each point of each chunk appears
     shown: int = -1
     visible: bool = True
+
+    def growth(self, n_frames: int) -> list[str]:
+        """For a page that plays by itself: for each chunk, how many of its points are drawn at
+        each frame from its first to the next chunk's (uint16, base64): the trail ends at the
+        body at every frame, where the chunks alone drew up to 1/TRAIL_CHUNKS of the run ahead."""
+        out = []
+        for j, at in enumerate(self.ats):
+            end = int(self.starts[j + 1]) if j + 1 < len(self.starts) else n_frames
+            frames = np.arange(int(self.starts[j]), max(end, int(self.starts[j]) + 1))
+            counts = np.searchsorted(np.asarray(at, float), frames, side="right")
+            out.append(_b64(np.minimum(counts, 65535).astype("<u2")))
+        return out
 
     def set_frame(self, k: int) -> None:
         n = int(np.searchsorted(self.starts, k, side="right"))
@@ -623,7 +638,7 @@ class SceneView:
         chunks = path_chunks(it, self.grow_trails)
         if chunks is None:
             return []
-        pieces, starts, prec = chunks
+        pieces, starts, prec, ats = chunks
         handles = []
         col = _rgb(it.color)
         for j, pts in enumerate(pieces):
@@ -631,7 +646,7 @@ class SceneView:
             handles.append(self._node(cname, lambda cname=cname, pts=pts: self.scene.add_point_cloud(
                 cname, pts, col, point_size=float(it.thickness), point_shape="square", precision=prec,
                 point_shading="flat"), sig=(float(it.thickness), prec, col), points=pts))
-        self._chunks.setdefault(it.group, []).append(_Chunks(handles, starts))
+        self._chunks.setdefault(it.group, []).append(_Chunks(handles, starts, ats))
         return []  # chunk visibility is handled by _Chunks, not by the group's static list
 
     # ---- changing what is shown --------------------------------------------------------------
@@ -774,7 +789,7 @@ class SceneView:
         for group, paths in self._chunks.items():
             for p in paths:
                 out["chunks"].append({"nodes": [h.name for h in p.handles], "starts": [int(x) for x in p.starts],
-                                      "group": group})
+                                      "grow": p.growth(self.n), "group": group})
         return out
 
     def _changed(self, key: str, value, force: bool) -> bool:

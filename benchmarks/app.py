@@ -166,7 +166,7 @@ def _drawn_paths(drawing) -> dict:
     out = {}
     for name in NAIVE_PATHS:
         it = drawing.item(name)
-        pieces, starts, _ = path_chunks(it, grow_trails=True)
+        pieces, starts, _, _ = path_chunks(it, grow_trails=True)
         pts = np.concatenate(pieces)
         # each chunk's points appear at its first frame; within it, in order over its time span
         ends = list(starts[1:]) + [drawing.n_frames]

@@ -609,6 +609,49 @@ def _wait_for(cond, limit: float = 20.0) -> bool:
     return True
 
 
+DRAWN_POINTS_JS = """() => {
+  const d = window.theoria.P.d, R = window.__viserMutable.nodeRefFromName, out = [];
+  for (const c of d.chunks) {
+    let n = 0;
+    for (const name of c.nodes) {
+      const o = R[name]; if (!o || !o.visible) continue;
+      const g = window.theoria.pointsOf(o); if (!g) continue;
+      n += Math.min(g.drawRange.count, g.attributes.position.count);
+    }
+    out.push(n);
+  }
+  return out;
+}"""
+
+
+@pytest.mark.parametrize("name, t", [("collinear", "0"), ("collinear", "0.3"), ("free-tumble", "0")])
+def test_a_growing_trail_ends_at_the_frame_shown(browser, app, name, t):
+    """A trail was sent as twelve chunks, each shown whole from its first frame: at t = 0 the
+    collinear bodies had 60° of their coming paths drawn ahead of them, and a long free tumble its
+    whole polhode. The page draws, at each frame, the points that have appeared by then."""
+    import numpy as np
+    from theoria.scenarios import get
+
+    base, sessions = app
+    spec = get(name)
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(spec, t=t, play="0"))
+    try:
+        s = _session_for(sessions, before, spec.name)
+        _page_plays(page)
+        page.wait_for_function("(k) => window.theoria.P.frame === k", arg=s.view.frame, timeout=WAIT_MS)
+        time.sleep(0.5)
+        k = s.view.frame
+        drawn = page.evaluate(DRAWN_POINTS_JS)
+        want = [int(sum(np.count_nonzero(np.asarray(at) <= k) for at in p.ats))
+                for paths in s.view._chunks.values() for p in paths]
+        assert want and drawn == want, (k, drawn, want)
+        total = [sum(len(at) for at in p.ats) for paths in s.view._chunks.values() for p in paths]
+        assert any(w < n for w, n in zip(want, total))  # the trails have not all been drawn yet
+    finally:
+        ctx.close()
+
+
 def test_playback_frame_rate_against_an_empty_page(browser, app):
     """Frames a second in which the page shows a new pose of the body while it plays, as a ratio to
     a page with only an animation loop in the same browser and run. The goal is 0.8; in software
