@@ -29,7 +29,7 @@ from typing import Any, Callable
 
 from theoria.physics.errors import ParameterError
 from theoria.physics.params import Param
-from .format import capitalised, exact
+from .format import capitalised
 
 MAX_SLIDER_STEPS = 2000
 
@@ -86,15 +86,22 @@ def _decimals(v: float) -> int:
     return max(0, -decimal.Decimal(repr(float(v))).as_tuple().exponent)
 
 
+SHOWN_DIGITS = 10  # significant digits a field shows (the obliquity's 23.439279444444445 as 23.43927944)
+
+
 def format_value(p: Param, v: Any) -> str:
-    """The text a field shows for value `v`: exact enough that reading it back gives `v`."""
+    """The text a field shows for value `v`: at most SHOWN_DIGITS significant digits. A field
+    whose text is still this when it is submitted keeps `v` exactly (`ParamControls._take_text`)."""
+    def short(x):
+        return f"{float(x):.{SHOWN_DIGITS}g}"
+
     if p.kind == "choice":
         return p.choice_text(v)
     if p.kind == "vec3":
-        return ", ".join(exact(x) for x in v)
+        return ", ".join(short(x) for x in v)
     if p.kind == "int":
         return str(int(v))
-    return exact(v)
+    return short(v)
 
 
 @dataclass
@@ -251,6 +258,8 @@ class ParamControls:
             return
         p = self.spec.param(name)
         text = str(text).strip()
+        if text == format_value(p, self._values.get(name, p.default)):
+            return  # the field as it was shown (a value of more digits than it shows is kept whole)
         try:
             v = p.parse(text)
         except ParameterError as e:

@@ -289,6 +289,9 @@ def guard_result(result):
     t=..." goes into `warnings` and `notes`. With no finite sample at all, `Diverged` (a
     ParameterError) is raised: the CLI exits 2 with one line, the app keeps the last good state.
     """
+    if isinstance(result, Run):  # every metric a Python float (a script's type checks, json, a sweep's table)
+        result.metrics = {k: float(v) if isinstance(v, (np.floating, np.integer)) else v
+                          for k, v in result.metrics.items()}
     tr = getattr(result, "trajectory", None)
     if not isinstance(result, Run) or tr is None:
         return result

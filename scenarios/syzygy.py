@@ -93,8 +93,9 @@ def _syzygy(values, progress=None):
         "swings_before_escape": float(n_half_run) / 2.0,
     }
     comps = [
-        Comparison("syzygy distance (lunar distances)", (sz.EULER_N_SQUARED / 3.0) ** (1.0 / 3.0), b_lunar, None, "c",
-                   "Euler: v ≈ c·∛(n²/3) with n² = 175, 'about four'; simulated: root of §7/§9 with today's n, m"),
+        Comparison("syzygy distance", (sz.EULER_N_SQUARED / 3.0) ** (1.0 / 3.0), b_lunar, None, "b",
+                   "Euler: v ≈ c·∛(n²/3) (his c: the Moon's distance) with n² = 175, 'about four'; simulated: "
+                   "root of §7/§9 with today's n, m"),
         Comparison("α = v/a: Euler's §7 equation vs the restricted problem's quintic", alpha_e, alpha, None, "",
                    "Euler pulls the Moon toward the Sun with a³ = G(M☉ + M⊕) where the Sun alone gives "
                    "a³(1 − μ); simulated: the collinear point (quintic) the run sits at"),

@@ -53,11 +53,12 @@ def _integrate(values_list):
 
 
 def _cost(values):
-    """orbits × steps_per_orbit steps of the planar kernel; kept: a state every k orbits with the
-    attractor's position and four series (the orbit-mean spin, shared with the trajectory's series,
+    """orbits × steps_per_orbit steps of the planar kernel; kept: a state every k orbits and the last,
+    with the attractor's position and four series (the orbit-mean spin, shared with the trajectory's series,
     and the three lines of the plot)."""
     orbits = int(round(values["orbits"]))
-    samples = 1 + orbits // _stride_orbits(orbits)
+    k = _stride_orbits(orbits)
+    samples = 1 + orbits // k + (1 if orbits % k else 0)  # and the last state, after the last whole stride
     return Cost(float(orbits * int(values["steps_per_orbit"])), samples,
                 trajectory_bytes(samples, bodies=1, series=4))
 
@@ -116,6 +117,13 @@ def _simulate(values, progress=None):
     t = np.concatenate([[0.0], out["t"]])
     th = np.concatenate([th0, out["theta_samples"][0]])
     wd = np.concatenate([[values["spin_rate"]], out["thetadot_samples"][0]])
+    orbits = int(round(values["orbits"]))
+    rest = orbits - k * (len(t) - 1)  # the orbits after the last whole stride: the run ends where it was asked to
+    if rest > 0:
+        t = np.append(t, 2 * np.pi * orbits)
+        th = np.append(th, out["theta"][0])
+        wd = np.append(wd, out["thetadot"][0])
+        rate = np.append(rate, (th[-1] - th[-2]) / (2 * np.pi * rest))
     I = planar_moments(w0**2 / 3.0)
     z = np.zeros_like(th)
     traj = Trajectory(t, np.stack([np.cos(th / 2), z, z, np.sin(th / 2)], 1), np.stack([z, z, I[2] * wd], 1), I,

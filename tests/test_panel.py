@@ -114,6 +114,23 @@ def test_typed_numbers_are_taken_exactly(text, value):
     assert p.parse(format_value(p, value)) == value  # what a field shows reads back to the same value
 
 
+def test_a_field_shows_ten_digits_and_keeps_the_value_whole_when_left_as_shown():
+    """The Earth's obliquity (84381.406″) filled its field as 23.439279444444445; shown to ten
+    digits, a field left as shown (a blur, Enter) keeps the exact value and runs nothing."""
+    from theoria.app.controls import ParamControls
+    from test_gallery import FakeGui
+
+    spec = get("earth")
+    changes = []
+    ctl = ParamControls(FakeGui(), spec, on_change=lambda name, debounce: changes.append(name))
+    assert ctl.kinds["obliquity_deg"] == "text"
+    assert ctl.handles["obliquity_deg"].value == "23.43927944"
+    ctl.enter("obliquity_deg", "23.43927944")
+    assert changes == [] and ctl.values()["obliquity_deg"] == spec.param("obliquity_deg").default
+    ctl.enter("obliquity_deg", "23.5")
+    assert changes == ["obliquity_deg"] and ctl.values()["obliquity_deg"] == 23.5
+
+
 def test_a_slider_only_when_it_holds_the_default_and_every_preset_on_its_grid():
     p = Param("perturbation", 0.01, 1e-9, 0.5, "1", step=0.001)
     assert slider_range(p) is not None

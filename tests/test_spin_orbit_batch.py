@@ -222,3 +222,18 @@ def test_tidal_capture_single_runs_captured_or_passing_through():
     short = sc.simulate(orbits=10)  # far too short to despin: it ends undecided and says so
     assert short.metrics["captured_resonance"] == 0.0 and "still changing" in short.warnings[0]
     assert np.isnan(short.metrics["captured_3_2"]) and np.isnan(short.metrics["captured_1_1"])  # undecided, not "0"
+
+
+@pytest.mark.parametrize("orbits", [50000, 20001])
+def test_a_tidal_run_ends_at_the_orbits_asked_for(orbits):
+    """Kept every k orbits, 50,000 asked were read out as "t = 0 of 49995 orbits" (20,001 as 20,000):
+    the last state is kept too, and the metrics stay those of the whole strides (a sweep's)."""
+    from theoria.app.format import human_number
+    from theoria.scenarios import get
+    from theoria.scenarios.drawing import clock_of
+
+    run = get("tidal-capture").simulate(orbits=orbits)
+    t = run.trajectory.t
+    assert t[-1] == pytest.approx(2 * np.pi * orbits, rel=1e-12)
+    assert clock_of(run).reading(t[0], t[-1], human_number).endswith(f"of {human_number(orbits)} orbits")
+    assert len(run.plot_series["spin rate, mean over each orbit (n)"]) == len(t)
