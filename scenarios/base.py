@@ -23,7 +23,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..physics.errors import Diverged, ParameterError, did_you_mean, show_value
-from ..physics.params import Param, resolve
+from ..physics.params import Param, pretty_unit, resolve
 from ..physics.trajectory import Trajectory
 from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
 from .drawing import Camera, Drawing, Option, View, declutter_labels, standard
@@ -47,6 +47,9 @@ class Comparison:
     rel_error: float | None = None
     tolerance: float | None = None
     passed: bool | None = None
+    # the modern value is an observation of a real body ("the real Earth": IAU 2006's precession),
+    # compared only while the run is that body (`Scenario.real_params` at their defaults)
+    observed: str = ""
 
     @property
     def title(self) -> str:  # a check row's title is its label
@@ -436,6 +439,9 @@ class Scenario:
     # the same for the per-sample columns of `Run.to_dataframe` that do not say theirs: the other
     # bodies' positions ("attractor_[xyz]": "a", the orbit's semi-major axis) and the series
     series_units: Mapping[str, str] = field(default_factory=dict)
+    # the parameters whose defaults make the run a real body (the Earth's H and obliquity): away
+    # from them, a comparison's observed modern value (`Comparison.observed`) is not compared
+    real_params: tuple[str, ...] = ()
 
     def __post_init__(self):
         for p in self.params:
@@ -474,10 +480,32 @@ class Scenario:
             run = guard_result(run)
             if isinstance(run, Run):
                 run.spec = self
+                self._observed_only_for_the_real_body(run, values)
             return run
 
         simulate_fn.__theoria_guarded__ = True
         return simulate_fn
+
+    def _observed_only_for_the_real_body(self, run: Run, values) -> None:
+        """With H = 10⁻⁹ the Earth's precession is nearly nil, and IAU 2006's 50.4″/yr for the real
+        Earth beside it read "differ by 100 %": an observed modern value is compared only while
+        the run is that body; otherwise it goes into the note, the modern column left empty."""
+        changed = [p for p in self.params if p.name in self.real_params and p.name in values
+                   and values[p.name] != p.parse(p.default)]
+        if not changed:
+            return
+        which = " and ".join(p.title() for p in changed)
+
+        def apart(c: Comparison) -> Comparison:
+            if not c.observed or c.modern is None:
+                return c
+            unit = pretty_unit(c.unit)
+            seen = f"{c.modern:.6g}" + ("" if not unit else unit if unit[0] in "°″′" else f" {unit}")
+            return dataclasses.replace(c, modern=None, note=(f"{c.note}; " if c.note else "") + (
+                f"modern: {c.observed}'s {seen}, not compared: this run's {which} "
+                f"{'is' if len(changed) == 1 else 'are'} not {c.observed}'s"))
+
+        run.comparisons = [apart(c) for c in run.comparisons]
 
     # ---- the front door ------------------------------------------------------------------------
     @property

@@ -141,13 +141,13 @@ def _cassini(values, progress=None):
     }
     comps = [
         Comparison("obliquity of the spin axis to the ecliptic (°)", I_peale, mean_obl, C.MOON_EQUATOR_INCLINATION_DEG,
-                   "deg", "Euler column: Peale's equation; modern: IAU mean lunar equator"),
+                   "deg", "Euler column: Peale's equation; modern: IAU mean lunar equator", observed="the real Moon"),
         Comparison("spin axis out of the plane (ecliptic pole, orbit normal), rms (″)", 0.0,
                    m["out_of_plane_rms_arcsec"], None, "arcsec",
                    "Cassini's third law: 0; the monthly nod of the axis (forced libration in latitude)"),
         Comparison("spin–orbit normal angle θ = i + I (°)", math.degrees(inc) + I_peale, m["spin_to_orbit_normal_mean_deg"],
                    C.MOON_MEAN_INCLINATION_DEG + C.MOON_EQUATOR_INCLINATION_DEG, "deg",
-                   "state 2: the ecliptic pole between the spin axis and the orbit normal"),
+                   "state 2: the ecliptic pole between the spin axis and the orbit normal", observed="the real Moon"),
     ]
     notes_rows = ("Obliquity: simulated is the figure axis's mean angle to the ecliptic pole over whole node cycles; "
                   "Euler's column is Peale's equation, modern the IAU mean lunar equator. The axis "
@@ -270,6 +270,7 @@ def e8_moon_cassini():
 register(Scenario(
     series_units={"earth_[xyz]": "km"},
     name="cassini",
+    real_params=("beta", "gamma", "inclination_deg", "node_period_yr", "sun_torque"),
     title="The Moon's Cassini state: three normals in one plane",
     section="Cassini's laws; Peale 1969 (beyond Euler, with §815)",
     group="ch. 16",

@@ -248,25 +248,28 @@ def _earth(values, progress=None):
                    f"geodesic precession {GEODESIC_PRECESSION_ARCSEC_PER_CY / 100:.6f}″/yr, which ψA holds and a Newtonian "
                    "rigid Earth has not (Capitaine et al. 2003). "
                    f"General precession pA = {GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100:.5f}″/yr adds the ecliptic's motion (planets, not modelled). "
-                   "Euler: Σ N cos n, circles in the ecliptic, A for C in N"),
+                   "Euler: Σ N cos n, circles in the ecliptic, A for C in N", observed="the real Earth"),
         Comparison("  solar part", -mod["euler_sun"] / ARCSEC_RAD * YR, sim(parts["sun"]), -mod["sun"] / ARCSEC_RAD * YR, "arcsec/yr",
                    "modern: orbit-averaged formula (e☉ = 0.0167)"),
         Comparison("  lunar part", -mod["euler_moon"] / ARCSEC_RAD * YR, sim(parts["moon"]), -mod["moon"] / ARCSEC_RAD * YR, "arcsec/yr",
                    "modern: orbit-averaged formula with the Moon's e and inclination (1 − 3/2 sin² i)"),
         Comparison("nutation in longitude, 18.6 yr (sin Ω)", None, sim(nut["18.6yr"]["dpsi"]), iau["18.6yr"]["dpsi"], "arcsec",
-                   "IAU 2000A (MHB2000). Euler's centre moves in the ecliptic: no such term in §844"),
-        Comparison("nutation in obliquity, 18.6 yr (cos Ω)", None, sim(nut["18.6yr"]["deps"]), iau["18.6yr"]["deps"], "arcsec", "IAU 2000A"),
+                   "IAU 2000A (MHB2000). Euler's centre moves in the ecliptic: no such term in §844", observed="the real Earth"),
+        Comparison("nutation in obliquity, 18.6 yr (cos Ω)", None, sim(nut["18.6yr"]["deps"]), iau["18.6yr"]["deps"], "arcsec", "IAU 2000A",
+                   observed="the real Earth"),
         Comparison("nutation in longitude, semi-annual (sin 2L☉)", eul_nut["semiannual"]["dpsi"], sim(nut["semiannual"]["dpsi"]),
                    iau["semiannual"]["dpsi"], "arcsec",
-                   "rigid Earth; IAU 2000 is ≈3% larger: the free-core-nutation resonance of the real, non-rigid Earth"),
+                   "rigid Earth; IAU 2000 is ≈3% larger: the free-core-nutation resonance of the real, non-rigid Earth",
+                   observed="the real Earth"),
         Comparison("nutation in obliquity, semi-annual (cos 2L☉)", eul_nut["semiannual"]["deps"], sim(nut["semiannual"]["deps"]),
-                   iau["semiannual"]["deps"], "arcsec", "rigid Earth"),
+                   iau["semiannual"]["deps"], "arcsec", "rigid Earth", observed="the real Earth"),
         Comparison("nutation in longitude, 13.66 d (sin 2L☾)", eul_nut["13.66d"]["dpsi"], sim(nut["13.66d"]["dpsi"]),
                    iau["13.66d"]["dpsi"], "arcsec",
                    f"figure axis free of diurnal terms (CIP-like); the angular-momentum axis has {nut_L['13.66d']['dpsi']:.4f}″ "
-                   "(the Oppolzer term, ≈ 2δ/ε ≈ 7%). IAU 2000 includes the non-rigid response (≈3%)"),
+                   "(the Oppolzer term, ≈ 2δ/ε ≈ 7%). IAU 2000 includes the non-rigid response (≈3%)", observed="the real Earth"),
         Comparison("nutation in obliquity, 13.66 d (cos 2L☾)", eul_nut["13.66d"]["deps"], sim(nut["13.66d"]["deps"]),
-                   iau["13.66d"]["deps"], "arcsec", f"angular-momentum axis: {nut_L['13.66d']['deps']:.4f}″"),
+                   iau["13.66d"]["deps"], "arcsec", f"angular-momentum axis: {nut_L['13.66d']['deps']:.4f}″",
+                   observed="the real Earth"),
         Comparison("Moon's node regression period", None, sim(node_period), NODE_PERIOD_SIDEREAL_YR, "yr",
                    "from the REBOUND Sun–Earth–Moon integration, not imposed; against the fixed J2000 ecliptic "
                    f"(sidereal; {NODE_PERIOD_YR:.3f} yr from the moving equinox)"),
@@ -407,6 +410,7 @@ def _cost(values):
 register(Scenario(
     series_units={"(sun|moon)_[xyz]": "1"},  # directions
     name="earth",
+    real_params=("H", "obliquity_deg"),
     title="The Earth under the Sun and the Moon: precession and nutation",
     section="§844–849 (modern values)",
     group="ch. 16",

@@ -89,12 +89,13 @@ def _lunar(values, progress=None):
     comps = [
         Comparison("regression of the node", node_fo, na["node_period_yr"], le.NODE_PERIOD_SIDEREAL_YR, "yr",
                    "Euler column: first-order rate (3/4)n'²/n·cos i; modern: 6793.48 d against the stars, the frame of "
-                   "this model (the often quoted 6798.38 d counts from the moving equinox)"),
+                   "this model (the often quoted 6798.38 d counts from the moving equinox)", observed="the real Moon"),
         Comparison("advance of the apsides", apse_fo, na["apse_period_yr"], le.APSE_PERIOD_YR, "yr",
                    f"first order gives {fo['apse_rate'] / na['apse_rate']:.2f} of the motion — the historical "
-                   "'half the apse motion' (Clairaut 1747); modern: 3232.6 d against the stars"),
-        Comparison("inclination min", None, float(inc.min()), MOON_INCLINATION_RANGE_DEG[0], "deg", "osculating, period ≈ 173 d"),
-        Comparison("inclination max", None, float(inc.max()), MOON_INCLINATION_RANGE_DEG[1], "deg", ""),
+                   "'half the apse motion' (Clairaut 1747); modern: 3232.6 d against the stars", observed="the real Moon"),
+        Comparison("inclination min", None, float(inc.min()), MOON_INCLINATION_RANGE_DEG[0], "deg", "osculating, period ≈ 173 d",
+                   observed="the real Moon"),
+        Comparison("inclination max", None, float(inc.max()), MOON_INCLINATION_RANGE_DEG[1], "deg", "", observed="the real Moon"),
         Comparison("Euler's elements vs Cartesian integration, max distance", 0.0, err, None, "LD",
                    "same forces, same RK4 step: the element equations (sign of §XXVII.4 corrected) reproduce the orbit"),
         Comparison("§XXVII.4 with the printed sign: max distance after 60 d", None, err_printed, None,
@@ -276,6 +277,7 @@ def _cost(values):
 register(Scenario(
     series_units={"(earth|moon|sun)_[xyz]": "LD", "eccentricity": "", "orbit_normal_[xyz]": "1"},  # the Sun's direction drawn at 3 LD
     name="lunar-perturbation",
+    real_params=("eccentricity", "inclination_deg", "sun_eccentricity"),
     title="The Moon perturbed by the Sun, by its elements",
     section="Euler 1768, §XIII–§XXXIV",
     group=GROUP,

@@ -491,15 +491,19 @@ def _moon(values, progress=None):
         Comparison("physical libration in longitude, sin M′ (anomalistic month)", m["physical_libration_mprime_euler_arcsec"],
                    m["physical_libration_mprime_arcsec"], m["physical_libration_mprime_published_arcsec"], "arcsec",
                    "Euler: −α·2N/(A²−2N), α = 6.289° the equation of the centre; published (Eckhardt 1981) includes "
-                   "the Moon's third-degree gravity field and the Sun's direct torque, not modelled here"),
+                   "the Moon's third-degree gravity field and the Sun's direct torque, not modelled here",
+                   observed="the real Moon"),
         Comparison("physical libration, sin M (anomalistic year)", m["physical_libration_annual_euler_arcsec"],
                    m["physical_libration_annual_arcsec"], m["physical_libration_annual_published_arcsec"] * Eyr, "arcsec",
-                   "forced by the annual equation −0.186° sin M of the Moon's longitude (the Sun's perturbation)"),
+                   "forced by the annual equation −0.186° sin M of the Moon's longitude (the Sun's perturbation)",
+                   observed="the real Moon"),
         Comparison("physical libration, sin(2D − M′) (evection)", m["physical_libration_evection_euler_arcsec"],
-                   m["physical_libration_evection_arcsec"], -0.00115 * 3600, "arcsec", "Meeus ch. 53: +0.00115° sin(M′ − 2D)"),
+                   m["physical_libration_evection_arcsec"], -0.00115 * 3600, "arcsec", "Meeus ch. 53: +0.00115° sin(M′ − 2D)",
+                   observed="the real Moon"),
         Comparison("free libration period", m["free_libration_period_euler_days"], P_free, 1056.0, "day",
                    "2π/√(2N) (§838); simulated: the difference of this run and one started 100″ further on, "
-                   "which is the free libration alone; published 1056 d (LLR: Rambaux & Williams 2011)"),
+                   "which is the free libration alone; published 1056 d (LLR: Rambaux & Williams 2011)",
+                   observed="the real Moon"),
     ]
     notes = [
         "Moments from lunar laser ranging: β = (C−A)/B = 631.0e-6, γ = (B−A)/C = 227.7e-6 (Williams et al. 2014).",
@@ -673,6 +677,7 @@ def _cost(values):
 register(Scenario(
     series_units={"(attractor|earth)_[xyz]": "km"},
     name="moon",
+    real_params=("beta", "gamma", "equator_inclination_deg", "core_fraction"),
     title="The Moon's libration seen from the Earth",
     section="§833–839 (modern values)",
     group="ch. 16",

@@ -215,3 +215,21 @@ def test_a_short_moon_run_measures_only_the_terms_its_span_tells_apart(years, un
     for name, key in keys.items():
         assert np.isnan(m[key]) == (name in unmeasured), (name, m[key])
     assert any(f"span of {years:g} yr cannot tell" in w for w in run.warnings)
+
+
+def test_an_observed_value_is_compared_only_with_a_run_of_that_body():
+    """With H = 10⁻⁹ the Earth's precession is nearly nil, and IAU 2006's 50.4″/yr for the real
+    Earth beside it read as a 100 % miss. A modern value that observes a real body is compared
+    only while the run is that body; otherwise the note keeps it and says why."""
+    earth = get("earth")
+    real = earth.simulate(years=2)
+    other = earth.simulate(years=2, H=1e-9)
+    row = lambda run: next(c for c in run.comparisons if c.label == "luni-solar precession")  # noqa: E731
+    assert row(real).modern == pytest.approx(50.404, abs=1e-3)
+    assert row(other).modern is None and "the real Earth's 50.404″/yr, not compared" in row(other).note
+    # the Moon's node against the stars does not hang on the Earth's figure: still compared
+    node = lambda run: next(c for c in run.comparisons if "node regression" in c.label)  # noqa: E731
+    assert node(other).modern == node(real).modern is not None
+    moon = get("moon").simulate(years=3, gamma=3e-4)
+    assert all(c.modern is None for c in moon.comparisons if "physical libration" in c.label)
+    assert all(c.modern is not None for c in moon.comparisons if c.label.startswith("optical libration"))
