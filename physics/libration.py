@@ -228,17 +228,26 @@ def periodic_libration(orbit, gamma, gm, guess=(0.0, None), rtol=1e-12, atol=1e-
                          "the resonance (B−A)/C = ±1/3")
 
 
-def free_libration_floquet(orbit, gamma, gm, lam0, lamdot0, rtol=1e-12, atol=1e-13, d=1e-6):
+def free_libration_floquet(orbit, gamma, gm, lam0, lamdot0, rtol=1e-12, atol=1e-13, d=1e-6, near=None):
     """Frequency of small free librations about the forced (periodic) solution (λ0, λ̇0) of §838,
     with nothing of the ellipse neglected (beyond Euler's 2N: the 1/s³ modulation, the forced
     swing's cos 2ζ, all orders in e): the Floquet exponent ν of the linearised flow over one
     orbit, from the monodromy matrix M (central differences of DOP853 runs): tr M = 2 cos νP.
-    Returns ν in (0, π/P) (the branch next to Euler's √(2N) while √(2N) < n/2), or NaN when the
-    forced solution is unstable (|tr M| > 2). Not valid for small-amplitude nonlinearity: a free
-    swing of amplitude φ lengthens the period further by φ²/4 (the pendulum's K(k))."""
+    tr M fixes νP only up to its sign and whole turns: the branch returned is the one nearest `near`
+    (Euler's √(2N); the first branch, in (0, π/P), when None), so that a free swing faster than n/2
+    ((B − A)/C > 1/12) gets its own frequency, not its alias. NaN when the forced solution is
+    unstable (|tr M| > 2). Not valid for small-amplitude nonlinearity: a free swing of amplitude φ
+    lengthens the period further by φ²/4 (the pendulum's K(k))."""
     P = 2.0 * np.pi / orbit.n
     c = 0.5 * np.trace(_monodromy(orbit, gamma, gm, lam0, lamdot0, rtol, atol, d))
-    return float(np.arccos(c) / P) if abs(c) <= 1 else float("nan")
+    if abs(c) > 1:
+        return float("nan")
+    a = float(np.arccos(c))
+    if near is None:
+        return a / P
+    k = np.arange(0, int(near * P / (2 * np.pi)) + 2)
+    branches = np.concatenate([2 * np.pi * k + a, 2 * np.pi * k[1:] - a]) / P
+    return float(branches[np.argmin(np.abs(branches - near))])
 
 
 def _monodromy(orbit, gamma, gm, lam0, lamdot0, rtol, atol, d):

@@ -367,7 +367,8 @@ register(Scenario(
         ("Earth–Moon L1: the satellite drifts off (unstable)", {"motion": "restricted", "lagrange_point": "L1"}),
         ("Earth–Moon L2", {"motion": "restricted", "lagrange_point": "L2"}),
     ),
-    metric_units={"alpha": "", "ratio_max_rel_deviation": "", "spacing_vs_euler_max_rel_error": ""},
+    metric_units={"alpha": "", "ratio_max_rel_deviation": "", "spacing_vs_euler_max_rel_error": "",
+                  "satellite_drift_max": "", "jacobi_constant_L[1-5]": ""},  # in the restricted problem's units (distance 1, G(M + m) = 1)
 ))
 
 

@@ -352,6 +352,10 @@ def _earth(values, progress=None):
     # the step against the fastest forcing: the Moon's pull repeats twice a sidereal month
     warnings = _validity.add([], _validity.coarse_step(step, SIDEREAL_MONTH_DAYS / 2,
                                                        "the Moon's pull, which repeats twice a month", "d", "step_days"))
+    if values["years"] * YR < 2 * SIDEREAL_MONTH_DAYS:  # the Moon's mean elements from part of an orbit
+        warnings.append(f"A run of {values['years'] * YR:.0f} days is shorter than two months: the Moon's "
+                        "month and mean distance are read from part of its orbit (18 days: 28.5 d and 389,000 km "
+                        "against 27.3 d and 384,400 km), and the precession from less than a turn of its pull.")
     # the pole's longitude is measured on its circle about the ecliptic pole: with a radius (the
     # obliquity) not far above the nodding of the pole, the longitude and its rate lose their
     # meaning (0.001°: 76″/yr against the formula's 55; 0.01°: 3 % off; 0.1°: 0.2 %)

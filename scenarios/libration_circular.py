@@ -61,6 +61,8 @@ def _libration_circular(values, progress=None):
     case = lib.classify(phi0, phidot0, w0) if w0 > 0 else "circulating"
     T_small = lib.small_oscillation_period(g, gm, 1.0) if w0 > 0 else np.inf
     T_exact = lib.pendulum_period(phi0, phidot0, w0) if w0 > 0 else (np.pi / abs(phidot0) if phidot0 else np.inf)
+    if start == "separatrix":  # on it by construction: the period is infinite (1 − k² of 4e-16, the
+        T_exact = np.inf       # rounding of the start, gave a finite 197 at ζ₀ = 20°)
     T_ref = T_exact if (np.isfinite(T_exact) and case != "separatrix") else T_small
     if not np.isfinite(T_ref):
         T_ref = 2 * np.pi / d

@@ -46,7 +46,22 @@ class ForcedSolution:
             lam0, lamdot0, P = -zeq, float(n), 2 * np.pi / n
         else:
             guess = (-zeq, float(self.orbit.true_anomaly_rate(np.array([0.0]))[0] - m * n))
-            lam0, lamdot0, P = lib.periodic_libration(self.orbit, gamma, n * n, guess=guess, progress=progress)
+            try:
+                lam0, lamdot0, P = lib.periodic_libration(self.orbit, gamma, n * n, guess=guess, progress=progress)
+                # Euler's guess far off (near the resonance A² = 2N): Newton may land on the other
+                # family, the long axis across the line to F at periapse (unstable)
+                jumped = abs(np.remainder(lam0 - guess[0] + 0.5 * np.pi, np.pi) - 0.5 * np.pi) > 0.25 * np.pi
+            except ParameterError as err:
+                lam0, jumped, refused = None, True, err
+            else:
+                refused = None
+            if jumped:
+                found = _continued(gamma, e, n, zeq)
+                if found is None:
+                    if refused is not None:
+                        raise refused
+                else:
+                    lam0, lamdot0, P = found
         lam0 = float(np.remainder(lam0 + 0.5 * np.pi, np.pi) - 0.5 * np.pi)  # ζ ≡ ζ + π
         self.lam0, self.lamdot0, self.P = lam0, lamdot0, P
         self.sol = solve_ivp(lib.planar_rhs(self.orbit, gamma, n * n), (0.0, P), [lam0, lamdot0],
@@ -61,6 +76,33 @@ class ForcedSolution:
     def zeta(self, t):
         tt = np.remainder(np.asarray(t, float), self.P)
         return self.orbit.true_anomaly(tt) - self.sol(tt)[0]
+
+
+CONTINUATION_STEPS = 8
+
+
+def _continued(gamma, e, n, zeq):
+    """The forced solution followed from a nearly circular orbit out to eccentricity e in
+    CONTINUATION_STEPS steps, each started from the last (its offset from the orbit's own rate at
+    periapse scaled with e): where Euler's first-order guess is too far off for Newton (near the
+    resonance A² = 2N: e = 0.1, (B − A)/C = 0.3 was refused, e = 0.05, 0.32 found the unstable
+    family), the solution of the nearby orbit is not. None when a step fails."""
+    y, e_prev = None, 0.0
+    for k in range(1, CONTINUATION_STEPS + 1):
+        e_k = e * k / CONTINUATION_STEPS
+        orbit = KeplerOrbit(a=1.0, e=e_k, n=n)
+        rate0 = float(orbit.true_anomaly_rate(np.array([0.0]))[0])
+        if y is None:
+            N = lib.euler_N(gamma, n * n, 1.0)
+            guess = (-zeq, rate0 - lib.forced_amplitude_euler(2 * e_k, n, N) * n)
+        else:
+            guess = (y[0], rate0 + y[2] * e_k / e_prev)
+        try:
+            lam0, lamdot0, P = lib.periodic_libration(orbit, gamma, n * n, guess=guess)
+        except ParameterError:
+            return None
+        y, e_prev = (lam0, lamdot0, lamdot0 - rate0), e_k
+    return y[0], y[1], 2.0 * np.pi / n
 
 
 @kept(32)
@@ -176,8 +218,8 @@ def _finish(values, s, t, L, q):
     }
     # modern: the linearised free period about the forced solution (Floquet, exact in e), lengthened by
     # the free swing's own amplitude φ²/4 (pendulum); only worth computing when there is a free part
-    if dz != 0 and g > 0 and w0 < 0.5 * n and not tumbles:
-        nu = fs.once("floquet_nu", lambda: lib.free_libration_floquet(fs.orbit, g, gm, fs.lam0, fs.lamdot0))
+    if dz != 0 and g > 0 and not tumbles:
+        nu = fs.once("floquet_nu", lambda: lib.free_libration_floquet(fs.orbit, g, gm, fs.lam0, fs.lamdot0, near=w0))
         mt["free_period_floquet"] = 2 * np.pi / nu if nu > 0 else np.nan
         mt["free_period_modern"] = mt["free_period_floquet"] * (1 + dz**2 / 4)
     warnings: list[str] = []

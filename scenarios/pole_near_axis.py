@@ -73,7 +73,10 @@ def _pole_near_axis(values, progress=None):
     # against the time the pull takes to turn the pole (1/√(3·tidal·ΔI/I)); at tidal = 10⁶ the pole
     # swung in 1/200 turn, the quartic through it gave |Oo|/dt 20× too slow and §841's 0 as 87.6
     pull = np.sqrt(3.0 * tidal * np.ptp(I) / np.min(I))
-    window = min(T / 200, 0.02 / pull) if pull > 0 else T / 200
+    # and short against the time the pole takes to move 0.01 rad (|τ|/(I γ′): at a spin of 10⁻⁶
+    # rad/s the pole ran off A within the window, and dβ/dt came out −53 against −147,721)
+    pole_rate = 3.0 * tidal * np.linalg.norm(np.cross(u, I * u)) / (np.min(I) * spin)
+    window = min(T / 200, 0.02 / pull if pull > 0 else np.inf, 0.01 / pole_rate if pole_rate > 0 else np.inf)
     ts, Ls, qs = integrate(I, w0, window, window / 100, masses=[PointMass(tidal, _fixed_direction(u))],
                            scheme="yoshida4")
     dspin, dbeta, dgamma = measure_pole_rates(ts, Ls / I)
@@ -88,7 +91,8 @@ def _pole_near_axis(values, progress=None):
     notes = ["Text: " + t for t in TYPOS_840_843]
     if a0 > 0:
         notes.append(f"the pole starts {values['offset_deg']:g}° from A: Euler's rates drop the free "
-                     f"wobble γ'(aa−cc)/bb·α, of size {spin * abs(I[0] - I[2]) / I[1] * a0:.3g} rad/s in dβ/dt")
+                     f"wobble (aa−bb)/cc·γ′ sin α cos α, of size {spin * abs(I[0] - I[1]) / I[2] * np.sin(a0) * np.cos(a0):.3g} "
+                     "rad/s in dγ/dt (the pole, off A toward B, turns toward C at that rate without any pull)")
     if np.isclose(I[1], I[2], rtol=1e-12):
         q841 = equal_moments_841(I, spin, (cz, ce, ct), tidal)
         ang = np.arctan2(-dgamma, -dbeta)  # displacement of O on (B, C) is (−dβ, −dγ)

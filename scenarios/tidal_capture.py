@@ -143,7 +143,7 @@ def _simulate(values, progress=None):
         depth = 0.5 * w0**2 * H  # 0 for a round body (ω₀² underflows below 1e-154): no resonance to hold it
         ratio = A * (np.pi * abs(p - q) + 2 * w0 * np.sqrt(H)) / depth if depth > 0 else np.inf
         m[f"tide_to_resonance_ratio_{p:g}"] = float(ratio)
-        if ratio > 0.1:
+        if ratio > 0.1 and depth > 0:  # no resonance at all (e = 0, a round body): nothing to be strong against
             warnings.append(f"tides strong against the {p:g} resonance (energy lost per libration {ratio:.2f} × its "
                             "depth): Goldreich & Peale's probability is the weak-tide limit")
     what = {1.5: "captured into the 3:2 resonance (Mercury's state)", 1.0: "captured into synchronous rotation (the Moon's state)",

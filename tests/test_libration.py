@@ -632,3 +632,44 @@ def test_a_sphere_is_refused_and_a_near_sphere_told_its_fitted_order_is_rounding
         run = sc.simulate(preset=name) if name else sc.simulate()
         assert run.warnings == [], (name, run.warnings)
         assert run.metrics["torque_error_order"] == pytest.approx(2.0, abs=0.02)
+
+
+@pytest.mark.parametrize("asymmetry", [0.1, 0.3])
+def test_a_free_swing_faster_than_half_the_orbital_rate_gets_its_own_floquet_period(asymmetry):
+    """tr M gives νP up to sign and whole turns; above (B − A)/C = 1/12 Euler's √(2N) exceeds n/2
+    and the first branch is an alias: the modern free period was left out (NaN) there. The branch
+    nearest √(2N) agrees with the rigid-body run's own free period (7.448 at 0.3; an outside
+    shooting + monodromy computation gave 7.447)."""
+    m = get("libration-eccentric").simulate(eccentricity=0.05, asymmetry=asymmetry).metrics
+    assert m["free_period_floquet"] == pytest.approx(m["free_period"], rel=2e-3)
+    assert m["free_period_modern"] == pytest.approx(m["free_period"], rel=2e-3)
+
+
+@pytest.mark.parametrize("e, gamma", [(0.05, 0.32), (0.1, 0.3), (0.05, 0.315)])
+def test_near_the_resonance_the_forced_libration_found_is_periodic_and_stable(e, gamma):
+    """Euler's first-order guess is far off near A² = 2N: the search refused (0.1, 0.3) and
+    (0.05, 0.315), and at (0.05, 0.32) found the other family (the long axis across the line to F,
+    ½ tr M = 235: "tumbles"). Followed out from a nearly circular orbit, the solution found is
+    checked here without theoria: it closes after one orbit of λ̈ = (3/2)γ(a/r)³ sin 2(f − λ)
+    (DOP853, Kepler solved here) and its monodromy matrix has |½ tr M| ≤ 1."""
+    from theoria.scenarios.libration_eccentric import forced_solution
+
+    fs = forced_solution(gamma, e, 1.0)
+
+    def rhs(t, y):
+        M = np.asarray(t, float)
+        E = M.copy()
+        for _ in range(50):
+            E = E - (E - e * np.sin(E) - M) / (1 - e * np.cos(E))
+        f = 2 * np.arctan2(np.sqrt(1 + e) * np.sin(E / 2), np.sqrt(1 - e) * np.cos(E / 2))
+        return [y[1], 1.5 * gamma / (1 - e * np.cos(E)) ** 3 * np.sin(2 * (f - y[0]))]
+
+    def after_one_orbit(y0):
+        return solve_ivp(rhs, (0, 2 * np.pi), y0, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
+
+    y0 = np.array([fs.lam0, fs.lamdot0])
+    assert np.allclose(after_one_orbit(y0) - [2 * np.pi, 0.0], y0, atol=1e-8)
+    d = 1e-6
+    M = np.column_stack([(after_one_orbit(y0 + d * v) - after_one_orbit(y0 - d * v)) / (2 * d) for v in np.eye(2)])
+    assert abs(0.5 * np.trace(M)) <= 1.0
+    assert get("libration-eccentric").simulate(eccentricity=e, asymmetry=gamma, orbits=5).status == "ok"

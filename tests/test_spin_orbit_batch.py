@@ -237,3 +237,10 @@ def test_a_tidal_run_ends_at_the_orbits_asked_for(orbits):
     assert t[-1] == pytest.approx(2 * np.pi * orbits, rel=1e-12)
     assert clock_of(run).reading(t[0], t[-1], human_number).endswith(f"of {human_number(orbits)} orbits")
     assert len(run.plot_series["spin rate, mean over each orbit (n)"]) == len(t)
+
+
+def test_a_circular_orbit_has_no_3_2_resonance_to_warn_about():
+    from theoria.scenarios import get
+
+    run = get("tidal-capture").simulate(eccentricity=0.0, orbits=3000)
+    assert not any("resonance (energy lost" in w for w in run.warnings), run.warnings
