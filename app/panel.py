@@ -198,12 +198,16 @@ def _md(text: str) -> str:
 TONE_COLOR = {"good": "#2b8a3e", "close": "#b08800", "far": "#c92a2a", "": "#666"}
 
 
-def compare_html(result) -> str:
+def compare_html(result, preview: bool = False) -> str:
     """The Compare tab: each comparison as its label (with unit), the three values side by side and
-    a verdict in words; the run's warnings first, as a visible note."""
+    a verdict in words; the run's warnings first, as a visible note. A quick `preview`'s warnings
+    are its own (a Moon of one year cannot measure its annual term): said of the preview, not of
+    the run the class asked for, which follows."""
     if result is None:
         return "<p style='color:#666;padding:0 12px'>Computing…</p>"
-    parts = ["<div style='padding:0 12px'>", warnings_html(result)]
+    top = ("<p style='color:#666'>A quick, shorter preview: the numbers and notes of the run asked for "
+           "follow in a moment.</p>") if preview else warnings_html(result)
+    parts = ["<div style='padding:0 12px'>", top]
     if not result.comparisons:
         parts.append("<p style='color:#666'>This scene has no Euler / simulated / modern values to compare.</p></div>")
         return "".join(parts)

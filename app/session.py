@@ -1012,9 +1012,9 @@ class ClientSession:
                 self._set_camera(drawing)
             self._sync_scene_options()
             self.result, self.good_values = result, values
-            self._show_result_text(result)
-            self._update_plot(result)
             preview = bool(getattr(req, "preview", False))
+            self._show_result_text(result, preview)
+            self._update_plot(result)
             if restore is not None:
                 self._restore = None
                 self._restore_view(restore, drawing)
@@ -1045,8 +1045,8 @@ class ClientSession:
                 self._tick_text(f"*simulated {len(result.trajectory.t)} samples in {1000 * t_sim:.0f} ms "
                                 f"(update #{self.updates})*")
 
-    def _show_result_text(self, result) -> None:
-        self.compare.content = compare_html(result)
+    def _show_result_text(self, result, preview: bool = False) -> None:
+        self.compare.content = compare_html(result, preview)
         errata, other = split_notes(result.notes)
         self.notes_md.content = "\n\n".join(f"*{_md(n)}*" for n in other if n not in result.warnings)
         self.errata.content = ("**Where the printed text is wrong**\n\n" + "\n\n".join(f"- {_md(n)}" for n in errata)

@@ -40,6 +40,9 @@ def _measured_modes(m, side, guess, progress=None):
     return sz.fit_swing_and_escape(tm, etam, A_meas, guess=guess)
 
 
+SWING_GROWN = 2.0  # η beyond this many times A: the small swing is no longer what the run shows
+
+
 def _syzygy(values, progress=None):
     from ..physics.three_body import syzygy as sz
 
@@ -140,6 +143,15 @@ def _syzygy(values, progress=None):
             f"line-up is unstable (the real root λ = {modes['escape_exponent']:.4f} of the linearised equations, "
             "the one Euler's assumed oscillation misses), so his η = A sin αζ and v = b(1 − kA cos αζ) describe "
             "only the part of the run before it.")
+    elif A > 0 and np.max(np.abs(eta)) > SWING_GROWN * A:
+        # still near the line-up, but the unstable direction, seeded by the swing's own second-order
+        # terms (∝ A²) and growing by e^(λ·2π) a year, has taken over from the small swing
+        warnings.append(
+            f"The swing grew from A = {values['amplitude_deg']:g}° to {math.degrees(np.max(np.abs(eta))):.3g}° "
+            f"within the run: the start's departure from the exact small swing (its second-order terms, or "
+            f"Euler's first-order start) seeds the unstable direction (λ = {modes['escape_exponent']:.4f}), "
+            "which outgrows the swing, so its frequency and Euler's k = 0.3117 describe only the start. "
+            "The exact small-swing start with A = 3e-4° stays small over a year.")
     return Run("syzygy", values, traj, metrics, comps, notes, warnings=warnings, plot_series={
         "η simulated (deg)": np.degrees(eta), "η Euler A sin αζ (deg)": np.degrees(eta_e),
         "v/b simulated": v / alpha, "v/b Euler 1 − 0.3117 A cos αζ": v_e / alpha},
@@ -155,7 +167,7 @@ def _syzygy_params():
               help="Moon between Earth and Sun (§7) or beyond the Earth (§9)",
               label="Side",
               choice_labels=("conjunction: Moon between Earth and Sun", "opposition: Moon beyond the Earth")),
-        Param("amplitude_deg", 0.05, 0.0, 20.0, "deg", "A: amplitude of η, the Moon's angle from the Sun line",
+        Param("amplitude_deg", 3e-4, 0.0, 20.0, "deg", "A: amplitude of η, the Moon's angle from the Sun line",
               label="Swing amplitude A"),
         Param("start", "linear-mode", kind="choice", choices=("euler", "linear-mode"),
               help="Euler's first-order solution at ω = 0, or the exact linear centre mode",
@@ -305,7 +317,7 @@ register(Scenario(
     kind="orbit",
     presets=(
         ("Syzygy: the small swing (Hill)", {}),
-        ("Syzygy: Euler's own start, and the Moon leaves", {"start": "euler"}),
+        ("Syzygy: Euler's own start, and the Moon leaves", {"start": "euler", "amplitude_deg": 0.05}),
         ("Syzygy: beyond the Earth (opposition)", {"side": "opposition"}),
         ("Syzygy: the Moon leaves", {"escape_seed": 0.01, "duration_yr": 6.0}),
     ),

@@ -783,3 +783,16 @@ def test_hyperions_table_and_tidal_captures_plot_are_in_words():
     assert "spin rate, mean over each orbit (n)" in run.plot_series
     assert not [k for k in run.plot_series if "_" in k], list(run.plot_series)
     assert not [n for n in run.notes if "plot_series" in n or "_n" in n], run.notes
+
+
+def test_a_quick_previews_own_warnings_are_not_shown_as_the_runs():
+    """The Moon's preview (one year) cannot measure its annual term and says so; the run the class
+    asked for (six years) can. While the preview is on screen the Compare tab says it is a preview."""
+    from theoria.app.panel import compare_html
+
+    spec = get("moon")
+    preview = spec.simulate(**spec.preview)
+    assert any("cannot tell" in w for w in preview.warnings)
+    shown = compare_html(preview, preview=True)
+    assert "quick, shorter preview" in shown and "cannot tell" not in shown
+    assert "cannot tell" in compare_html(preview)
