@@ -309,12 +309,18 @@ def _number(x) -> bool:
     return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
 
 
+CAMERA_REACH = 1e6  # scene units: no view of a scene (a few units across) has a camera farther out
+
+
 def _bad_camera(message) -> str | None:
-    """Why a ViewerCameraMessage is refused (None: a camera pose of finite numbers)."""
+    """Why a ViewerCameraMessage is refused (None: a camera pose of finite numbers within
+    CAMERA_REACH; an up direction of 1e308s overflowed numpy's norm when the link was made)."""
     for name, n in _CAMERA_VECTORS.items():
         v = getattr(message, name, None)
         if not isinstance(v, (list, tuple)) or len(v) != n or not all(_number(x) for x in v):
             return f"{name} is not {n} finite numbers"
+        if any(abs(x) > CAMERA_REACH for x in v):
+            return f"{name} is beyond {CAMERA_REACH:g} scene units"
     for name in _CAMERA_NUMBERS:
         if not _number(getattr(message, name, None)):
             return f"{name} is not a finite number"
@@ -712,7 +718,9 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
         server, _ = make_server(port=port, host=host, scenario=scenario, verbose=False, run=run, limits=limits,
                                 pool=pool, sweep=sweep)
         sweep = server._theoria_sweep
-        port = server.get_port()
+        asked, port = port, server.get_port()
+        if asked and port != asked:  # viser takes the next free port: a link to the asked one would not open
+            print(f"theoria: port {asked} is in use; serving on port {port} instead", flush=True)
         if host in ("0.0.0.0", "::", ""):
             import socket
 

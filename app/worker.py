@@ -172,8 +172,17 @@ def nbytes(obj, _depth: int = 0) -> int:
         return sum(nbytes(v, _depth + 1) for v in obj[:10000] if not isinstance(v, _NO_ARRAYS))
     names = getattr(type(obj), "__dataclass_fields__", None)
     if names is not None:
-        return sum(nbytes(getattr(obj, name, None), _depth + 1) for name in names if name != "spec")
+        fields = sum(nbytes(getattr(obj, name, None), _depth + 1) for name in names if name != "spec")
+        # and what it computed since and keeps (a Trajectory's ω, L in space, energy, axes: 55.7 MB
+        # counted of 90.8 MB held for a long earth-long-view), but not the drawings and the cache's
+        # own marks, counted by the cache
+        extra = getattr(obj, "__dict__", {})
+        return fields + sum(nbytes(v, _depth + 1) for k, v in extra.items()
+                            if k not in names and k not in _COUNTED_APART)
     return 0
+
+
+_COUNTED_APART = ("_theoria_drawings", "_theoria_cache", "spec")
 
 
 class RunCache:
@@ -211,13 +220,16 @@ class RunCache:
             self._trim()
 
     def grew(self, key: str, run, delta: int) -> None:
-        """`run`, cached under `key`, holds `delta` bytes more (or fewer): a drawing was kept with it."""
+        """`run`, cached under `key`, holds more (or fewer) bytes: a drawing was kept with it, and
+        drawing it computed arrays its trajectory keeps. Measured again whole (`delta`, the
+        drawing's own size, is what the caller knows)."""
+        size = nbytes(run) + sum(nbytes(d) for d in run.__dict__.get("_theoria_drawings", {}).values())
         with self._lock:
             hit = self._d.get(key)
             if hit is None or hit[0] is not run:
                 return
-            self._d[key] = (run, hit[1] + delta, hit[2])
-            self._bytes += delta
+            self._d[key] = (run, size, hit[2])
+            self._bytes += size - hit[1]
             self._trim()
 
     def _trim(self) -> None:

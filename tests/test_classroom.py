@@ -1464,3 +1464,17 @@ def test_a_childs_run_comes_with_its_drawing_and_the_server_does_not_draw_it_aga
     assert [type(it).__name__ for it in sent.items] == [type(it).__name__ for it in mine.items]
     assert np.array_equal(sent.frames, mine.frames) and np.array_equal(sent.times, mine.times)
     assert [getattr(it, "name", None) for it in sent.items] == [getattr(it, "name", None) for it in mine.items]
+
+
+def test_a_camera_out_of_all_reach_is_refused_at_the_gate():
+    """Finite but huge camera numbers (an up direction of 1e308s) passed the gate, and making the
+    class link's camera overflowed numpy's norm: a warning line in the log outside its rate limit."""
+    import types
+
+    from theoria.app.server import _bad_camera
+
+    ok = dict(wxyz=[1.0, 0.0, 0.0, 0.0], position=[3.0, 2.0, 2.0], look_at=[0.0, 0.0, 0.0],
+              up_direction=[0.0, 0.0, 1.0], fov=1.3, near=0.01, far=1000.0, image_height=800, image_width=1280)
+    assert _bad_camera(types.SimpleNamespace(**ok)) is None
+    far = _bad_camera(types.SimpleNamespace(**{**ok, "up_direction": [1e308, 1e308, -1e308]}))
+    assert far == "up_direction is beyond 1e+06 scene units"

@@ -1008,3 +1008,24 @@ def test_an_export_says_one_thing_even_when_its_page_server_ends_late(tmp_path, 
     else:
         assert p.returncode == 130 and err == "theoria: interrupted\n" and out == "", (out, err)
         assert target.read_bytes() == b"an older file"
+
+
+def test_a_busy_port_is_said_not_replaced_in_silence(tmp_path):
+    """viser serves on the next free port when the one asked for is taken: the printed address was
+    right, but nothing said that it was not the port a teacher had written on the board."""
+    import socket
+
+    busy = socket.socket()
+    busy.bind(("127.0.0.1", 0))
+    busy.listen()
+    port = busy.getsockname()[1]
+    p = subprocess.Popen([sys.executable, "-m", "theoria", "serve", "--port", str(port), "--no-precompute"],
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        lines = [p.stdout.readline() for _ in range(2)]
+    finally:
+        p.send_signal(signal.SIGINT)
+        p.wait(60)
+        busy.close()
+    assert lines[0].startswith(f"theoria: port {port} is in use; serving on port ") and "open http://" in lines[1], lines
