@@ -181,9 +181,12 @@ def _earth(values, progress=None):
     eph = EP.integrate_orbits(dur, 0.5, moon_elements=el)
     me = EP.moon_mean_elements(eph)
     runs = {}
-    for key, bodies in (("both", ("sun", "moon")), ("sun", ("sun",)), ("moon", ("moon",))):
+    # the three runs report their progress (and so can be stopped: a closed tab, a newer request)
+    # as thirds of the whole; the Sun's and the Moon's parts ran on unstoppable, two thirds of a run
+    for j, (key, bodies) in enumerate((("both", ("sun", "moon")), ("sun", ("sun",)), ("moon", ("moon",)))):
+        part = None if progress is None else (lambda f, j=j: progress((j + f) / 3))
         runs[key] = EP.run_earth(eph.sun, eph.moon, dur, step, H=H, obliquity=obl, bodies=bodies,
-                                 sample_days=0.5, progress=progress if key == "both" else None)
+                                 sample_days=0.5, progress=part)
     t, L, q, I = runs["both"]
     L_in = quat.rotate(q, L)  # the angular-momentum axis
     sun_dir, moon_dir = eph.sun(t), eph.moon(t)

@@ -493,3 +493,31 @@ def test_an_earth_run_shorter_than_two_months_says_its_moon_is_measured_from_par
     assert any("shorter than two months" in w for w in short.warnings)
     assert short.metrics["sidereal_month_days"] == pytest.approx(27.32, rel=0.06)  # read from 18 days: rough
     assert not any("two months" in w for w in get("earth").simulate(years=0.5).warnings)
+
+
+def test_every_part_of_an_earth_run_can_be_stopped(monkeypatch):
+    """The Earth's run is three integrations (both bodies, the Sun's part, the Moon's part); only
+    the first reported progress, through which a closed tab or a newer request stops a run, so two
+    thirds of it ran on (an outside probe: each cancelled run ended by killing its process)."""
+    from theoria.physics import earth_precession as EP
+    from theoria.physics.errors import Cancelled
+    from theoria.scenarios import get
+
+    real = EP.run_earth
+    seen = []
+
+    def recording(*args, progress=None, **kwargs):
+        seen.append(progress is not None)
+        return real(*args, progress=progress, **kwargs)
+
+    monkeypatch.setattr(EP, "run_earth", recording)
+    fractions = []
+
+    def stop_in_the_last_third(f):
+        fractions.append(f)
+        if f > 0.8:
+            raise Cancelled()
+
+    with pytest.raises(Cancelled):
+        get("earth").simulate(years=1, progress=stop_in_the_last_third)
+    assert seen == [True, True, True] and fractions == sorted(fractions)
