@@ -177,11 +177,13 @@ _ephemerides = new_store()
 _ephemerides_lock = threading.Lock()
 
 
-def integrate_orbits(duration_days, sample_days=0.5, moon_elements=None, t_start=0.0) -> Ephemeris:
+def integrate_orbits(duration_days, sample_days=0.5, moon_elements=None, t_start=0.0, progress=None) -> Ephemeris:
     """Integrate the Sun–Earth–Moon problem with REBOUND IAS15 from J2000 over
     [t_start, t_start + duration] and return the geocentric Sun and Moon sampled every
     `sample_days` (samples from t_start − sample to the end + sample, for interpolation).
-    Read-only arrays: the same run is handed to every caller that asks for it or a shorter span."""
+    Read-only arrays: the same run is handed to every caller that asks for it or a shorter span.
+    `progress(frac)` is called as the samples are made (it may raise to stop the integration; the
+    simulation stopped half way is then not kept)."""
     n = int(np.ceil(duration_days / sample_days)) + 3
     key = (float(sample_days), None if moon_elements is None else tuple(map(float, moon_elements)), float(t_start))
     with _ephemerides_lock:
@@ -194,7 +196,7 @@ def integrate_orbits(duration_days, sample_days=0.5, moon_elements=None, t_start
     else:
         eph, sim = made if made is not None else (None, make_simulation(moon_elements))
         tg = t_start - sample_days + sample_days * np.arange(n)
-        more = _sample(sim, tg[0 if eph is None else len(eph.t):])
+        more = _sample(sim, tg[0 if eph is None else len(eph.t):], progress)
         eph = out = more if eph is None else eph.joined(more)
         for a in (eph.t, eph.sun_x, eph.sun_v, eph.moon_x, eph.moon_v):
             a.flags.writeable = False
@@ -205,13 +207,18 @@ def integrate_orbits(duration_days, sample_days=0.5, moon_elements=None, t_start
     return out
 
 
-def _sample(sim, tg) -> Ephemeris:
+PROGRESS_EVERY_SAMPLES = 256  # ~0.1 s of REBOUND between two looks at whether to stop
+
+
+def _sample(sim, tg, progress=None) -> Ephemeris:
     """The geocentric Sun and Moon of `sim` integrated to each time of tg in turn."""
     n = len(tg)
     out = np.empty((n, 3, 6))
     xyz = np.empty((3, 3))
     vel = np.empty((3, 3))
     for j, tj in enumerate(tg):  # the first call goes backward (REBOUND flips dt), then forward
+        if progress is not None and j % PROGRESS_EVERY_SAMPLES == 0:
+            progress(j / n)
         integrate_to(sim, tj)
         sim.serialize_particle_data(xyz=xyz, vxvyvz=vel)
         out[j, :, :3] = xyz

@@ -178,7 +178,9 @@ def _earth(values, progress=None):
     H = values["H"]
     obl = math.radians(values["obliquity_deg"])
     el = EP.calibrated_moon_elements()
-    eph = EP.integrate_orbits(dur, 0.5, moon_elements=el)
+    # REBOUND's orbits first (kept and reused when only H, the obliquity or the step move): the bar
+    # stays at 0 meanwhile, but a closed tab stops them too
+    eph = EP.integrate_orbits(dur, 0.5, moon_elements=el, progress=None if progress is None else (lambda f: progress(0.0)))
     me = EP.moon_mean_elements(eph)
     runs = {}
     # the three runs report their progress (and so can be stopped: a closed tab, a newer request)

@@ -521,3 +521,14 @@ def test_every_part_of_an_earth_run_can_be_stopped(monkeypatch):
     with pytest.raises(Cancelled):
         get("earth").simulate(years=1, progress=stop_in_the_last_third)
     assert seen == [True, True, True] and fractions == sorted(fractions)
+    # and the REBOUND orbits of a span never integrated before (80 years) stop within their samples
+    looked = []
+
+    def stop_at_once(f):
+        looked.append(f)
+        raise Cancelled()
+
+    with pytest.raises(Cancelled):
+        EP.integrate_orbits(80 * 365.25, 0.5, moon_elements=EP.calibrated_moon_elements(), t_start=123.0,
+                            progress=stop_at_once)
+    assert looked == [0.0]
