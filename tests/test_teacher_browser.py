@@ -609,6 +609,23 @@ def _wait_for(cond, limit: float = 20.0) -> bool:
     return True
 
 
+@contextlib.contextmanager
+def _paused_at(browser, app, spec, t: str):
+    """A fresh page of `spec` paused at time `t` (a link), once it shows the server's frame:
+    (page, session, frame)."""
+    base, sessions = app
+    before = set(sessions)
+    ctx, page = _open(browser, base + "?" + _query(spec, t=t, play="0"))
+    try:
+        s = _session_for(sessions, before, spec.name)
+        _page_plays(page)
+        page.wait_for_function("(k) => window.theoria.P.frame === k", arg=s.view.frame, timeout=WAIT_MS)
+        time.sleep(0.5)
+        yield page, s, s.view.frame
+    finally:
+        ctx.close()
+
+
 DRAWN_POINTS_JS = """() => {
   const d = window.theoria.P.d, R = window.__viserMutable.nodeRefFromName, out = [];
   for (const c of d.chunks) {
@@ -632,24 +649,13 @@ def test_a_growing_trail_ends_at_the_frame_shown(browser, app, name, t):
     import numpy as np
     from theoria.scenarios import get
 
-    base, sessions = app
-    spec = get(name)
-    before = set(sessions)
-    ctx, page = _open(browser, base + "?" + _query(spec, t=t, play="0"))
-    try:
-        s = _session_for(sessions, before, spec.name)
-        _page_plays(page)
-        page.wait_for_function("(k) => window.theoria.P.frame === k", arg=s.view.frame, timeout=WAIT_MS)
-        time.sleep(0.5)
-        k = s.view.frame
+    with _paused_at(browser, app, get(name), t) as (page, s, k):
         drawn = page.evaluate(DRAWN_POINTS_JS)
         want = [int(sum(np.count_nonzero(np.asarray(at) <= k) for at in p.ats))
                 for paths in s.view._chunks.values() for p in paths]
         assert want and drawn == want, (k, drawn, want)
         total = [sum(len(at) for at in p.ats) for paths in s.view._chunks.values() for p in paths]
         assert any(w < n for w, n in zip(want, total))  # the trails have not all been drawn yet
-    finally:
-        ctx.close()
 
 
 def test_playback_frame_rate_against_an_empty_page(browser, app):
@@ -698,21 +704,11 @@ def test_the_letters_of_turning_arrows_sit_at_their_tips_in_a_paused_page(browse
     import numpy as np
     from theoria.scenarios import get
 
-    base, sessions = app
     spec = get("initial-axis")
     for t in ("0", "2.5"):
-        before = set(sessions)
-        ctx, page = _open(browser, base + "?" + _query(spec, t=t, play="0"))
-        try:
-            s = _session_for(sessions, before, spec.name)
-            _page_plays(page)
-            page.wait_for_function("(k) => window.theoria.P.frame === k", arg=s.view.frame, timeout=WAIT_MS)
-            time.sleep(0.5)
-            k = s.view.frame
+        with _paused_at(browser, app, spec, t) as (page, s, k):
             for name in ("omega", "L"):
                 arrows = next(it for it in s.drawing.items if it.name == name)
                 tip = 1.1 * float(np.linalg.norm(np.asarray(arrows.vectors, float)[k, 0]))
                 pos = page.evaluate("(n) => window.__viserMutable.nodePoseData[n].position", f"/world/{name}/label")
                 assert np.allclose(pos, [0.0, 0.0, tip], atol=1e-4 * max(1.0, tip)), (t, name, pos, tip)
-        finally:
-            ctx.close()
