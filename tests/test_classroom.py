@@ -700,7 +700,9 @@ def test_a_run_is_sized_by_its_cpu_time_not_by_a_loaded_machine():
     long a loaded machine took: judged by wall time, a run of tens of milliseconds at low
     priority beside busy processes looked slow, was queued behind runs of seconds and timed
     slower still. Here three busy processes load the two cores; the pool's expectation for the
-    run must be its CPU time, well under the wall time it took."""
+    run must come from the CPU time its child reports, not the wall time it took (where the
+    scheduler still gave the child most of a core, as in one CI run, the two are close: the
+    expectation is then checked against the CPU time alone)."""
     import subprocess
     import sys
 
@@ -719,14 +721,20 @@ def test_a_run_is_sized_by_its_cpu_time_not_by_a_loaded_machine():
             assert done.wait(300), "no answer"
             w.close()
             assert "error" not in got, got
-            return got["seconds"], spec.resolve(given)
+            return got["seconds"], spec.resolve(given), w.last.stamps.get("cpu")
 
         run({"spin": 5.0})  # compiled (or loaded from numba's cache) on a quiet machine
+        t_end = time.time() + 300  # a machine whose numba cache is cold: its first runs are pure Python
+        while spec.name not in pool.warm and time.time() < t_end:
+            time.sleep(0.5)
         burners = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(3)]
         time.sleep(1.0)
-        wall, values = run({"spin": 5.5, "duration": 60.0})
+        wall, values, cpu = run({"spin": 5.5, "duration": 60.0})
         expected = pool.expected_seconds(spec, values)
-        assert expected is not None and expected < 0.5 * wall, (expected, wall)
+        # learnt from a child's CPU time (this run's, or an earlier one's of the same size)
+        assert cpu is not None and expected is not None and expected <= 2 * cpu, (expected, cpu, wall)
+        if wall > 4 * cpu:  # the load took its share: judged by the wall time it would look slow
+            assert expected < 0.5 * wall, (expected, wall)
     finally:
         for b in burners:
             b.kill()
