@@ -107,6 +107,14 @@ CHILD_NICE = 10
 # group over 200 ms. At nice 5 instead of 10: p95 0.325, 0.462 and 0.358 s (the last with tests running beside it) against
 # 0.375-0.510 s; the flip's sliders over 200 ms 31 and 62 of ~262 against 48-83.
 CHILD_NICE_TINY = 5
+# One slow child takes only browsers' runs expected within this much CPU (runs of a second or a
+# few: Hyperion's full run, a tidal capture over many orbits), never the runs of tens of seconds.
+# The other slow children take anything, so two students' 30-s Earth runs held both of them and a
+# third student's Hyperion run (its preview shown in 0.16 s) waited 32-42 s for one to end; now it
+# starts at once and shares the cores with them (the slow children are all in SCHED_IDLE, which
+# the kernel time-slices evenly). A run judged short that has taken twice this much CPU while
+# another short run waits is stopped and queued again for the other slow children.
+SHORT_SLOW_S = 5.0
 # The children of slow runs and background work, far below the quick ones: at nice 12 two slow runs
 # still took a third of the CPU a quick child wanted (at 15, a tenth). Where Linux offers it they
 # run in SCHED_IDLE, which gives way at once to any other process: a quick run, the server.
@@ -528,6 +536,7 @@ class Job:
     cancel: bool = False
     preempted: bool = False  # a background job stopped to free its child for a browser (queued again)
     overran: bool = False  # judged quick, it ran past QUICK_OVERRUN_S in a quick child: slow from now on
+    short_overran: bool = False  # judged short, it ran past 2 × SHORT_SLOW_S in the short child: long from now on
     cpu: float | None = None  # CPU seconds the child spent on it (for the timing log)
     nojit_tried: bool = False
     progress: float | None = None
@@ -573,6 +582,7 @@ class _Slot:
     def __init__(self, pool: "SimPool", index: int, jit: bool = True, use_process: bool = True):
         self.pool, self.index, self.jit, self.use_process = pool, index, jit, use_process
         self.tiny = jit and index == pool.tiny_index  # takes tiny runs only
+        self.short = jit and index == pool.short_index  # takes browsers' slow runs of a few seconds only
         self.quick = jit and (index < pool.quick_n or self.tiny)  # takes quick runs and previews only
         self.proc: subprocess.Popen | None = None
         self.inbox: Connection | None = None  # child → us
@@ -749,13 +759,17 @@ class _Slot:
         limit = RUN_SECONDS_LIMIT if self.jit else NOJIT_SECONDS_LIMIT
         self.outbox.send(("run", job.id, job.spec.name, job.values, limit))
         t0 = time.perf_counter()
-        cpu0 = _cpu_seconds(self.proc.pid) if self.quick else None
+        cpu0 = _cpu_seconds(self.proc.pid) if (self.quick or self.short) else None
         signalled = None
         while True:
             now = time.perf_counter()
-            if (cpu0 is not None and not job.overran and not job.preview and now - t0 > QUICK_OVERRUN_S
+            if (cpu0 is not None and self.quick and not job.overran and not job.preview and now - t0 > QUICK_OVERRUN_S
                     and _cpu_seconds(self.proc.pid) - cpu0 > QUICK_OVERRUN_S and self.pool.quick_waiting()):
                 job.overran = job.preempted = True  # queued again, for a slow child
+                self.pool.stats["overran"] += 1
+            if (cpu0 is not None and self.short and not job.short_overran and now - t0 > 2 * SHORT_SLOW_S
+                    and _cpu_seconds(self.proc.pid) - cpu0 > 2 * SHORT_SLOW_S and self.pool.short_waiting()):
+                job.short_overran = job.preempted = True  # queued again, for the other slow children
                 self.pool.stats["overran"] += 1
             if (job.cancel or job.preempted or self.pool.closed) and signalled is None:
                 signalled = now
@@ -858,9 +872,11 @@ class SimPool:
     scenario is not compiled on this machine yet, a run cache and a disk store."""
 
     def __init__(self, slots: int | None = None, use_processes: bool | None = None, store: bool = True,
-                 cache_bytes: float = CACHE_BYTES, first: str | None = None, tiny: bool | None = None):
+                 cache_bytes: float = CACHE_BYTES, first: str | None = None, tiny: bool | None = None,
+                 short: bool | None = None):
         """`first`: the scenario browsers will ask for first (see `prepare`). `tiny`: one more child
-        for tiny runs only (TINY_JOB_S; the server's pool has it, a pool of `slots` only if asked)."""
+        for tiny runs only (TINY_JOB_S); `short`: one more slow child for browsers' runs of a few
+        seconds only (SHORT_SLOW_S). The server's pool has both, a pool of `slots` only if asked."""
         if use_processes is None:
             use_processes = os.name == "posix" and os.environ.get("THEORIA_SIM_PROCESSES", "1") != "0"
         # the quick children (one more than the cores, at most 4) only ever take quick runs and
@@ -871,6 +887,10 @@ class SimPool:
         cores = os.cpu_count() or 1
         self.quick_n = slots // 2 if slots else min(4, cores + 1)
         self.slots_n = slots or self.quick_n + min(3, cores)
+        self.short_index = None  # the slow child for runs of a few seconds
+        if (slots is None) if short is None else short:
+            self.short_index = self.slots_n
+            self.slots_n += 1
         self.tiny_index = None  # the child for tiny runs, started last (the first child shows the first scene)
         if (slots is None) if tiny is None else tiny:
             self.tiny_index = self.slots_n
@@ -1118,6 +1138,19 @@ class SimPool:
             return False
         return self._least_seconds(job) <= TINY_JOB_S
 
+    def _short(self, job: Job) -> bool:
+        """A browser's run for the slow child kept for runs of a few seconds: expected (from its
+        scenario's last run, scaled by integrator steps) within SHORT_SLOW_S of CPU."""
+        if job.background or job.short_overran:
+            return False
+        t = self.expected_seconds(job.spec, job.values, job.preview, steps=job.steps)
+        return t is not None and t <= SHORT_SLOW_S
+
+    def short_waiting(self) -> bool:
+        """A browser's run of a few seconds waits in the queue."""
+        with self._cv:
+            return any(self._slow(j) and self._short(j) and not self._cold(j) for j in self._queue)
+
     def quick_waiting(self) -> bool:
         """A browser's quick run waits in the queue (for a quick child)."""
         with self._cv:
@@ -1136,6 +1169,8 @@ class SimPool:
         if slot.quick and (job.background or self._slow(job)):
             return False
         if slot.tiny and not self._tiny(job):
+            return False
+        if slot.short and not self._short(job):
             return False
         # a browser waiting goes first; compiling a scenario a browser waits for (a warm job) does not wait
         if job.background and not job.key.endswith("#warm") and any(

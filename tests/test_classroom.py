@@ -888,6 +888,63 @@ def test_a_tiny_run_does_not_wait_for_busy_children():
         pool.close()
 
 
+def test_a_run_of_seconds_does_not_wait_for_runs_of_minutes():
+    """Two students' long runs (tens of seconds each) held every slow child, and a third student's
+    run of a second or two waited for one of them to end (32-42 s for a full Hyperion run behind two
+    Earth runs). One slow child takes only browsers' runs expected within SHORT_SLOW_S: the short
+    run is answered while both long ones are still running or waiting, and that child never takes
+    a long run. Three children: one quick, one slow, the short one."""
+    from theoria.scenarios import get
+
+    ecc = get("libration-eccentric")
+    pool = worker_mod.SimPool(slots=2, store=False, short=True)
+    assert [(s.quick, s.short) for s in pool.slots] == [(True, False), (False, False), (False, True)]
+    done, took = {}, []
+    take = pool._take
+
+    def spy(slot):
+        job = take(slot)
+        if job is not None:
+            took.append((slot.index, job.values.get("orbits"), job.preview))
+        return job
+
+    pool._take = spy
+
+    def submit(tag, given):
+        ev = threading.Event()
+        def finished(req, r, sec):  # the full run (a slow run's preview comes first)
+            if not req.preview:
+                done.setdefault(tag, r)
+                ev.set()
+
+        w = worker_mod.SimulationWorker(tag, finished, lambda req, e: (done.update({tag: e}), ev.set()),
+                                        lambda *a: None, pool=pool)
+        w.submit(ecc, given)
+        return ev
+
+    try:
+        assert submit("warm", {"orbits": 5.0}).wait(300)
+        assert _wait(lambda: all(s.ready for s in pool.slots), 120)
+        base = ecc.resolve({"orbits": 5.0})
+        pool._seconds[(ecc.name, False)] = (1.0, worker_mod._steps(ecc, base), True)  # five orbits: a 1-s run
+        long_given = {"orbits": 400.0, "steps_per_orbit": 4000}
+        long_job = worker_mod.Job("k", ecc, ecc.resolve(long_given))
+        assert pool._slow(long_job) and not pool._short(long_job)
+        longs = [submit(f"long{a}", {**long_given, "asymmetry": a}) for a in (0.05, 0.06)]
+        def long_full():
+            return [j for j in list(pool._jobs.values()) if not j.preview and j.values.get("orbits") == 400.0]
+
+        assert _wait(lambda: len(long_full()) == 2 and any(j.state == "running" for j in long_full()), 60)
+        time.sleep(0.5)  # a free child that may take the second long run has taken it
+        assert submit("short", {"orbits": 6.0}).wait(120)
+        assert not isinstance(done["short"], Exception), done["short"]
+        assert not any(k.startswith("long") for k in done), (took, list(done))  # answered while both long runs run or wait
+        assert (2, 6.0, False) in took and not any(o == 400.0 for i, o, _ in took if i == 2), took
+        assert not longs[1].is_set()
+    finally:
+        pool.close()
+
+
 def test_a_preview_that_would_take_seconds_is_left_to_the_slow_children():
     """A preview goes before every full run, in a quick child, unless even at its scenario's
     cheapest pace per step it would hold that child for long: earth-long-view's full integration
