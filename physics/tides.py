@@ -40,7 +40,10 @@ if the lower passage cannot lift it back, i.e. with probability
     P(p) = (δ₊ + δ₋)/δ₊ = 2 / (1 + π(p − q)/(2ω₀√H)),
 
 1 when δ₋ ≥ 0 (q within 2ω₀√H/π of p: certain capture) and 0 when δ₊ ≤ 0 (the tide stops the
-spin above the resonance: it is never reached). The tidal strength A cancels: the result holds in
+spin above the resonance: it is never reached). A body spun up from below (q above p: a slow
+rotator on an eccentric orbit) crosses during a lower passage, by an amount spread over (0, δ₋),
+and stays if the upper passage cannot lift it back: the same argument with the branches
+exchanged, P(p) = (δ₋ + δ₊)/δ₋ = 2 / (1 + π(q − p)/(2ω₀√H)); it is 0 when δ₋ ≤ 0 (q below p). The tidal strength A cancels: the result holds in
 the limit of weak tides (δ₊ ≪ the separatrix's energy ω₀²H/2). Mercury, with (B − A)/C ≈ 1.2e-4:
 P(3/2) ≈ 0.07 (Goldreich & Peale's 7 %; Correia & Laskar 2004).
 """
@@ -75,16 +78,19 @@ def resonance_strength(p, e):
     return float(hansen_H(p, e))
 
 
-def capture_probability(p, e, omega0, q=None):
-    """Goldreich & Peale's (1966) probability that a body despinning from above is captured into
-    the resonance θ̇ = p n, for the constant-time-lag torque (module docstring): 2/(1 + π(p − q)/
-    (2ω₀√|H|)), clipped to 1 (certain capture) and 0 (never reached). ω₀² = 3(B − A)/C."""
+def capture_probability(p, e, omega0, q=None, from_above: bool = True):
+    """Goldreich & Peale's (1966) probability that a body despinning from above (or, with
+    `from_above=False`, spun up from below) is captured into the resonance θ̇ = p n, for the
+    constant-time-lag torque (module docstring): 2/(1 + π|p − q|/(2ω₀√|H|)), clipped to 1 (certain
+    capture) and 0 (never reached: q on the side the body comes from). ω₀² = 3(B − A)/C."""
     if q is None:
         q = float(pseudo_synchronous_rate(e))
     H = abs(resonance_strength(p, e))
     w = omega0 * np.sqrt(H)
-    up = np.pi * (p - q) + 2 * w
-    down = -np.pi * (p - q) + 2 * w
+    up = np.pi * (p - q) + 2 * w  # δ₊/A: lost on the passage the body crosses in
+    down = -np.pi * (p - q) + 2 * w  # δ₋/A: lost on the passage that may lift it back out
+    if not from_above:
+        up, down = down, up
     if up <= 0:
         return 0.0
     if down >= 0:

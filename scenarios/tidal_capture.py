@@ -72,18 +72,18 @@ def _classify(values, theta, theta0, k):
     final = float((th[-1] - th[-1 - last]) / (2 * np.pi * k * last))
     q = float(tides.pseudo_synchronous_rate(e))
     captured = next((p for p in RESONANCES if abs(final - p) < CAPTURE_TOL), 0.0)
-    # Goldreich & Peale along the way down: each resonance between the start and q is met in turn
-    # (from above), a body reaches p only if it was not held by one above it
+    # Goldreich & Peale along the way to q: each resonance between the start and q is met in turn
+    # (from above for a body despinning, from below for one spun up), and a body reaches p only if
+    # it was not held by one met before it
     start = values["spin_rate"]
+    down = start > q
     p_reach, gp = 1.0, {}
-    for p in RESONANCES:
-        if p >= start:
-            continue
-        P = tides.capture_probability(p, e, w0, q)
+    for p in sorted((p for p in RESONANCES if (p < start if down else p > start)), reverse=down):
+        P = tides.capture_probability(p, e, w0, q, from_above=down)
         gp[p] = p_reach * P
         p_reach *= 1.0 - P
-    # decided: held in a resonance, or settled at q, or already below p (passed through); a spin still
-    # above p and on its way down is undecided for p (NaN: a sweep's mean over starts leaves it out)
+    # decided: held in a resonance, or settled at q, or already past p (passed through); a spin on
+    # its way to p is undecided for p (NaN: a sweep's mean over starts leaves it out)
     # held anywhere (also in a higher-order resonance such as 5:4): over the last two windows the
     # spin changed by less than a fifth of what the tide alone would have changed it
     before = (th[-1 - last] - th[-1 - 2 * last]) / (2 * np.pi * k * last) if len(th) > 2 * last else np.nan
@@ -94,7 +94,7 @@ def _classify(values, theta, theta0, k):
     def outcome(p):
         if captured == p:
             return 1.0
-        if settled or final < p - CAPTURE_TOL:
+        if settled or (final < p - CAPTURE_TOL if down else final > p + CAPTURE_TOL):  # passed through it
             return 0.0
         return float("nan")
 
@@ -154,7 +154,9 @@ def _simulate(values, progress=None):
                         m["gp_capture_probability_3_2"], "", "one run is captured (1) or not (0); a sweep over the "
                         "initial angle measures the probability (as the check of this result does)"),
              Comparison("probability of ending in 1:1", None, m["captured_1_1"], m["gp_capture_probability_1_1"], "",
-                        "passes 3:2 (and 2:1 if above it), then captured if q lies inside the 1:1 zone")]
+                        "passes 3:2 (and 2:1 if above it), then captured if q lies inside the 1:1 zone"
+                        if values["spin_rate"] > q else
+                        "spun up from below toward q: captured on the way, or carried through 1:1 to q")]
     notes = [f"This run: {what}.",
              "The tidal rate c is exaggerated so that despinning takes thousands of orbits rather than millions of "
              "years; the capture probability does not depend on it as long as it is weak (see the warning).",
