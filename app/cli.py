@@ -215,9 +215,9 @@ def cmd_run(args) -> int:
     if table_out is not None:
         n = _put_in_place(table_out, lambda: write_table(result, table_out))
         sys.stderr.write(f"wrote {'the' if n is None else n} samples × {len(result.columns())} columns to {table_out}\n")
-    out = result.to_json()
+    out = result.to_dict()
     if args.json:
-        print(json.dumps(out, indent=2))
+        print(result.to_json())
         return 0
     print(f"{sc.title} ({sc.name}, {sc.section})")
     print("parameters:")
@@ -272,7 +272,7 @@ def cmd_check(args) -> int:
     if shown:
         sys.stderr.write("\r" + " " * 50 + "\r")
     if args.json:
-        print(json.dumps({"results": [r.to_json() for r in rows]}, indent=2))
+        print(json.dumps({"results": [r.to_dict() for r in rows]}, indent=2))
     else:
         print(check_table(rows))
         for r in rows:

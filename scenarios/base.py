@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import importlib
+import json
 import math
 import pkgutil
 import re
@@ -55,7 +56,7 @@ class Comparison:
     def title(self) -> str:  # a check row's title is its label
         return self.label
 
-    def to_json(self) -> dict:
+    def to_dict(self) -> dict:
         out = {"label": self.label, "euler": jsonable(self.euler), "simulated": jsonable(self.simulated),
                "modern": jsonable(self.modern), "unit": self.unit, "note": self.note}
         if self.id is not None:
@@ -136,16 +137,16 @@ class Run:
     def _spec(self) -> "Scenario":
         return self.spec if self.spec is not None else get(self.scenario)
 
-    def to_json(self) -> dict:
-        """The CLI's `theoria run NAME --json`: scenario, params (with units), metrics,
-        comparisons, notes, status, warnings, and for rotation scenarios the final state."""
+    def to_dict(self) -> dict:
+        """Scenario, params (with units), metrics, comparisons, notes, status, warnings, and for
+        rotation scenarios the final state, as plain JSON values (NaN and ±inf as None)."""
         spec = self._spec()
         out = {
             "scenario": self.scenario,
             "params": {p.name: {"value": jsonable(self.params[p.name]), "unit": p.unit} for p in spec.params},
             "metrics": {k: jsonable(v) for k, v in self.metrics.items()},
             "metric_units": self.metric_units,
-            "comparisons": [c.to_json() for c in self.comparisons],
+            "comparisons": [c.to_dict() for c in self.comparisons],
             "notes": list(self.notes),
             "status": self.status,
             "warnings": list(self.warnings),
@@ -153,6 +154,10 @@ class Run:
         if self.trajectory is not None and spec.kind == "rotation":
             out["final_state"] = self.trajectory.final_state()
         return out
+
+    def to_json(self, indent: int | None = 2) -> str:
+        """`to_dict()` as strict JSON text: what `theoria run NAME --json` prints."""
+        return json.dumps(self.to_dict(), indent=indent, allow_nan=False)
 
     def to_dataframe(self):
         """One row per sample: t, the attitude, ω and L on the body axes, the other bodies'

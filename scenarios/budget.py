@@ -63,7 +63,7 @@ class Cost:
     def within(self, max_steps: float | None = MAX_STEPS, max_memory: float | None = MAX_MEMORY) -> bool:
         return not _over(self.steps, max_steps) and not _over(self.bytes, max_memory)
 
-    def to_json(self) -> dict:
+    def to_dict(self) -> dict:
         def num(x):
             return float(x) if math.isfinite(x) else None
 

@@ -232,7 +232,7 @@ def test_diverged_run_is_cut_and_reported():
     assert np.all(np.isfinite(res.trajectory.L_body)) and np.all(np.isfinite(res.trajectory.omega_inertial))
     assert len(res.plot_series["spin"]) == 30 and res.trajectory.bodies["moon"].shape == (30, 3)
     assert len(res.warnings) == 1 and res.warnings[0].startswith("diverged at t=3 s") and "angular momentum" in res.warnings[0]
-    out = res.to_json()
+    out = res.to_dict()
     assert out["status"] == "diverged" and out["warnings"] == res.warnings
     assert out["metrics"]["final_spin"] is None  # NaN metric → null, never NaN in the JSON
     json.dumps(out, allow_nan=False)
@@ -245,7 +245,7 @@ def test_diverged_run_is_cut_and_reported():
 def test_ok_run_untouched_and_no_finite_sample_refused():
     ok = _blowup_scenario(None).simulate({})
     assert ok.status == "ok" and ok.warnings == [] and len(ok.trajectory.t) == 51
-    assert ok.to_json()["status"] == "ok"
+    assert ok.to_dict()["status"] == "ok"
     with pytest.raises(Diverged) as ei:
         _blowup_scenario(0.0).simulate({})
     assert isinstance(ei.value, ParameterError) and "diverged at the start" in str(ei.value)

@@ -37,12 +37,13 @@ def test_metrics_equal_the_command_lines_for_the_same_parameters():
              "--json")
     assert p.returncode == 0, p.stderr
     cli = json.loads(p.stdout)
-    assert cli == json.loads(json.dumps(run.to_json()))
+    assert cli == json.loads(run.to_json()) == json.loads(json.dumps(run.to_dict()))
+    assert p.stdout.strip() == run.to_json()  # the same text
     assert cli["metrics"] == pytest.approx(run.metrics, rel=0, abs=0)
     # a preset by (part of) its name, overridden by keywords, as `--preset` and `--set`
     tiny = sc.simulate(preset="tiny nudge", duration=50)
     p = _cli("run", "middle-axis-flip", "--preset", "tiny nudge", "--set", "duration=50", "--json")
-    assert json.loads(p.stdout)["metrics"] == json.loads(json.dumps(tiny.to_json()))["metrics"]
+    assert json.loads(p.stdout)["metrics"] == json.loads(tiny.to_json())["metrics"]
     assert tiny.params["perturbation"] == 1e-6
 
 

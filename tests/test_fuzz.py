@@ -9,7 +9,7 @@ app (every GUI value goes through `resolve`) share.
    its Param range and of the right kind / arity.
 2. Simulation of valid sets (durations and sample counts capped so the file stays fast; the
    physical parameters roam their full ranges, edges included): no exception other than
-   ParameterError; nothing non-finite in `Result.to_json` (strict JSON), in the trajectory
+   ParameterError; nothing non-finite in `Run.to_dict` (strict JSON), in the trajectory
    arrays, or in any number the scene sends to viser (a recording fake scene API).
    A run that diverges must say so (status "diverged" and a "diverged at t=" warning).
 
@@ -286,7 +286,7 @@ def simulate_fuzzed(name, data):
         FOUND.append(f"{name}: {e}")
         check_error(spec, e, set(given_) | {"parameters"})
         return
-    out = result.to_json()
+    out = result.to_dict()
     json.dumps(out, allow_nan=False)  # strict JSON: no NaN / Infinity
     tr = result.trajectory
     if tr is None:
@@ -347,4 +347,4 @@ def test_the_least_value_above_an_open_minimum_runs_or_is_refused(name):
         except ParameterError as e:
             check_error(spec, e, {p.name, "parameters"})
             continue
-        json.dumps(result.to_json(), allow_nan=False)
+        json.dumps(result.to_dict(), allow_nan=False)

@@ -108,7 +108,7 @@ def test_every_metric_has_a_unit_and_every_declared_unit_a_metric(name):
         assert not [k for k, u in got.metric_units.items() if u is None], (name, preset)
         stale = [p for p in stale if not any(k == p or re.fullmatch(p, k) for k in got.metrics)]
     assert not stale, f"{name}: metric_units names metrics the scenario does not return: {stale}"
-    assert run.to_json()["metric_units"] == run.metric_units
+    assert run.to_dict()["metric_units"] == run.metric_units
     # and every column of its table: t, the attitude, the rates, the other bodies and the series
     missing = [c for c in run.columns() if c not in run.column_units()]
     assert not missing, f"{name}: no unit in the name, the label or series_units for {missing}"

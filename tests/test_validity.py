@@ -146,7 +146,7 @@ def test_no_libration_is_reported_as_tumbling(tumbling):
     assert abs(m["forced_floquet_half_trace"]) > 1  # unstable (independent of the run)
     (w,) = [w for w in r.warnings if w.startswith("No libration")]
     assert "tumbles" in w and "unstable" in w
-    j = r.to_json()
+    j = r.to_dict()
     assert j["status"] == "tumbles" and j["metrics"]["forced_amplitude_rad"] is None
     assert all(c["simulated"] is None for c in j["comparisons"])
 
