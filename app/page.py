@@ -32,11 +32,15 @@ LOADING = "theoria — connecting…"
 # (`set_loading(client, None)`). While it is there, the content of viser's panel is hidden: before
 # the app's controls arrive, viser fills it with its developer tools (the websocket address, "Save
 # Canvas", "Dev Settings", the scene tree), which a class has no use for.
+# The box beside a slider is 3rem wide in viser: "0.00002" (a tidal rate) showed as "0.0000" and a
+# value with ten digits as its first five. It grows with its text (up to 8rem) instead.
 CSS = """
 #theoria-loading{position:fixed;left:50%;top:45%;transform:translate(-50%,-50%);z-index:10000;
   font:17px/1.4 system-ui,sans-serif;color:#222;background:rgba(255,255,255,.94);padding:10px 18px;
   border-radius:8px;box-shadow:0 1px 6px rgba(0,0,0,.15);pointer-events:none;max-width:70vw;text-align:center}
 body:has(#theoria-loading) .mantine-ScrollArea-root{visibility:hidden}
+.mantine-NumberInput-root{width:auto!important;min-width:3rem;max-width:8rem}
+.mantine-NumberInput-input{field-sizing:content;min-width:3rem;max-width:8rem}
 """
 LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div>'
 # Run before viser's client starts. In software WebGL (no GPU: SwiftShader, llvmpipe; the names

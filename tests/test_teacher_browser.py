@@ -30,6 +30,10 @@ PANEL_SCREENS_JS = f"""() => {{
   const v = p.querySelector('.mantine-ScrollArea-viewport');
   const header = v.getBoundingClientRect().top - p.getBoundingClientRect().top;
   return (header + v.scrollHeight) / window.innerHeight; }}"""
+# the values of the panel's number boxes, and those a box shows only in part
+CUT_BOXES_JS = """() => {
+  const boxes = [...document.querySelectorAll('input.mantine-NumberInput-input')].filter(i => i.offsetParent);
+  return {shown: boxes.map(i => i.value), cut: boxes.filter(i => i.scrollWidth > i.clientWidth + 1).map(i => i.value)}; }"""
 # the first element matching `css` near the control labelled `label` (in its row of the panel)
 NEAR_LABEL_JS = """([label, css]) => {
   const l = Array.from(document.querySelectorAll('label')).find(x => x.innerText.trim() === label);
@@ -135,7 +139,7 @@ def test_every_panel_is_in_words_and_fits_two_screens(browser, app):
     from theoria.scenarios import all_scenarios
 
     base, sessions = app
-    bad, screens, titles = [], {}, {}
+    bad, screens, titles, cut = [], {}, {}, {}
     for spec in all_scenarios():
         # one more try when the page's first session did not show the link's scene: on a loaded
         # machine a page can be slow to answer its address (the link); the
@@ -161,9 +165,13 @@ def test_every_panel_is_in_words_and_fits_two_screens(browser, app):
                 if ids:
                     bad.append((spec.name, tab, sorted(set(ids))))
                 screens[(spec.name, tab)] = page.evaluate(PANEL_SCREENS_JS)
+                if tab == "Explore":  # every number box shows its whole value
+                    cut[spec.name] = page.evaluate(CUT_BOXES_JS)
         finally:
             ctx.close()
     assert bad == [], bad
+    assert "0.00002" in cut["tidal-capture"]["shown"], cut["tidal-capture"]  # the tide's rate has a box
+    assert {k: v["cut"] for k, v in cut.items() if v["cut"]} == {}, cut
     too_tall = {k: round(v, 2) for k, v in screens.items() if v is None or v > 2.0}
     assert too_tall == {}, too_tall
     assert all(t == f"theoria — {name}" for name, t in titles.items()), titles
