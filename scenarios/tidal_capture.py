@@ -14,6 +14,8 @@ with the binomial error of 400 draws as the tolerance.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..physics import tides
@@ -110,6 +112,21 @@ def _classify(values, theta, theta0, k):
     return m, rate
 
 
+def _higher_order(final, q, max_denominator: int = 8):
+    """(a, b) when the final mean spin sits on a resonance θ̇ = (a/b) n of higher order (5:4, 7:4,
+    …) far closer than to q: held there, not settled at q (Mercury's orbit: 5:4 at 1.25 against
+    q = 1.2558, the held runs' mean spin within 3e-4 of 1.25). None otherwise."""
+    best = None
+    for b in range(1, max_denominator + 1):
+        a = int(round(final * b))
+        if a <= 0 or math.gcd(a, b) != 1 or (2 * a) % b == 0:  # half-integers are first order
+            continue
+        d = abs(final - a / b)
+        if d < min(2e-3, 0.15 * abs(final - q)) and (best is None or d < best[0]):
+            best = (d, a, b)
+    return None if best is None else best[1:]
+
+
 def _simulate(values, progress=None):
     orb, k, th0, out = _integrate([values])
     m, rate = _classify(values, out["theta_samples"][0], th0[0], k)
@@ -146,9 +163,14 @@ def _simulate(values, progress=None):
         if ratio > 0.1 and depth > 0:  # no resonance at all (e = 0, a round body): nothing to be strong against
             warnings.append(f"tides strong against the {p:g} resonance (energy lost per libration {ratio:.2f} × its "
                             "depth): Goldreich & Peale's probability is the weak-tide limit")
+    held_in = _higher_order(final, q) if cap == 0.0 else None
     what = {1.5: "captured into the 3:2 resonance (Mercury's state)", 1.0: "captured into synchronous rotation (the Moon's state)",
             0.0: f"not in a first-order resonance at the end (θ̇/n = {final:.4f})"}.get(cap, f"captured into θ̇/n = {cap:g}")
-    comps = [Comparison("pseudo-synchronous spin N(e)/Ω(e) (Hut 1981)", None, final if cap == 0.0 else None, q, "n",
+    if held_in is not None:
+        what = (f"held in the {held_in[0]}:{held_in[1]} resonance (θ̇/n = {final:.4f}), a higher-order one that "
+                f"Goldreich & Peale's first-order theory leaves out; the tidal end state q = {q:.4f} is not reached")
+    comps = [Comparison("pseudo-synchronous spin N(e)/Ω(e) (Hut 1981)", None,
+                        final if (cap == 0.0 and held_in is None) else None, q, "n",
                         "where the orbit-averaged tide vanishes"),
              Comparison("probability of capture into 3:2 (Goldreich & Peale 1966)", None, m["captured_3_2"],
                         m["gp_capture_probability_3_2"], "", "one run is captured (1) or not (0); a sweep over the "

@@ -268,3 +268,21 @@ def test_a_circular_orbit_has_no_3_2_resonance_to_warn_about():
 
     run = get("tidal-capture").simulate(eccentricity=0.0, orbits=3000)
     assert not any("resonance (energy lost" in w for w in run.warnings), run.warnings
+
+
+def test_a_spin_held_in_a_higher_order_resonance_is_not_reported_as_settled_at_q():
+    """On Mercury's orbit (q = 1.2558 n) many starts end held at 5:4 (1.25 n), 0.006 from q: the
+    scene said "not in a first-order resonance" and compared the spin with q as if it had settled
+    there. Held means held: twice as many orbits end at the same 1.25."""
+    sc = th.scenario("tidal-capture")
+    given = dict(eccentricity=0.2056, spin_rate=1.7, initial_angle_deg=123.75)
+    run = sc.simulate(**given)
+    longer = sc.simulate(**given, orbits=100000)
+    for r in (run, longer):
+        assert abs(r.metrics["final_spin_rate_n"] - 1.25) < 1e-3, r.metrics
+    assert "held in the 5:4 resonance" in run.notes[0] and run.comparisons[0].simulated is None
+    # a body that does settle at q (spun up from below on e = 0.2, past 1:1) is compared with it
+    r = sc.simulate(eccentricity=0.2, omega0=0.1, spin_rate=0.9, orbits=50000, initial_angle_deg=30.0)
+    q = r.metrics["pseudo_synchronous_rate_n"]
+    assert r.metrics["captured_resonance"] == 0.0
+    assert r.comparisons[0].simulated == pytest.approx(q, abs=2e-3) and "held in" not in r.notes[0]
