@@ -38,6 +38,7 @@ import logging
 import math
 import os
 import signal
+import socket
 import threading
 import time
 import traceback
@@ -52,6 +53,7 @@ from theoria.scenarios import all_scenarios, get
 
 from . import page
 from .controls import TYPED, Typed
+from .link import class_link
 from .panel import comparison_markdown, info_markdown  # noqa: F401
 from .session import ClientSession
 from .worker import MAX_TEXT_CHARS, RateLimitedLog, SimPool, shared_pool
@@ -722,10 +724,11 @@ def serve(port: int = 8080, host: str = "127.0.0.1", scenario: str | None = None
         if asked and port != asked:  # viser takes the next free port: a link to the asked one would not open
             print(f"theoria: port {asked} is in use; serving on port {port} instead", flush=True)
         if host in ("0.0.0.0", "::", ""):
-            import socket
-
-            print(f"theoria: listening on all interfaces, port {port}; open http://{socket.gethostname()}:{port}/ "
-                  f"(or http://127.0.0.1:{port}/ on this machine). Ctrl-C to stop.", flush=True)
+            # the students' address is the one the panel shows (this machine's network address): a
+            # host name such as "vm" may resolve only on this machine
+            students = class_link(host, port) or f"http://{socket.gethostname()}:{port}/"
+            print(f"theoria: listening on all interfaces, port {port}; students open {students} "
+                  f"(on this machine http://127.0.0.1:{port}/). Ctrl-C to stop.", flush=True)
         else:
             print(f"theoria: open http://{host}:{port}/ in a browser (Ctrl-C to stop)", flush=True)
         if precompute:

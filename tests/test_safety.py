@@ -1029,3 +1029,29 @@ def test_a_busy_port_is_said_not_replaced_in_silence(tmp_path):
         p.wait(60)
         busy.close()
     assert lines[0].startswith(f"theoria: port {port} is in use; serving on port ") and "open http://" in lines[1], lines
+
+
+def test_a_server_for_the_class_prints_the_address_students_open(tmp_path):
+    """Serving on every interface, the first line named the machine by its host name ("vm"), which
+    may resolve only on the machine itself; students need its network address, the one the panel's
+    class link and QR code give."""
+    import socket
+
+    from theoria.app.link import network_addresses
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    p = subprocess.Popen([sys.executable, "-m", "theoria", "serve", "--host", "0.0.0.0", "--port", str(port),
+                          "--no-precompute"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        line = p.stdout.readline()
+    finally:
+        p.send_signal(signal.SIGINT)
+        p.wait(60)
+    addrs = network_addresses()
+    if not addrs:
+        pytest.skip("this machine has no network address")
+    assert f"students open http://{addrs[0]}:{port}/" in line, line
+    assert f"http://{socket.gethostname()}:" not in line or socket.gethostname() == addrs[0], line
