@@ -29,7 +29,7 @@ from typing import Any, Callable
 
 from theoria.physics.errors import ParameterError
 from theoria.physics.params import Param
-from .format import capitalised
+from .format import capitalised, readable
 
 MAX_SLIDER_STEPS = 2000
 
@@ -52,8 +52,9 @@ def label_of(p: Param) -> str:
 def hint_of(p: Param) -> str:
     allowed = p.allowed()
     if p.kind == "choice":
-        return p.help
-    return f"{capitalised(p.help)}. Allowed: {allowed.split(' ', 2)[-1] if allowed.startswith('allowed range') else allowed}"
+        return readable(p.help)
+    return readable(f"{capitalised(p.help)}. Allowed: "
+                    f"{allowed.split(' ', 2)[-1] if allowed.startswith('allowed range') else allowed}")
 
 
 def _on_grid(v: float, lo: float, step: float) -> bool:

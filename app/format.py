@@ -93,13 +93,13 @@ def capitalised(text: str) -> str:
     return text[:1].upper() + text[1:] if text[:1].isascii() else text
 
 
-_E_NUMBER = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?[eE][+-]?\d+)(?![\w.])")
+_E_NUMBER = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?[eE][+\-−]?\d+)(?![\w.])")
 _LEADING_MINUS = re.compile(r"(?<![\w)\]])-(?=\.?\d)")
 
 
 def readable(text: str) -> str:
     """Text for the panel as a person writes it: numbers in a programmer's e-notation as powers of
     ten ("1e-06" → "1 × 10⁻⁶"), "≥" and "≤" for ">=" and "<=", a true minus sign ("−0.45")."""
-    text = _E_NUMBER.sub(lambda m: human_number(float(m[1]), 6), str(text))
+    text = _E_NUMBER.sub(lambda m: human_number(float(m[1].replace(MINUS, "-")), 6), str(text))
     text = text.replace(">=", "≥").replace("<=", "≤")
     return _LEADING_MINUS.sub(MINUS, text)

@@ -52,6 +52,8 @@ from .worker import SimulationWorker, drawing_of, limits_text, timing_log
 # Playback: one thread for every browser within a share of a core (app/playback.py); with many
 # browsers each plays back at a lower rate and slider changes stay quick.
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
+# a teacher read speed 1 as real time (a 30-s run played 1.5x faster than that): the label says what 1 is
+SPEED_LABEL = f"Playback speed (1: the run in {RUN_SECONDS:g} s)"
 CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubber while playing
 # s the scrubber is left to the browser after it moved it: its number field sends each keystroke,
 # and the scrubber following playback rewrote the field under a teacher typing "90" (lost)
@@ -265,7 +267,7 @@ class ClientSession:
             self.scrub.on_update(self._on(self._on_scrub))
             on_typed(self.scrub, self._typed_into(self.scrub))
             self.time_md = gui.add_markdown("t = 0")
-            self.speed = gui.add_slider("Playback speed", min=0.1, max=10.0, step=0.1, initial_value=1.0,
+            self.speed = gui.add_slider(SPEED_LABEL, min=0.1, max=10.0, step=0.1, initial_value=1.0,
                                         hint=f"1 = the whole run in {RUN_SECONDS:g} s")
             self.speed.on_update(self._on(self._send_clock))
             on_typed(self.speed, self._typed_into(self.speed))
@@ -1048,8 +1050,8 @@ class ClientSession:
     def _show_result_text(self, result, preview: bool = False) -> None:
         self.compare.content = compare_html(result, preview)
         errata, other = split_notes(result.notes)
-        self.notes_md.content = "\n\n".join(f"*{_md(n)}*" for n in other if n not in result.warnings)
-        self.errata.content = ("**Where the printed text is wrong**\n\n" + "\n\n".join(f"- {_md(n)}" for n in errata)
+        self.notes_md.content = "\n\n".join(f"*{_md(readable(n))}*" for n in other if n not in result.warnings)
+        self.errata.content = ("**Where the printed text is wrong**\n\n" + "\n\n".join(f"- {_md(readable(n))}" for n in errata)
                                if errata else "")
         self.numbers.content = numbers_markdown(result)
 

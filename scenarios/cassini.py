@@ -287,8 +287,8 @@ register(Scenario(
         # 0.5 d by 3e-5° (1 d: 7e-6°; the check's tolerance is 0.02°), the out-of-plane peak by 0.06 %,
         # for 0.13 CPU-s a run against 0.29 s at 1 d (tests/test_cassini.py)
         Param("step_days", 2.0, 0.01, 2.0, "day", "integrator step", label="Integrator step", advanced=True),
-        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)", label="β = (C − A)/B"),
-        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (LLR: 227.7e-6)", label="γ = (B − A)/C"),
+        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (lunar laser ranging: 631.0 × 10⁻⁶)", label="β = (C − A)/B"),
+        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (lunar laser ranging: 227.7 × 10⁻⁶)", label="γ = (B − A)/C"),
         Param("inclination_deg", C.MOON_MEAN_INCLINATION_DEG, 0.5, 30.0, "deg", "orbit to ecliptic (5.145°)",
               label="Orbit to ecliptic"),
         Param("node_period_yr", C.NODE_PERIOD_SIDEREAL_DAYS / JULIAN_YEAR_DAYS, 2.0, 200.0, "yr",

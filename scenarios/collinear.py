@@ -103,7 +103,7 @@ def _collinear(values, progress=None):
     }
     comps = [
         Comparison("α = BC/AB (quintic, §7 Eq. 33)", alpha, float(np.median(ratio)), None, "",
-                   f"the three bodies integrated directly (DOP853) keep the ratio to {ratio_err:.1e}"),
+                   f"the three bodies integrated directly (an 8th-order Runge–Kutta integrator, DOP853) keep the ratio to {ratio_err:.1e}"),
         Comparison("AB spacing / Euler's law", 1.0, float(d1[-1] / p_euler[-1]), None, "",
                    {"rotating": "rigid rotation: spacing constant",
                     "collapse": "Case II: spacing ∝ cos²φ, t ∝ φ + sinφ cosφ",

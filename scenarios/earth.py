@@ -276,7 +276,7 @@ def _earth(values, progress=None):
                    iau["13.66d"]["deps"], "arcsec", f"angular-momentum axis: {nut_L['13.66d']['deps']:.4f}″",
                    observed="the real Earth"),
         Comparison("Moon's node regression period", None, sim(node_period), NODE_PERIOD_SIDEREAL_YR, "yr",
-                   "from the REBOUND Sun–Earth–Moon integration, not imposed; against the fixed J2000 ecliptic "
+                   "from the Sun–Earth–Moon N-body integration (REBOUND), not imposed; against the fixed J2000 ecliptic "
                    f"(sidereal; {NODE_PERIOD_YR:.3f} yr from the moving equinox)"),
     ]
     # why Euler's §846 sum differs: A for C in N, circles (no eccentricity), the Moon in the ecliptic
@@ -424,7 +424,7 @@ register(Scenario(
     section="§844–849 (modern values)",
     group="ch. 16",
     summary=("The Earth with its real figure (dynamical ellipticity H), spin and tilt, pulled by the "
-            "Sun and the Moon (their orbits from a Sun–Earth–Moon REBOUND integration, the Moon's node "
+            "Sun and the Moon (their orbits from a Sun–Earth–Moon N-body integration (REBOUND), the Moon's node "
             "regressing in 18.6 years). The pole turns westward around the pole of the ecliptic at "
             "about 50.4″ a year (a whole cycle in ~25,700 years) and nods: 17″ in longitude and 9″ in "
             "obliquity with the Moon's node, 1.3″ twice a year, 0.2″ twice a month. The table puts "

@@ -266,12 +266,12 @@ def _earth_long(values, progress=None):
                      "integration from the secular pole adds the nutation back (peak to peak "
                      f"{m['zoom_nutation_longitude_range_arcsec']:.1f}″ across and "
                      f"{m['zoom_nutation_obliquity_range_arcsec']:.1f}″ in obliquity).")
-    eclip = ("the ecliptic of date moves as Vondrák et al. (2011) have it (computed with ERFA): the planets turn the "
+    eclip = ("the ecliptic of date moves as Vondrák et al. (2011) have it (computed with the IAU's SOFA/ERFA library): the planets turn the "
              "Earth's orbit plane, the obliquity swings" if values["ecliptic"] == "moving" else
              "the ecliptic is held fixed at J2000 (no planets): the pole drifts from the real one by degrees "
              "over millennia")
     notes.append(f"Frame: the J2000 ecliptic; {eclip}. The pole is compared with Vondrák, Capitaine & Wallace "
-                 "(2011, A&A 534, A22) long-term precession (ERFA ltpequ), valid ±200,000 years.")
+                 "(2011, A&A 534, A22) long-term precession (the IAU's SOFA/ERFA library), valid ±200,000 years.")
     comps = [Comparison("precession period", 360 * 3600 / eul, m["precession_period_yr"], 360 * 3600 / rate_ref, "yr",
                         "mean rate about the ecliptic pole of date over the run; modern: the same for Vondrák's pole"),
              Comparison("pole − Vondrák 2011, largest (°)", None, m["pole_vs_vondrak_max_deg"], 0.0, "deg",
@@ -356,7 +356,7 @@ def e10_earth_long_term():
     return dict(euler=float(fixed.max()), simulated=float(sep.max()), modern=0.0, rel_error=float(sep.max()),
                 tolerance=0.1, unit="deg",
                 note=(f"error and tolerance in degrees: the largest angle between the secular model's pole and "
-                      f"Vondrák, Capitaine & Wallace's (2011, computed with ERFA) from 11,000 BC to AD 15,000, "
+                      f"Vondrák, Capitaine & Wallace's (2011, computed with the IAU's SOFA/ERFA library) from 11,000 BC to AD 15,000, "
                       f"{sep.max():.3f}° in {J2000_YEAR + t[j] / YR:.0f}; the ecliptic of date from the same paper "
                       f"drives the Sun's and the Moon's planes, theoria's averaged torque moves the "
                       f"equator. Euler's column: the same torque on the fixed J2000 ecliptic ({fixed.max():.2f}°). "

@@ -46,7 +46,7 @@ def _gg_accuracy(values, progress=None):
     comps = [Comparison("order of the torque error in size/s (§816)", 2.0, m["torque_error_order"]),
              Comparison("order of the §818 force error in size/s", 2.0, m["force_error_order"])]
     notes = ["Across the run, F comes in from far away: the horizontal axis is size/distance (the largest semi-axis over s); exact values by Gauss quadrature "
-             "over the homogeneous ellipsoid (16×16×32 points; converged to ~1e-6 relative at s = 1.25 sizes)."]
+             "over the homogeneous ellipsoid (16×16×32 points; converged to ~10⁻⁶ relative at s = 1.25 sizes)."]
     series = {"torque_rel_error": et, "force_rel_error": ef, "ratio_squared": ratios**2}
     traj.series.update(series)
     warnings = [f"The {what} error does not fall on a straight line against size/s (its points {off:.2f} decades "

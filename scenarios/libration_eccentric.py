@@ -270,7 +270,7 @@ def _finish(values, s, t, L, q):
                    mt["forced_amplitude_periodic_rad"], "rad",
                    "simulated: first harmonic of ζ in the rigid-body run (whole orbits; a free swing fitted "
                    "alongside at its measured period); modern: that of the periodic solution of the planar "
-                   "equation (DOP853, the ellipse to all orders)"),
+                   "equation (an 8th-order Runge–Kutta integration, DOP853; the ellipse to all orders)"),
         Comparison("sin 2At coefficient (§835)", m2e, mt["forced_second_harmonic_rad"], None, "rad",
                    "Euler keeps only the 1/s³ modulation β; the ellipse adds (5/4)e² sin 2M to the true anomaly, "
                    "which gives 5e²A²/(4A²−2N) — larger than Euler's term"),

@@ -97,7 +97,7 @@ def _lunar(values, progress=None):
                    observed="the real Moon"),
         Comparison("inclination max", None, float(inc.max()), MOON_INCLINATION_RANGE_DEG[1], "deg", "", observed="the real Moon"),
         Comparison("Euler's elements vs Cartesian integration, max distance", 0.0, err, None, "LD",
-                   "same forces, same RK4 step: the element equations (sign of §XXVII.4 corrected) reproduce the orbit"),
+                   "same forces, same Runge–Kutta (RK4) step: the element equations (sign of §XXVII.4 corrected) reproduce the orbit"),
         Comparison("§XXVII.4 with the printed sign: max distance after 60 d", None, err_printed, None,
                    "LD", "the sign error makes the orbit wrong within weeks"),
         Comparison("dω sin σ − dψ sin ω cos σ (§VII)", 0.0, id1, None, "rel.",

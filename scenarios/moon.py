@@ -506,7 +506,7 @@ def _moon(values, progress=None):
                    observed="the real Moon"),
     ]
     notes = [
-        "Moments from lunar laser ranging: β = (C−A)/B = 631.0e-6, γ = (B−A)/C = 227.7e-6 (Williams et al. 2014).",
+        "Moments from lunar laser ranging: β = (C−A)/B = 631.0 × 10⁻⁶, γ = (B−A)/C = 227.7 × 10⁻⁶ (Williams et al. 2014).",
         "The −16.8″ term is the anomalistic-month term (sin M′); the annual term is +90.7″ E sin M "
         "(Meeus ch. 53 after Eckhardt 1981).",
         f"Euler's formula (§836) is linear in each longitude term: it gets the M′, annual and evection terms to a few "
@@ -693,8 +693,8 @@ register(Scenario(
         Param("start_year", 2025.0, 1900.0, 2190.0, "yr", "start epoch (TDB, years; DE421 covers 1899.92–2200.08)",
               label="Start year"),
         Param("step_days", 0.25, 0.01, 2.0, "day", "integrator step", label="Integrator step", advanced=True),
-        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (LLR: 631.0e-6)", label="β = (C − A)/B"),
-        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (LLR: 227.7e-6)", label="γ = (B − A)/C"),
+        Param("beta", C.MOON_BETA_LLR, 1e-5, 0.01, "", "(C−A)/B (lunar laser ranging: 631.0 × 10⁻⁶)", label="β = (C − A)/B"),
+        Param("gamma", C.MOON_GAMMA_LLR, 1e-6, 0.01, "", "(B−A)/C (lunar laser ranging: 227.7 × 10⁻⁶)", label="γ = (B − A)/C"),
         Param("equator_inclination_deg", C.MOON_EQUATOR_INCLINATION_DEG, 0.0, 10.0, "deg", "lunar equator to ecliptic (1.54242°)",
               label="Equator to ecliptic"),
         Param("start", "de421", kind="choice", choices=("de421", "forced", "uniform"),

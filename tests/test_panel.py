@@ -796,3 +796,22 @@ def test_a_quick_previews_own_warnings_are_not_shown_as_the_runs():
     shown = compare_html(preview, preview=True)
     assert "quick, shorter preview" in shown and "cannot tell" not in shown
     assert "cannot tell" in compare_html(preview)
+
+
+PROGRAMMERS_NUMBER = re.compile(r"(?<![\w.])\d+(?:\.\d+)?[eE][+\-−]?\d+|(?<![\w)\]−-])-\d")
+
+
+@pytest.mark.parametrize("name", [s.name for s in all_scenarios()])
+def test_every_text_of_the_panel_writes_numbers_as_people_do(name):
+    """What a class can unfold (how the numbers were made, the printed text's errors, every number
+    of the run) and the controls' hover hints: a teacher found "631.0e-6", "+6.2e−06 %", "~1e-6"
+    and "-8.5″" there (the browser test reads only what is unfolded)."""
+    from test_gallery import _session, _wait
+
+    full = get(name).resolve({})
+    with _session(name) as (s, client):
+        _wait(lambda: s.result is not None and dict(s.result.params) == full, 300)  # the full run, not its preview
+        handles = [h for h in client.gui.handles if not h.removed]
+        texts = [getattr(h, "content", "") or "" for h in handles] + [getattr(h, "hint", "") or "" for h in handles]
+    bad = [t[max(0, m.start() - 40):m.end() + 10] for t in texts for m in PROGRAMMERS_NUMBER.finditer(t)]
+    assert bad == [], bad

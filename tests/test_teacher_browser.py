@@ -362,7 +362,7 @@ def test_an_arrow_key_on_a_focused_slider_moves_the_slider_only(browser, app):
         assert _wait_for(lambda: not s.playing)
         time.sleep(0.5)
         clock, speed = s.clock, s.speed.value
-        thumb = _near(page, "Playback speed", "[role=slider]")
+        thumb = _near(page, "Playback speed (1: the run in 20 s)", "[role=slider]")
         thumb.focus()
         page.keyboard.press("ArrowRight")
         assert _wait_for(lambda: s.speed.value > speed, limit=10.0)
