@@ -744,9 +744,7 @@ class SceneView:
         out = {"n": self.n, "tracks": [], "chunks": [], "props": []}
         if d is None or self.n == 0:
             return out
-        t = np.asarray(d.times, float)
-        span = (t[-1] - t[0]) or 1.0
-        out["times"] = _b64(((t - t[0]) / span).astype("<f4"))
+        out["times"] = _b64(d.paces().astype("<f4"))
 
         def add(node, attr, values, group):
             v = np.asarray(values, float)

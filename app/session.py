@@ -1136,7 +1136,11 @@ class ClientSession:
     def _frame_index(self) -> int:
         if self.drawing is None:
             return 0
-        t = self.drawing.times  # called for every playback tick of every browser: no numpy wrappers
+        d = self.drawing
+        if d.pace is not None:
+            p = d.pace
+            return min(max(int(p.searchsorted(self.clock - 1e-9)), 0), len(p) - 1)
+        t = d.times  # called for every playback tick of every browser: no numpy wrappers
         span = t[-1] - t[0]
         # the first frame at the clock's time, rounding forgiven: a link's t = 3.77 came back as
         # 3.7700000000000005 through the clock's fraction and showed the frame of 3.78
@@ -1224,8 +1228,7 @@ class ClientSession:
 
     def _set_clock_at(self, t: float, drawing) -> None:
         """Put the clock at time `t` of `drawing` (in its time unit)."""
-        t0, t1 = drawing.times[0], drawing.times[-1]
-        self._set_clock((t - t0) / ((t1 - t0) or 1.0))
+        self._set_clock(drawing.pace_at(t))
 
     def tick_hz(self) -> float:
         """At most this many playback ticks a second: a page that plays by itself needs the server

@@ -296,10 +296,30 @@ class Drawing:
     plot_t: np.ndarray | None = None
     rotation: bool = True
     clock: Clock = field(default_factory=Clock)  # the time as the panel reads it out
+    # where playback stands at each frame (0 … 1 of the run, rising); None: in proportion to the
+    # time. A sweep whose samples are on a log scale (gravity-gradient-accuracy's distances) plays
+    # one sample per equal share instead: in proportion to its "time" the first nine of twelve
+    # flashed by in a quarter of the run and the last stood still for its last 30 %.
+    pace: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
         return len(self.frames)
+
+    def paces(self) -> np.ndarray:
+        """Where playback stands at each frame, 0 … 1 (`pace`, or the times in proportion)."""
+        if self.pace is not None:
+            return np.asarray(self.pace, float)
+        t = np.asarray(self.times, float)
+        span = (t[-1] - t[0]) or 1.0
+        return (t - t[0]) / span
+
+    def pace_at(self, t: float) -> float:
+        """Where playback stands at time `t` of the run."""
+        times = np.asarray(self.times, float)
+        if self.pace is None:
+            return float((t - times[0]) / ((times[-1] - times[0]) or 1.0))
+        return float(np.interp(t, times, self.paces()))
 
     def add(self, *items: Item) -> None:
         self.items.extend(items)

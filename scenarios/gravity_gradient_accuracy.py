@@ -81,6 +81,7 @@ def _draw(run, spec, view):
     labelled with the relative errors of Euler's torque and of the §818 force at that distance
     (the run's plot_series)."""
     d, _ = body_scene(run, spec, view, bodies={})  # F is drawn at its distance, not on a sphere of directions
+    d.pace = np.linspace(0.0, 1.0, d.n_frames)  # the distances are on a log scale: one each equal share of playback
     tr = run.trajectory
     if not view.option("attractor", spec) or "attractor" not in tr.bodies:
         return d

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import json
 import re
 import threading
 import time
@@ -815,3 +816,29 @@ def test_every_text_of_the_panel_writes_numbers_as_people_do(name):
         texts = [getattr(h, "content", "") or "" for h in handles] + [getattr(h, "hint", "") or "" for h in handles]
     bad = [t[max(0, m.start() - 40):m.end() + 10] for t in texts for m in PROGRAMMERS_NUMBER.finditer(t)]
     assert bad == [], bad
+
+
+def test_a_sweep_on_a_log_scale_plays_one_distance_per_equal_share_of_the_run():
+    """gravity-gradient-accuracy's run is a sweep of F's distance, its twelve sizes/distances on a
+    log scale from 0.01 to 0.5. Played in proportion to that "time", the first nine flashed by in a
+    quarter of the run and F stood still at 0.5 from 70 % to the end (a teacher saw 50, 60 and 65 %
+    all read 0.3504). Each now has an equal share, on the server's clock and in the page's tracks;
+    a time set from a link still lands on its own distance."""
+    import base64
+
+    from test_gallery import _session, _wait
+
+    with _session("gravity-gradient-accuracy") as (s, client):
+        _wait(lambda: s.result is not None and s.drawing is not None and s.drawing.n_frames == 12)
+        d = s.drawing
+        seen = []
+        for c in np.linspace(0.0, 1.0, 101):
+            s._set_clock(c)
+            seen.append(s._frame_index())
+        counts = np.bincount(seen, minlength=12)
+        assert counts[0] >= 1 and counts[1:].min() >= 8 and counts.max() <= 10, counts  # each its share (100 / 11)
+        times = np.frombuffer(base64.b64decode(json.loads(s.view.tracks_json())["times"]), "<f4")
+        assert np.allclose(times, np.linspace(0, 1, 12), atol=1e-6)
+        t = float(d.times[9])
+        s._set_clock_at(t, d)
+        assert s._frame_index() == 9 and d.times[s._frame_index()] == t
