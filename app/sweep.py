@@ -64,7 +64,7 @@ class SweepBusy(ParameterError):
 # flagged: the run finished but its status names what it found (e.g. "tumbles": no libration at all)
 STATUS = {"not run": 0, "ok": 1, "diverged": 2, "refused": 3, "failed": 4, "flagged": 5}
 SAMPLE = "sample"
-MAX_MESSAGES = 1000
+MAX_MESSAGES = 1000  # messages kept in the description (docs/sweeps.md); past them the status alone says it
 
 
 # ------------------------------------------------------------------------------------- the plan
@@ -190,6 +190,9 @@ def parse_grid(sc, spec: str) -> Axis:
         if count > 10_000_000:
             raise ParameterError("--grid", spec, "count at most 10,000,000")
         lo, hi = p.parse(parts[0].strip()), p.parse(parts[1].strip())
+        if count == 1 and lo != hi:  # both ends included: one value cannot be both (it kept the start only)
+            raise ParameterError("--grid", spec, f"one value holds both ends only when they are equal; a count of "
+                                 f"at least 2 runs from {parts[0]} to {parts[1]}; {form}")
         vals = np.linspace(lo, hi, count)
         if p.kind == "int":
             if not np.all(vals == np.round(vals)):
@@ -385,15 +388,29 @@ def run_chunk(task: dict) -> dict:
     out: dict[str, np.ndarray] = {}
     reported: set[str] = set()  # every metric the runs reported (to name them if --metrics asks for another)
     if task["batched"]:
-        res = sc.batch.fn(dict(fixed), {k: np.asarray(v) for k, v in points.items()})
-        st = res.pop("_status", None)
-        if st is not None:
-            status[:] = st
-        messages.update(res.pop("_messages", {}))
-        reported.update(res)
-        for k, v in res.items():
-            if metrics is None or k in metrics:
-                out[k] = np.asarray(v, float)
+        # each run's budget, as on the single-run path and in `simulate`: a batch of runs of 10⁸
+        # steps each was run when the same values alone were refused
+        keep = np.ones(n, bool)
+        for i in range(n):
+            values = {**fixed, **{k: _item(v[i]) for k, v in points.items()}}
+            try:
+                sc.check_budget(sc.resolve(values), **task.get("limits", {}))
+            except ParameterError as e:
+                keep[i] = False
+                status[i] = STATUS["refused"]
+                messages[i] = str(e)
+        idx = np.flatnonzero(keep)
+        if len(idx):
+            res = sc.batch.fn(dict(fixed), {k: np.asarray(v)[idx] for k, v in points.items()})
+            st = res.pop("_status", None)
+            if st is not None:
+                status[idx] = st
+            messages.update({int(idx[int(j)]): m for j, m in res.pop("_messages", {}).items()})
+            reported.update(res)
+            for k, v in res.items():
+                if metrics is None or k in metrics:
+                    out[k] = np.full(n, np.nan)
+                    out[k][idx] = np.asarray(v, float)
     else:
         for i in range(n):
             values = {**fixed, **{k: _item(v[i]) for k, v in points.items()}}
@@ -1080,7 +1097,7 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
     regions = plan.chunk_regions()
     done = writer.done_regions(regions) if not writer.new else set()
     todo = [i for i in range(len(regions)) if i not in done]
-    t0 = time.perf_counter()
+    t0, started = time.perf_counter(), datetime.datetime.now(datetime.timezone.utc)
     summary = Summary(out, plan.size, len(regions), len(done), 0, "batched" if plan.batched else "single runs", 0.0)
     counts = {k: 0 for k in STATUS if k != "not run"}
     interrupted = False
@@ -1139,7 +1156,7 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
         summary.interrupted = interrupted
         summary.kept = writer.kept if interrupted else ""
         held = held or to_the_end.enter_context(signals_held())
-        writer.session({"started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        writer.session({"started": started.isoformat(timespec="seconds"),  # when it started, not when it ended
                         "chunks_computed": summary.chunks_computed, "chunks_done_before": summary.chunks_done_before,
                         "path": summary.path, "seconds": round(summary.seconds, 3), "interrupted": interrupted,
                         "where": summary.cluster})

@@ -36,6 +36,7 @@ def cli(*args, timeout=600, **kw):
     ("nonsense=0:1:3", ["nonsense", "unknown parameter", "eccentricity"]),
     ("eccentricity=0:0.9:3", ["eccentricity", "0.9", "[0, 0.5]"]),
     ("eccentricity=0:0.5:0", ["--grid", "count must be at least 1"]),
+    ("eccentricity=0:0.5:1", ["--grid", "both ends only when they are equal"]),  # it kept 0 and dropped 0.5
     ("eccentricity=0:0.5", ["--grid", "name=start:stop:count"]),
     ("eccentricity=a:b:3", ["--grid", "name=start:stop:count"]),
     ("eccentricity=0:0.5:2.5", ["--grid", "whole number"]),
@@ -350,10 +351,18 @@ def test_python_sweep_batched_to_zarr_and_parquet_and_the_map_replays_a_pixel(tm
     sc = th.scenario("hyperion")
     fixed = dict(n_starts=4, n_orbits=100, probe_orbits=1)
     grid = {"eccentricity": (0.0, 0.2, 3), "probe_rate": [0.5, 1.0, 1.45, 2.5]}
+    import datetime
+
     with LocalCluster(n_workers=1, threads_per_worker=1, host="127.0.0.1", dashboard_address=None) as lc, Client(lc) as c:
+        before = datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0)
         ds = sc.sweep(grid=grid, out=tmp_path / "h.zarr", cluster=c, **fixed)
+        after = datetime.datetime.now(datetime.timezone.utc)
         df = sc.sweep(grid=grid, out=tmp_path / "h.parquet", cluster=c, **fixed)
     assert ds.attrs["sessions"][0]["path"] == "batched"
+    # when it started (it was when it ended): no later than the sweep's own length before the end
+    started = datetime.datetime.fromisoformat(ds.attrs["sessions"][0]["started"])
+    assert before <= started <= after - datetime.timedelta(seconds=ds.attrs["sessions"][0]["seconds"]) \
+        + datetime.timedelta(seconds=1)
     assert ds["lyapunov_probe_per_orbit"].dims == ("eccentricity", "probe_rate")
     assert ds["probe_rate"].attrs["units"] == "n"
     # every metric with the scenario's unit ("1" for a pure number), in both stores
@@ -667,6 +676,33 @@ def test_a_run_over_the_budget_is_refused_in_a_sweep_not_run():
     assert "1e+08 integrator steps" in res["messages"][1] and "max_steps" in res["messages"][1]
     res = sw.run_chunk({**task, "points": {"duration": np.array([2.0])}, "limits": {"max_steps": 100}})
     assert list(res["status"]) == [sw.STATUS["refused"]] and "over the limit of 100" in res["messages"][0]
+
+
+@pytest.mark.parametrize("name, over, limits", [("libration-eccentric", {"orbits": 200.0}, {"max_steps": 20000}),
+                                                 ("tidal-capture", {"orbits": 200000.0, "steps_per_orbit": 512.0}, {})])
+def test_the_batched_path_holds_each_run_to_the_same_budget(name, over, limits):
+    """Scenarios that advance many bodies together ran every point, however many steps it took: a
+    tidal capture of 10⁸ steps that `simulate` refuses was written "ok" (27.7 s), and --max-steps
+    changed nothing. Each point is held to its own budget first: the refused one gets status 3 and
+    the message `simulate` gives, the others their metrics as before."""
+    sc = th.scenario(name)
+    assert sc.batch is not None
+    fixed = {k: v for k, v in sc.resolve({}).items() if k not in over}  # as a plan fixes what is not swept
+    points = {k: np.array([float(sc.resolve({})[k]) if k != "orbits" else 20.0, v]) for k, v in over.items()}
+    assert set(points) <= set(sc.batch.sweepable), sc.batch.sweepable
+    task = {"scenario": name, "fixed": fixed, "points": points, "metrics": None, "batched": True, "threads": None,
+            "limits": limits}
+    res = sw.run_chunk(task)
+    assert list(res["status"]) == [sw.STATUS["ok"], sw.STATUS["refused"]], res["messages"]
+    with pytest.raises(th.BudgetExceeded) as e:
+        sc.simulate(**{k: v[1] for k, v in points.items()}, **limits)
+    assert res["messages"][1] == str(e.value)
+    one = sc.simulate(**{k: v[0] for k, v in points.items()})
+    for k, v in res["metrics"].items():
+        assert np.isnan(v[1]) and np.allclose(v[0], one.metrics[k], rtol=1e-9, atol=1e-15, equal_nan=True), k
+    # the command's limit applies too
+    res = sw.run_chunk({**task, "limits": {"max_steps": 10}})
+    assert list(res["status"]) == [sw.STATUS["refused"]] * 2 and "over the limit of 10 " in res["messages"][0]
 
 
 def test_a_sweep_description_left_empty_is_one_line_on_resume(tmp_path):
