@@ -1073,3 +1073,35 @@ def test_a_stop_during_the_last_chunks_write_is_too_late_to_interrupt(monkeypatc
     interrupted = sw._drive(client, plan, {i: None for i in todo}, todo, Writer(), stop, lambda n: None,
                             {k: 0 for k in sw.STATUS}, summary, 1, None)
     assert (interrupted, summary.chunks_computed) == (False, 3)
+
+
+def test_a_grid_of_a_million_is_checked_in_a_moment_and_every_bad_point_still_found():
+    """The scenario's cross-parameter check ran at each of a million points before any work (27 s
+    for the flip, whose check reads the spin only); it is run once per combination of what it
+    reads, falling back to every point when a call reads another swept value, so a check whose
+    branch reads the nudge only at high spin still finds the one bad corner."""
+    sc = th.scenario("middle-axis-flip")
+    plan = sw.make_plan(sc, grid={"spin": (1, 8, 1000), "perturbation": (1e-3, 1e-1, 1000)})
+    calls = []
+
+    def reads_spin(v):
+        calls.append(v["spin"])
+        if v["spin"] == 8.0:
+            raise th.ParameterError("spin", v["spin"], "a bad corner")
+
+    with pytest.raises(th.ParameterError, match="bad corner"):
+        sw._check_every_point(reads_spin, plan)
+    assert len(calls) == 1001  # the first point, then each spin once
+
+    def branch(v):
+        calls.append(1)
+        if v["spin"] > 5 and v["perturbation"] == 0.1 and v["spin"] == 8.0:
+            raise th.ParameterError("perturbation", 0.1, "a bad corner behind a branch")
+
+    calls.clear()
+    with pytest.raises(th.ParameterError, match="behind a branch"):
+        sw._check_every_point(branch, plan)
+    ok = sw.make_plan(sc, grid={"spin": (1, 7, 50), "perturbation": (1e-3, 1e-1, 50)})
+    calls.clear()
+    sw._check_every_point(branch, ok)  # no bad point: every point was looked at once the branch read the nudge
+    assert 2500 <= len(calls) <= 2500 + 51
