@@ -495,6 +495,8 @@ def run_chunk(task: dict) -> dict:
             if run.status != "ok":
                 status[i] = STATUS["diverged"] if run.status == "diverged" else STATUS["flagged"]
                 messages[i] = f"{run.status}: " + "; ".join(run.warnings)
+            elif run.warnings:  # ok, but a warning says what its numbers cannot be read as (a NaN's reason)
+                messages[i] = "ok, with warnings: " + "; ".join(run.warnings)
             reported.update(run.metrics)
             for k, v in run.metrics.items():
                 if metrics is not None and k not in metrics:

@@ -174,6 +174,18 @@ def _libration_circular(values, progress=None):
         T_fast = np.pi / abs(phidot0) if phidot0 else np.inf
     _validity.add(warnings, _validity.coarse_step(step, T_fast, "the swing through F's direction", "time units",
                                                   "steps_per_period"))
+    # a period that is not measured says why (a sweep's NaN was otherwise unexplained)
+    if not np.isfinite(T_meas):
+        if case == "locked":
+            notes.append("Locked: the body keeps its long axis toward F, so there is no libration period to measure.")
+        elif case == "separatrix":
+            notes.append("On the separatrix the period is infinite: none is measured.")
+        elif w0 <= 0 and not phidot0:
+            notes.append("No torque (A = B) and no starting spin relative to F: nothing turns, no period to measure.")
+        else:
+            warnings.append(f"The run holds fewer than two {'half turns relative to F' if circ else 'whole swings'} "
+                            f"({values['periods']:g} period{'' if values['periods'] == 1 else 's'}): the period is "
+                            "measured from at least two, and is not given; set periods ≥ 2.")
     return Run("libration-circular", values, traj, m, comps, notes, plot_series=series, extras=extras,
                warnings=warnings)
 

@@ -1105,3 +1105,19 @@ def test_a_grid_of_a_million_is_checked_in_a_moment_and_every_bad_point_still_fo
     calls.clear()
     sw._check_every_point(branch, ok)  # no bad point: every point was looked at once the branch read the nudge
     assert 2500 <= len(calls) <= 2500 + 51
+
+
+def test_a_metric_a_run_could_not_measure_says_why_in_the_sweep():
+    """libration-circular over one period: its libration period is NaN (two swings are needed) and
+    the run said nothing, nor did the sweep (status ok, no message). The run warns, and the sweep
+    keeps an ok run's warnings in its messages."""
+    task = {"scenario": "libration-circular", "fixed": {}, "points": {"periods": np.array([1.0, 3.0])},
+            "metrics": ["libration_period"], "batched": False, "threads": None, "limits": {}}
+    res = sw.run_chunk(task)
+    assert list(res["status"]) == [sw.STATUS["ok"]] * 2
+    period = res["metrics"]["libration_period"]
+    assert np.isnan(period[0]) and np.isfinite(period[1])
+    assert set(res["messages"]) == {0} and "periods ≥ 2" in res["messages"][0], res["messages"]
+    # against the exact pendulum period: three periods measure it, so the warning's advice holds
+    exact = th.scenario("libration-circular").simulate(periods=3).metrics["libration_period_exact"]
+    assert period[1] == pytest.approx(exact, rel=1e-3)
