@@ -29,7 +29,7 @@ from .worker import cache_root
 TITLE = "theoria"
 LOADING = "theoria — connecting…"
 # The loading line is shown over the page from its first frame until the first scene is drawn
-# (`set_loading(client, None)`). While it is there, the content of viser's panel is hidden: before
+# (`set_loading(client, None)`). While it is there, viser's panel is hidden, its header too: before
 # the app's controls arrive, viser fills it with its developer tools (the websocket address, "Save
 # Canvas", "Dev Settings", the scene tree), which a class has no use for.
 # The box beside a slider is 3rem wide in viser: "0.00002" (a tidal rate) showed as "0.0000" and a
@@ -39,6 +39,7 @@ CSS = """
   font:17px/1.4 system-ui,sans-serif;color:#222;background:rgba(255,255,255,.94);padding:10px 18px;
   border-radius:8px;box-shadow:0 1px 6px rgba(0,0,0,.15);pointer-events:none;max-width:70vw;text-align:center}
 body:has(#theoria-loading) .mantine-ScrollArea-root{visibility:hidden}
+body:has(#theoria-loading) .mantine-Paper-root:has(.mantine-ScrollArea-root){visibility:hidden}
 .mantine-NumberInput-root{width:auto!important;min-width:3rem;max-width:8rem}
 .mantine-NumberInput-input{field-sizing:content;min-width:3rem;max-width:8rem}
 """

@@ -33,7 +33,7 @@ STATE_JS = """() => {
   const M = window.__viserMutable;
   const nodes = M && M.nodeRefFromName ? Object.keys(M.nodeRefFromName).filter(k => k.startsWith('/world/')).length : 0;
   const dev = Array.from(document.querySelectorAll('*')).some(e => e.childElementCount === 0
-      && ['Dev Settings', 'Save Canvas', 'Scene tree'].includes(e.textContent.trim())
+      && ['Dev Settings', 'Save Canvas', 'Scene tree', 'Connected'].includes(e.textContent.trim())
       && getComputedStyle(e).visibility !== 'hidden' && (() => { const r = e.getBoundingClientRect();
         if (r.width <= 0 || r.height <= 0) return false;  // on top at its centre: what a person sees
         const top = document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2);
