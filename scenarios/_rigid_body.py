@@ -94,6 +94,11 @@ def free_body_warnings(traj: Trajectory, fm, what: str = "the interval between f
     from . import _validity
 
     out: list[str] = []
+    span = float(traj.t[-1] - traj.t[0]) if len(traj.t) else 0.0
+    if step is not None and span < 10 * step:  # a run of 0.001 s at a 0.01-s step: two states, nothing to see
+        out.append(f"The run ({span:.3g} s) is only {span / step:.2g} steps long (step {step:.3g} s): it holds "
+                   f"{len(traj.t)} states, too few to show or measure the motion; set the step to at most "
+                   f"{span / 100:.3g} s (a hundredth of the run).")
     if len(traj.t) >= 2:
         spacing = float(np.max(np.diff(traj.t)))
         remedy = None

@@ -301,3 +301,15 @@ def test_body_rate_is_body_frame():
     t, L, q = integrate(I, (2.0, 0, 0), 0.5, 0.01, q0=q0)
     expected = quat.multiply(q0, quat.from_axis_angle([1, 0, 0], 1.0))
     assert quat.angle_between(q[-1], expected) < 1e-13
+
+
+def test_a_run_of_a_few_steps_says_it_cannot_show_the_motion():
+    """A teacher typed a length of 0.001 s with the 0.01-s step: the run held two states, the
+    read-out stood at its end and the polhode had no value, without a word."""
+    import theoria as th
+
+    sc = th.scenario("free-tumble")
+    short = sc.simulate(inertia=(1e-3, 2e-3, 2.5e-3), omega0=(1e-3, 0, 0), duration=1e-3)
+    assert len(short.trajectory.t) == 2
+    assert any("too few to show or measure the motion" in w and "0.001 s" in w for w in short.warnings), short.warnings
+    assert not any("too few to show" in w for w in sc.simulate(duration=1.0).warnings)  # 100 steps
