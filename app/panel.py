@@ -86,6 +86,8 @@ def verdict(c) -> tuple[str, str]:
     if not _finite(e) or not _finite(s):
         if _finite(s) and _finite(c.modern):
             return _versus(("the simulation", "the modern value"), s, c.modern)
+        if _finite(e) and getattr(c, "missing", ""):
+            return f"No simulated value: {c.missing}", ""
         return ("Euler gives no value here" if not _finite(e) else "no simulated value"), ""
     return _versus(("Euler", "the simulation"), e, s)
 

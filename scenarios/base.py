@@ -51,6 +51,9 @@ class Comparison:
     # the modern value is an observation of a real body ("the real Earth": IAU 2006's precession),
     # compared only while the run is that body (`Scenario.real_params` at their defaults)
     observed: str = ""
+    # why the run gives no simulated value here ("fewer than two flips in 30 s: …"), said beside the
+    # row: in the notes alone, a folded section, the row read "no simulated value" with no reason
+    missing: str = ""
 
     @property
     def title(self) -> str:  # a check row's title is its label
@@ -59,6 +62,8 @@ class Comparison:
     def to_dict(self) -> dict:
         out = {"label": self.label, "euler": jsonable(self.euler), "simulated": jsonable(self.simulated),
                "modern": jsonable(self.modern), "unit": self.unit, "note": self.note}
+        if self.missing:
+            out["missing"] = self.missing
         if self.id is not None:
             out = {"id": self.id, "title": self.label, "section": self.section, **out,
                    "rel_error": jsonable(self.rel_error), "tolerance": self.tolerance, "pass": bool(self.passed)}

@@ -6,6 +6,8 @@ E7.separatrix.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from ..physics import libration as lib
 from ..physics import quaternion as quat
@@ -177,15 +179,20 @@ def _libration_circular(values, progress=None):
     # a period that is not measured says why (a sweep's NaN was otherwise unexplained)
     if not np.isfinite(T_meas):
         if case == "locked":
-            notes.append("Locked: the body keeps its long axis toward F, so there is no libration period to measure.")
+            why = "locked: the body keeps its long axis toward F, so there is no libration period to measure"
+            notes.append(why[0].upper() + why[1:] + ".")
         elif case == "separatrix":
-            notes.append("On the separatrix the period is infinite: none is measured.")
+            why = "on the separatrix the period is infinite: none is measured"
+            notes.append(why[0].upper() + why[1:] + ".")
         elif w0 <= 0 and not phidot0:
-            notes.append("No torque (A = B) and no starting spin relative to F: nothing turns, no period to measure.")
+            why = "no torque (A = B) and no starting spin relative to F: nothing turns, no period to measure"
+            notes.append(why[0].upper() + why[1:] + ".")
         else:
-            warnings.append(f"The run holds fewer than two {'half turns relative to F' if circ else 'whole swings'} "
-                            f"({values['periods']:g} period{'' if values['periods'] == 1 else 's'}): the period is "
-                            "measured from at least two, and is not given; set periods ≥ 2.")
+            why = (f"the run holds fewer than two {'half turns relative to F' if circ else 'whole swings'} "
+                   f"({values['periods']:g} period{'' if values['periods'] == 1 else 's'}): the period is "
+                   "measured from at least two; set periods ≥ 2")
+            warnings.append(why[0].upper() + why[1:] + ".")
+        comps[0] = dataclasses.replace(comps[0], missing=why)
     return Run("libration-circular", values, traj, m, comps, notes, plot_series=series, extras=extras,
                warnings=warnings)
 

@@ -46,11 +46,15 @@ def _middle_axis_flip(values, progress=None):
         measured = seen = float("nan")
     m.update(flip_interval=measured, flip_interval_exact=exact, flip_interval_euler_808=euler, flips_seen=seen)
     notes = []
+    missing = ""
     if len(tc) < 2:
-        notes.append(f"fewer than two flips in {values['duration']:g} s: run longer than {2 * exact:.3g} s "
-                     "to measure the interval")
+        missing = (f"fewer than two flips in {values['duration']:g} s: run longer than {2 * exact:.3g} s "
+                   "to measure the interval")
+        notes.append(missing)
+    elif not np.isfinite(measured):
+        missing = "flips fall between the stored states (see the warning): shorten the run or the step"
     comps = [Comparison("interval between flips", euler, measured, exact, "s",
-                        "Euler: §808 quadrature; modern: 2K(k)/λ (Jacobi)")]
+                        "Euler: §808 quadrature; modern: 2K(k)/λ (Jacobi)", missing=missing)]
     return Run("middle-axis-flip", values, traj, m, comps, notes, warnings=warnings,
                   plot_series={"ω on middle axis": traj.omega_body[:, mid],
                                "ω on smallest-moment axis": traj.omega_body[:, lo],

@@ -842,3 +842,17 @@ def test_a_sweep_on_a_log_scale_plays_one_distance_per_equal_share_of_the_run():
         t = float(d.times[9])
         s._set_clock_at(t, d)
         assert s._frame_index() == 9 and d.times[s._frame_index()] == t
+
+
+def test_a_row_without_a_simulated_value_says_why_beside_it():
+    """A spin of −0.5 rad/s flips fewer than twice in 30 s: the Compare row read "no simulated
+    value", its reason only in a folded section below."""
+    from theoria.app.panel import compare_html
+
+    run = get("middle-axis-flip").simulate(spin=-0.5)
+    assert run.comparisons[0].simulated != run.comparisons[0].simulated or run.comparisons[0].simulated is None
+    page = compare_html(run)
+    assert "No simulated value: fewer than two flips in 30 s" in page, page
+    run = get("libration-circular").simulate(periods=1)
+    assert "No simulated value: the run holds fewer than two whole swings" in compare_html(run)
+    assert run.to_dict()["comparisons"][0]["missing"].startswith("the run holds fewer")
