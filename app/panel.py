@@ -200,6 +200,17 @@ def _md(text: str) -> str:
 TONE_COLOR = {"good": "#2b8a3e", "close": "#b08800", "far": "#c92a2a", "": "#666"}
 
 
+def _orbit_clock(result):
+    """The run's clock when its time is read out in orbits (scale: orbits per time unit), else None."""
+    from theoria.scenarios.drawing import clock_of
+
+    try:
+        clock = clock_of(result) if result.trajectory is not None else None
+    except Exception:  # noqa: BLE001 — a run without the parts a clock needs: shown as it is
+        return None
+    return clock if clock is not None and clock.words == "orbits" and clock.scale != 1.0 else None
+
+
 def compare_html(result, preview: bool = False) -> str:
     """The Compare tab: each comparison as its label (with unit), the three values side by side and
     a verdict in words; the run's warnings first, as a visible note. A quick `preview`'s warnings
@@ -216,8 +227,15 @@ def compare_html(result, preview: bool = False) -> str:
     th = "padding:2px 4px;text-align:right;font-weight:600;color:#555;font-size:0.85em"
     rows = [f"<table style='width:100%;border-collapse:collapse;font-size:0.92em'>"
             f"<tr><th></th><th style='{th}'>Euler</th><th style='{th}'>simulated</th><th style='{th}'>modern</th></tr>"]
+    clock = _orbit_clock(result)
     for c in result.comparisons:
         unit = gallery.pretty_unit(c.unit)
+        shown = (c.euler, c.simulated, c.modern)
+        if clock is not None and c.unit == result.trajectory.time_unit:
+            # a time in the run's own unit, read out above as orbits: the same orbits here (a class
+            # read "libration period 16.73 time units" beside "t = 1.87 of 10.65 orbits")
+            shown = tuple(x * clock.scale if _finite(x) else x for x in shown)
+            unit = "orbits"
         label = html.escape(readable(c.label)) + (f" <span style='color:#666'>({html.escape(unit)})</span>"
                                         if _unit_not_in(c.label, unit) else "")
         words, tone = verdict(c)
@@ -225,9 +243,9 @@ def compare_html(result, preview: bool = False) -> str:
         cell = "padding:1px 4px;text-align:right;white-space:nowrap;font-variant-numeric:tabular-nums"
         rows.append(
             f"<tr><td colspan='4' style='padding:8px 0 1px 0;border-top:1px solid #ddd'><b>{label}</b></td></tr>"
-            f"<tr><td></td><td style='{cell}'>{human_number(c.euler)}</td>"
-            f"<td style='{cell};font-weight:600'>{human_number(c.simulated)}</td>"
-            f"<td style='{cell}'>{human_number(c.modern)}</td></tr>"
+            f"<tr><td></td><td style='{cell}'>{human_number(shown[0])}</td>"
+            f"<td style='{cell};font-weight:600'>{human_number(shown[1])}</td>"
+            f"<td style='{cell}'>{human_number(shown[2])}</td></tr>"
             f"<tr><td colspan='4' style='font-size:0.85em;color:{TONE_COLOR[tone]}'>{html.escape(words)}{note}</td></tr>")
     rows.append("</table></div>")
     parts.append("".join(rows))

@@ -856,3 +856,32 @@ def test_a_row_without_a_simulated_value_says_why_beside_it():
     run = get("libration-circular").simulate(periods=1)
     assert "No simulated value: the run holds fewer than two whole swings" in compare_html(run)
     assert run.to_dict()["comparisons"][0]["missing"].startswith("the run holds fewer")
+
+
+def test_a_time_in_the_compare_tab_is_in_the_orbits_the_clock_reads():
+    """libration-circular read "t = 1.871 of 10.65 orbits" above a libration period of "16.73 time
+    units": the period is shown in orbits too (16.73 time units at δ = 1 rad per unit are 2.66
+    orbits), and its verdict is unchanged."""
+    from theoria.app.format import human_number
+    from theoria.app.panel import compare_html, verdict
+    from theoria.scenarios.drawing import clock_of
+
+    run = get("libration-circular").simulate()
+    c = run.comparisons[0]
+    clock = clock_of(run)
+    assert clock.words == "orbits"
+    page = compare_html(run)
+    for x in (c.euler, c.simulated, c.modern):
+        assert human_number(x * clock.scale) in page, (x * clock.scale, page)
+    assert human_number(c.simulated) not in page  # not in time units any more
+    assert "(orbits)" in page and "time units" not in page
+    assert html_escape(verdict(c)[0]) in page
+    T = c.modern * clock.scale
+    end = run.trajectory.t[-1] * clock.scale
+    assert end / T == pytest.approx(run.params["periods"], rel=1e-9)  # the clock's orbits, in periods
+
+
+def html_escape(text):
+    import html
+
+    return html.escape(text)
