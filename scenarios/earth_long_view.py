@@ -338,6 +338,10 @@ def _draw(run, spec, view):
             d.add(Sphere(name=f"pole_stars/{name}/mark", radius=0.035, color=STAR_MARK_COLOR, position=1.006 * pos),
                   Label(name=f"pole_stars/{name}/label", text=f"{name}: {year_label(year)} ({sep:.1f}°)",
                         position=R * 1.03 * star + np.array([0.0, 0.0, 0.08])))
+    # the plot shows what the Read tab points to, the obliquity's swing of a degree: beside the pole's
+    # longitude and RA (hundreds of degrees) and its distance from Vondrák's (arcminutes) on one axis
+    # it was a flat line; the pole's path is the scene itself, and every series stays in the run
+    d.plot = {k: v for k, v in d.plot.items() if k.startswith("obliquity")}
     return d
 
 

@@ -885,3 +885,18 @@ def html_escape(text):
     import html
 
     return html.escape(text)
+
+
+def test_the_long_views_plot_shows_the_obliquitys_swing_on_its_own_scale():
+    """earth-long-view's Read tab points to the obliquity's swing of a degree in the time plot, which
+    put it on one axis with the pole's longitude and RA (−340° … 90°) and a difference in arcminutes:
+    a flat line. The plot holds the obliquity of date and Vondrák's; the run keeps every series."""
+    from theoria.scenarios.drawing import View
+
+    spec = get("earth-long-view")
+    run = spec.simulate()
+    d = spec.draw(run, spec, View())
+    assert set(d.plot) == {"obliquity of date (deg)", "obliquity, Vondrák 2011 (deg)"}
+    lo, hi = min(np.min(v) for v in d.plot.values()), max(np.max(v) for v in d.plot.values())
+    assert 0.5 < hi - lo < 2.0  # the swing fills the axis
+    assert "pole RA J2000 (deg)" in run.plot_series
