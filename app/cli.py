@@ -18,7 +18,7 @@ from theoria.app.interrupt import (EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated
                                    forget_interrupts_in_source_text)
 from theoria.physics.params import ParameterError, whole_number
 
-from .format import number
+from .format import human_size, number
 
 
 def _terminal() -> bool:
@@ -398,15 +398,6 @@ def cmd_export(args) -> int:
     from theoria.app.export_html import export
 
     return _write_command(args, (".html", ".htm"), export, "an HTML replay", "open it in a browser, or theoria replay")
-
-
-def human_size(n: int) -> str:
-    """A file size as a person reads it: "840 KB", "1.2 MB"."""
-    for unit, k in (("GB", 1e9), ("MB", 1e6), ("KB", 1e3)):
-        if n >= k:
-            v = n / k
-            return f"{v:.1f} {unit}" if v < 10 else f"{v:.0f} {unit}"
-    return f"{n} bytes"
 
 
 def _wrote(path: str, what: str, how: str) -> None:

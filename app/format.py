@@ -103,3 +103,12 @@ def readable(text: str) -> str:
     text = _E_NUMBER.sub(lambda m: human_number(float(m[1].replace(MINUS, "-")), 6), str(text))
     text = text.replace(">=", "≥").replace("<=", "≤")
     return _LEADING_MINUS.sub(MINUS, text)
+
+
+def human_size(n: int) -> str:
+    """A file size as a person reads it: "840 KB", "1.2 MB"."""
+    for unit, k in (("GB", 1e9), ("MB", 1e6), ("KB", 1e3)):
+        if n >= k:
+            v = n / k
+            return f"{v:.1f} {unit}" if v < 10 else f"{v:.0f} {unit}"
+    return f"{n} bytes"

@@ -43,7 +43,7 @@ from . import browser, gallery, page, playback
 from . import link as linkmod
 from .controls import ParamControls, PerThread, format_value, number_param, on_typed
 from .export_html import configure_scene
-from .format import capitalised, human_number, readable
+from .format import capitalised, human_number, human_size, readable
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
                     read_markdown, time_axis, y_axis_px)
 from .scene import SceneView
@@ -54,6 +54,10 @@ from .worker import SimulationWorker, drawing_of, limits_text, timing_log
 RUN_SECONDS = 20.0  # at speed 1 a whole run plays in this many seconds
 # a teacher read speed 1 as real time (a 30-s run played 1.5x faster than that): the label says what 1 is
 SPEED_LABEL = f"Playback speed (1: the run in {RUN_SECONDS:g} s)"
+# A teacher found no way to keep a scene from the panel (record and export were the command line's):
+# the scene shown, as the standalone web page `theoria export` writes (~1 MB, 0.1-0.2 s to make).
+SAVE_PAGE_LABEL = "Save this scene as a web page"
+SAVE_PAGES_AT_ONCE = threading.BoundedSemaphore(2)  # pages made at once for the whole class
 CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubber while playing
 # s the scrubber is left to the browser after it moved it: its number field sends each keystroke,
 # and the scrubber following playback rewrote the field under a teacher typing "90" (lost)
@@ -305,10 +309,13 @@ class ClientSession:
                 self.present_cb = gui.add_checkbox("Presenter mode", initial_value=self.present,
                                                    hint="large type, controls hidden; keys: space, ← →, 1–9, P")
                 self.present_cb.on_update(self._on(self._on_present_cb))
+                self.save_btn = gui.add_button(SAVE_PAGE_LABEL, hint="a replay of this run, as shown, that plays in "
+                                               "any browser without a network (the page theoria export writes)")
+                self.save_btn.on_click(self._on(self._save_page, clicks=True))
                 self.class_html = gui.add_html("")
                 self.limits_md = gui.add_markdown(limits_text())
         # projected, the panel shows what the class reads: not the server's limits for the teacher
-        self._present_hidden = [self.draw_folder, self.speed, self.scrub, self.limits_md]
+        self._present_hidden = [self.draw_folder, self.speed, self.scrub, self.limits_md, self.save_btn]
 
     def _make_controls(self) -> ParamControls:
         tab = getattr(self, "_explore", None)
@@ -468,6 +475,29 @@ class ClientSession:
             timer.cancel()
 
     # ---- messages ----------------------------------------------------------------------------
+    def _save_page(self) -> None:
+        """The scene shown, as a standalone web page, downloaded by this browser."""
+        from .export_html import render_html
+
+        d, result = self.drawing, self.result
+        if d is None or result is None or self.drawing_spec != self.spec.name:
+            self.notify("Nothing to save yet", "The scene is still being computed.", color="yellow")
+            return
+        if not SAVE_PAGES_AT_ONCE.acquire(blocking=False):
+            self.notify("Not saved", "Other pages are being made for the class: try again in a moment.", color="yellow")
+            return
+        try:
+            page = render_html(d, result).encode("utf-8")
+        finally:
+            SAVE_PAGES_AT_ONCE.release()
+        name = f"theoria-{self.spec.name}.html"
+        try:
+            self.client.send_file_download(name, page)
+        except Exception:  # the tab closed meanwhile
+            return
+        self.notify("Saved", f"{name} ({human_size(len(page))}): it plays in any browser, without a network.",
+                    color="green")
+
     def notify(self, title: str, body: str, color: str = "red") -> None:
         try:
             self.client.add_notification(title, body, auto_close_seconds=8.0, color=color)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import math
 import json
+import os
 import re
 import threading
 import time
@@ -900,3 +901,32 @@ def test_the_long_views_plot_shows_the_obliquitys_swing_on_its_own_scale():
     lo, hi = min(np.min(v) for v in d.plot.values()), max(np.max(v) for v in d.plot.values())
     assert 0.5 < hi - lo < 2.0  # the swing fills the axis
     assert "pole RA J2000 (deg)" in run.plot_series
+
+
+def test_the_scene_shown_is_saved_as_a_web_page_from_the_panel():
+    """Record and export were only on the command line: a teacher found no way to keep a scene. The
+    Read tab's button sends this browser the standalone replay of what it shows (the page `theoria
+    export` writes, which `theoria replay --check` accepts), and says its name and size."""
+    from test_gallery import _session, _wait
+
+    from theoria.app import replay
+    from theoria.app.session import SAVE_PAGE_LABEL
+
+    with _session("middle-axis-flip") as (s, client):
+        _wait(lambda: s.result is not None and s.drawing is not None)
+        saved = []
+        client.send_file_download = lambda name, content, **kw: saved.append((name, content))
+        client.gui.find("button", SAVE_PAGE_LABEL).value = True  # a click
+        _wait(lambda: saved and any(t == "Saved" for t, b in client.notes))
+    (name, content), = saved
+    assert name == "theoria-middle-axis-flip.html" and content.startswith(b"<!")
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, name)
+        with open(path, "wb") as f:
+            f.write(content)
+        got = replay.check(path)  # raises on a page that is not a whole theoria export
+        assert got["scenario"] == "middle-axis-flip" and got["digest"], got
+    body = next(b for t, b in client.notes if t == "Saved")
+    assert name in body and ("MB" in body or "KB" in body), body
