@@ -508,6 +508,8 @@ def run_chunk(task: dict) -> dict:
                 if k not in out:
                     out[k] = np.full(n, np.nan)
                 out[k][i] = x
+    for k in metrics or ():  # a metric asked for is in the store even where no run gave it (all refused)
+        out.setdefault(k, np.full(n, np.nan))
     return {"metrics": out, "status": status, "messages": messages, "seconds": time.perf_counter() - t0,
             "worker_pid": os.getpid(), "reported": sorted(reported)}
 
@@ -974,6 +976,9 @@ def _client(cluster, workers):
         except (OSError, TimeoutError) as e:
             raise ParameterError("--cluster", cluster, f"no Dask scheduler answers there ({type(e).__name__})") from None
         return c, None, f"scheduler {cluster}", True
+    if not all(callable(getattr(cluster, m, None)) for m in ("submit", "gather")):
+        raise ParameterError("cluster", cluster, "None (a local cluster), a scheduler address such as "
+                             "tcp://127.0.0.1:8786, or a dask.distributed Client")
     return cluster, None, "the given client", False  # the caller's: left open
 
 

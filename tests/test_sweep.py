@@ -796,6 +796,10 @@ def test_a_sweep_refused_for_its_cluster_writes_nothing_at_out(tmp_path, suffix)
         sw.run_sweep(sc, out=out, cluster="nonsense", progress=False, **TINY)
     assert "--cluster" in str(e.value) and "tcp://" in str(e.value)
     assert list(tmp_path.iterdir()) == []
+    with pytest.raises(th.ParameterError) as e:  # not a client at all: was an AttributeError ('submit')
+        sw.run_sweep(sc, out=out, cluster=42, progress=False, **TINY)
+    assert "cluster=42" in str(e.value) and "Client" in str(e.value)
+    assert list(tmp_path.iterdir()) == []
     # a finished sweep there, replaced with --force through the same wrong --cluster: left as it was
     plan = sw.make_plan(sc, **TINY)
     (sw.ZarrWriter if suffix == "zarr" else sw.ParquetWriter)(str(out), plan, resume=False)
@@ -1121,3 +1125,21 @@ def test_a_metric_a_run_could_not_measure_says_why_in_the_sweep():
     # against the exact pendulum period: three periods measure it, so the warning's advice holds
     exact = th.scenario("libration-circular").simulate(periods=3).metrics["libration_period_exact"]
     assert period[1] == pytest.approx(exact, rel=1e-3)
+
+
+def test_a_metric_asked_for_is_in_the_store_even_where_every_run_was_refused(tmp_path, in_process_client):
+    """With every run over the budget the store held `status` only, and code reading the metric
+    asked for broke (the Parquet table had no column either): it is there, NaN, in both."""
+    import xarray as xr
+    import pyarrow.parquet as pq
+
+    sc = th.scenario("libration-circular")
+    kw = dict(grid={"asymmetry": [0.01, 0.2]}, metrics="libration_period", progress=False, limits={"max_steps": 1},
+              cluster=in_process_client)
+    sw.run_sweep(sc, out=tmp_path / "r.zarr", **kw)
+    sw.run_sweep(sc, out=tmp_path / "r.parquet", **kw)
+    ds = xr.open_zarr(tmp_path / "r.zarr", consolidated=False)
+    assert list(ds["status"].values) == [sw.STATUS["refused"]] * 2
+    assert np.all(np.isnan(ds["libration_period"].values))
+    table = pq.read_table(tmp_path / "r.parquet")
+    assert "libration_period" in table.column_names
