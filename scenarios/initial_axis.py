@@ -50,7 +50,7 @@ def _initial_axis(values, progress=None):
         "axis_cos_alpha_simulated": float(axis_n[0]), "axis_cos_beta_simulated": float(axis_n[1]),
         "axis_cos_gamma_simulated": float(axis_n[2]),
     }
-    comps = [Comparison("angular acceleration dγ'/dt", acc_e, acc_n, acc_e, "rad/s²",
+    comps = [Comparison("how fast the spin grows, dγ'/dt (γ' = |ω|)", acc_e, acc_n, acc_e, "rad/s²",
                         f"simulated over the first {h:g} s"),
              Comparison("angle between Euler's axis and the numerical one", 0.0, ang, 0.0, "rad",
                         "O(t²) from the gyroscopic term, which Euler's first instant omits")]

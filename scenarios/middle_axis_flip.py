@@ -92,7 +92,10 @@ register(Scenario(
     draw=lambda run, spec, view: standard(run, spec, view, shape="box"),
     cost_fn=body_cost,
     check=_check_flip,
-    euler_formula=("dt = −𝔄 dx √(𝔅ℭ) / [ √(𝔄xx − 𝔄a² + 𝔅b²) · √(𝔄xx − 𝔄a² + ℭc²) ] (§808)"),
+    euler_formula=("dt = −𝔄 dx √(𝔅ℭ) / [ √(𝔄xx − 𝔄a² + 𝔅b²) · √(𝔄xx − 𝔄a² + ℭc²) ] (§808)\n"
+                   "x: the rate about the first axis, a, b, c: the three starting rates; "
+                   "𝔄 = A/(C − B), 𝔅 = B/(A − C), ℭ = C/(B − A) from the moments A, B, C "
+                   "(Euler's letters exchanged: he writes 𝔄, 𝔅, ℭ for the starting rates)"),
     presets=(
         ("Brick: the flip", {}),
         ("Brick: a big nudge, frequent flips", {"perturbation": 0.2}),

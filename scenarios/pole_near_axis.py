@@ -84,7 +84,7 @@ def _pole_near_axis(values, progress=None):
     m = dict(dspin_dt=dspin, dspin_dt_euler=e.dspin_dt, dbeta_dt=dbeta, dbeta_dt_euler=e.dbeta_dt,
              dgamma_dt=dgamma, dgamma_dt_euler=e.dgamma_dt, pole_speed=float(np.hypot(dbeta, dgamma)),
              pole_speed_euler=e.pole_speed)
-    comps = [Comparison("dγ'/dt (change of spin)", e.dspin_dt, dspin, None, "rad/s²", "§840"),
+    comps = [Comparison("how fast the spin changes, dγ'/dt (γ' = |ω|)", e.dspin_dt, dspin, None, "rad/s²", "§840"),
              Comparison("dβ/dt (pole toward/away from B)", e.dbeta_dt, dbeta, None, "rad/s",
                         "§840 (the printed formula lacks the minus sign)"),
              Comparison("dγ/dt (pole toward/away from C)", e.dgamma_dt, dgamma, None, "rad/s", "§840")]
@@ -100,12 +100,12 @@ def _pole_near_axis(values, progress=None):
         m.update(N_843=q841["N"], pole_speed_euler_842=q841["pole_speed"],
                  pole_direction_deg=float(np.degrees(ang)), pole_direction_deg_euler=float(np.degrees(ang_e)),
                  perpendicularity_841=float(dbeta * ce + dgamma * ct))
-        comps.append(Comparison("|Oo|/dt = 2N cos ζ sin ζ (bb = cc)", q841["pole_speed"],
+        comps.append(Comparison("speed of the pole O across the body, |Oo|/dt = 2N cos ζ sin ζ (B = C)", q841["pole_speed"],
                                 m["pole_speed"], None, "rad/s", "§842"))
         comps.append(Comparison("direction of Oo on (B, C)", float(np.degrees(ang_e)),
                                 float(np.degrees(ang)), None, "deg",
                                 "§843: at right angles to FA, around A in the sense C→B when aa > cc"))
-        comps.append(Comparison("dβ cos η + dγ cos θ", 0.0, m["perpendicularity_841"], None, "rad/s", "§841"))
+        comps.append(Comparison("the pole's motion toward F, dβ cos η + dγ cos θ (Euler: none)", 0.0, m["perpendicularity_841"], None, "rad/s", "§841"))
     ob = traj.omega_body / np.linalg.norm(traj.omega_body, axis=1, keepdims=True)
     # the step against the fastest period: F's pull on the turning body repeats twice a turn
     warnings = _validity.add([], _validity.coarse_step(step, T / 2, "half a turn of the body under F (the pull "
