@@ -25,7 +25,7 @@ import numpy as np
 from ..physics import earth_precession as EP
 from ..physics import long_term_precession as LT
 from ..physics import quaternion as quat
-from ..physics.constants import (ARCSEC_RAD, EARTH_DYNAMICAL_ELLIPTICITY,
+from ..physics.constants import (ARCSEC_RAD, EARTH_DYNAMICAL_ELLIPTICITY, GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY,
                                  GM_SUN_AU3_DAY2, LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY, OBLIQUITY_J2000_RAD,
                                  SIDEREAL_MONTH_DAYS)
 from ..physics.params import Param, ParameterError
@@ -272,8 +272,12 @@ def _earth_long(values, progress=None):
              "over millennia")
     notes.append(f"Frame: the J2000 ecliptic; {eclip}. The pole is compared with Vondrák, Capitaine & Wallace "
                  "(2011, A&A 534, A22) long-term precession (the IAU's SOFA/ERFA library), valid ±200,000 years.")
+    today = GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY / 100  # ″/yr
     comps = [Comparison("precession period", 360 * 3600 / eul, m["precession_period_yr"], 360 * 3600 / rate_ref, "yr",
-                        "mean rate about the ecliptic pole of date over the run; modern: the same for Vondrák's pole"),
+                        f"from the mean rate about the ecliptic pole of date over the run ({rate_ref:.2f}″/yr for "
+                        f"Vondrák's pole); today's rate, {today:.2f}″/yr (IAU 2006), gives the textbook "
+                        f"{360 * 3600 / today:,.0f} years: the rate changes over the millennia (it goes with cos ε as "
+                        "the obliquity swings, and the ecliptic itself moves)"),
              Comparison("pole − Vondrák 2011, largest (°)", None, m["pole_vs_vondrak_max_deg"], 0.0, "deg",
                         f"the angle between this run's pole and the long-term precession's over "
                         f"{values['start_year']:g}…{values['start_year'] + values['years']:g}"),

@@ -548,3 +548,13 @@ def test_a_precession_near_ninety_degrees_says_the_first_order_rate_does_not_hol
     said = any("first-order precession" in w for w in run.warnings)
     assert said == warned, (run.warnings, off)
     assert off > 0.05 if warned else off < 0.07, off
+
+
+def test_the_long_views_precession_period_says_why_it_is_not_the_textbooks():
+    """A teacher met 25,700, 25,800, ~26,000 and 25,340 years across the Earth scenes with no word
+    on why. The long view's period is the mean over its run; the row says so, and gives the
+    textbook value from today's rate (IAU 2006's p_A = 5028.796195″ a century: 25,772 years)."""
+    run = get("earth-long-view").simulate()
+    c = run.comparisons[0]
+    assert "25,772 years" in c.note and "mean rate" in c.note
+    assert abs(c.modern / 25772 - 1) > 0.01  # the run's mean differs from today's: the note is needed
