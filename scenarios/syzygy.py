@@ -43,6 +43,16 @@ def _measured_modes(m, side, guess, progress=None):
 SWING_GROWN = 2.0  # η beyond this many times A: the small swing is no longer what the run shows
 
 
+def _distance_left(t, v, v_e):
+    """The time from which the run's distance v is more than SWING_GROWN swings (half the range of
+    Euler's v_e = b(1 − kA cos αζ)) from Euler's, or None while it stays."""
+    swing = float(np.ptp(v_e)) / 2.0
+    if not swing > 0:
+        return None
+    far = np.flatnonzero(np.abs(np.asarray(v) - np.asarray(v_e)) > SWING_GROWN * swing)
+    return float(t[far[0]]) if len(far) else None
+
+
 def _syzygy(values, progress=None):
     from ..physics.three_body import syzygy as sz
 
@@ -151,7 +161,16 @@ def _syzygy(values, progress=None):
             f"within the run: the start's departure from the exact small swing (its second-order terms, or "
             f"Euler's first-order start) seeds the unstable direction (λ = {modes['escape_exponent']:.4f}), "
             "which outgrows the swing, so its frequency and Euler's k = 0.3117 describe only the start. "
-            "The exact small-swing start with A = 3e-4° stays small over a year.")
+            "The exact small-swing start with A = 3e-4° stays small for 0.8 of a year.")
+    elif A > 0 and _distance_left(t, v, v_e) is not None:
+        # η can stay within the swing while the distance, the unstable direction's larger share, has
+        # left it: the default small swing over a year ended 6× its swing off Euler's v (from 0.88 yr)
+        t_off = _distance_left(t, v, v_e)
+        warnings.append(
+            f"From t ≈ {t_off / (2 * math.pi):.2g} yr the Moon's distance leaves the small swing (it moves more than "
+            f"{SWING_GROWN:g} swings from Euler's v = b(1 − kA cos αζ)): the line-up is unstable (λ = "
+            f"{modes['escape_exponent']:.4f}), and the start's tiny share of the unstable direction has grown "
+            "e^(λ·2π) ≈ 10⁷-fold a year; his curves describe the run before that.")
     return Run("syzygy", values, traj, metrics, comps, notes, warnings=warnings, plot_series={
         "η simulated (deg)": np.degrees(eta), "η Euler A sin αζ (deg)": np.degrees(eta_e),
         "v/b simulated": v / alpha, "v/b Euler 1 − 0.3117 A cos αζ": v_e / alpha},
@@ -174,7 +193,7 @@ def _syzygy_params():
               label="Start", choice_labels=("Euler's first-order start", "exact small-swing mode")),
         Param("escape_seed", 0.0, 0.0, 0.1, "b", "extra displacement along the unstable direction",
               label="Push along the escape direction"),
-        Param("duration_yr", 1.0, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)",
+        Param("duration_yr", 0.8, 0.1, 20.0, "yr", "run length (the run stops when the Moon has left)",
               label="Length of the run"),
         Param("mass_ratio", sz.EARTH_SUN_MASS_RATIO, 1e-9, 1.0, "1",
               "m = M⊕/M☉ (IAU 2009: 3.0035e-6); Euler's n²c³/a³ is m/(1 + m)",
@@ -311,7 +330,7 @@ register(Scenario(
     draw=_draw,
     options=OPTIONS,
     cost_fn=_cost,
-    preview={"duration_yr": 1.0},  # the first year while a run of many is computed
+    preview={"duration_yr": 0.8},  # the first 0.8 yr while a run of many is computed
     euler_formula=("m(1 − α)² = α² − α²(1 − α)³ (§7)\n"
                    "η = A sin ω, v = b(1 − 0.3117 A cos ω), ω = αζ, α⁴ + 2α² = 27 (§16)"),
     kind="orbit",

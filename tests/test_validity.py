@@ -252,3 +252,11 @@ def test_a_syzygy_swing_that_outgrows_itself_says_so_and_the_default_stays_small
     assert small.warnings == []
     A = small.params["amplitude_deg"]
     assert np.nanmax(np.abs(small.plot_series["η simulated (deg)"])) < 1.2 * A
+    # ... and so does its distance (a teacher saw it leave Euler's v = b(1 − kA cos αζ) from ~0.8 yr
+    # of the former year-long default, the swing in η still small): within one swing of his curve
+    v, v_e = (np.asarray(small.plot_series[k]) for k in ("v/b simulated", "v/b Euler 1 − 0.3117 A cos αζ"))
+    assert np.max(np.abs(v - v_e)) < np.ptp(v_e) / 2
+    year = sc.simulate(duration_yr=1.0)
+    v, v_e = (np.asarray(year.plot_series[k]) for k in ("v/b simulated", "v/b Euler 1 − 0.3117 A cos αζ"))
+    assert np.max(np.abs(v - v_e)) > 2 * np.ptp(v_e) / 2  # over a year it does leave ...
+    assert any("the Moon's distance leaves the small swing" in w for w in year.warnings)  # ... and says so
