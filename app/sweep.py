@@ -1160,8 +1160,13 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
     """`run_sweep` once OUT is this sweep's alone."""
     earlier = os.path.exists(out) or os.path.exists(out + ".parts" if kind == "parquet" else out.rstrip("/") + ".new")
     if earlier and not (resume or force):  # hours of runs are not replaced by a command repeated by mistake
-        raise ParameterError("--out", out, "a new path: it holds a sweep; add --resume to complete it or "
-                             "--force to replace it")
+        ours = (_is_sweep_store(out) or os.path.isdir(out.rstrip("/") + ".new")) if kind == "zarr" else \
+            os.path.isdir(out + ".parts") or (os.path.isfile(out) and out.endswith(".parquet"))
+        if ours:
+            raise ParameterError("--out", out, "a new path: it holds a sweep; add --resume to complete it or "
+                                 "--force to replace it")
+        raise ParameterError("--out", out, "a new path: it exists and is not a theoria sweep (choose another "
+                             "name, or --force to replace it)")
     # an older table or store at `out` stays as it is until the new one replaces it whole
     # (`finish`): an interrupted sweep leaves it, and its own finished chunks (OUT.parts/, OUT.new/)
     # for --resume. The writer only checks here; a new sweep's store is made (`create`) once the

@@ -1143,3 +1143,17 @@ def test_a_metric_asked_for_is_in_the_store_even_where_every_run_was_refused(tmp
     assert np.all(np.isnan(ds["libration_period"].values))
     table = pq.read_table(tmp_path / "r.parquet")
     assert "libration_period" in table.column_names
+
+
+@pytest.mark.parametrize("what", ["empty folder", "text file"])
+def test_a_path_that_is_not_a_sweep_is_not_called_one(tmp_path, what):
+    """An empty folder or a text file named like the output was refused as "it holds a sweep; add
+    --resume": it says what it is."""
+    out = tmp_path / "x.zarr"
+    if what == "empty folder":
+        out.mkdir()
+    else:
+        out.write_text("hi")
+    with pytest.raises(th.ParameterError) as e:
+        sw.run_sweep(th.scenario("free-tumble"), out=out, progress=False, **TINY)
+    assert "is not a theoria sweep" in str(e.value) and "holds a sweep" not in str(e.value), str(e.value)
