@@ -342,11 +342,14 @@ def _check_every_point(check, plan) -> None:
     function of what it reads, so the combinations decide every point; should any call read a
     parameter outside them, every point is checked."""
     fixed = plan.fixed
-    if plan.random:
+
+    def every_point():
         pts = plan.points(tuple(slice(0, n) for n in plan.shape))
         for i in range(plan.size):
             check({**fixed, **{k: _item(v[i]) for k, v in pts.items()}})
-        return
+
+    if plan.random:
+        return every_point()
     axes = {a.name: a.values for a in plan.grid}
     first = _Reads({**fixed, **{k: _item(v[0]) for k, v in axes.items()}})
     check(first)
@@ -357,10 +360,7 @@ def _check_every_point(check, plan) -> None:
         vals.read.clear()
         check(vals)
         if not vals.read <= set(used) | set(fixed):  # it read another swept value: every point, then
-            pts = plan.points(tuple(slice(0, n) for n in plan.shape))
-            for i in range(plan.size):
-                check({**fixed, **{k: _item(v[i]) for k, v in pts.items()}})
-            return
+            return every_point()
 
 
 def _as_specs(x, flag) -> list[str]:
