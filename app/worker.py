@@ -1170,7 +1170,7 @@ class SimPool:
             return False
         if slot.tiny and not self._tiny(job):
             return False
-        if slot.short and not self._short(job):
+        if slot.short and not (self._slow(job) and self._short(job)):  # quick runs are the quick children's
             return False
         # a browser waiting goes first; compiling a scenario a browser waits for (a warm job) does not wait
         if job.background and not job.key.endswith("#warm") and any(

@@ -43,8 +43,9 @@ if the lower passage cannot lift it back, i.e. with probability
 spin above the resonance: it is never reached). A body spun up from below (q above p: a slow
 rotator on an eccentric orbit) crosses during a lower passage, by an amount spread over (0, δ₋),
 and stays if the upper passage cannot lift it back: the same argument with the branches
-exchanged, P(p) = (δ₋ + δ₊)/δ₋ = 2 / (1 + π(q − p)/(2ω₀√H)); it is 0 when δ₋ ≤ 0 (q below p). The tidal strength A cancels: the result holds in
-the limit of weak tides (δ₊ ≪ the separatrix's energy ω₀²H/2). Mercury, with (B − A)/C ≈ 1.2e-4:
+exchanged, P(p) = (δ₋ + δ₊)/δ₋ = 2 / (1 + π(q − p)/(2ω₀√H)); it is 0 when δ₋ ≤ 0 (q below p).
+The tidal strength A cancels: the result holds in the limit of weak tides (δ₊ ≪ the separatrix's
+energy ω₀²H/2). Mercury, with (B − A)/C ≈ 1.2e-4:
 P(3/2) ≈ 0.07 (Goldreich & Peale's 7 %; Correia & Laskar 2004).
 """
 from __future__ import annotations
