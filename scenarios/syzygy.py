@@ -164,7 +164,7 @@ def _syzygy(values, progress=None):
             "The exact small-swing start with A = 3e-4° stays small for 0.8 of a year.")
     elif A > 0 and _distance_left(t, v, v_e) is not None:
         # η can stay within the swing while the distance, the unstable direction's larger share, has
-        # left it: the default small swing over a year ended 6× its swing off Euler's v (from 0.88 yr)
+        # left it: the former year-long default ended 6 swings off Euler's v (2 swings from 0.92 yr)
         t_off = _distance_left(t, v, v_e)
         warnings.append(
             f"From t ≈ {t_off / (2 * math.pi):.2g} yr the Moon's distance leaves the small swing (it moves more than "
