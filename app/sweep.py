@@ -1319,7 +1319,7 @@ def _drive(client, plan, regions, todo, writer, stop, bar, counts, summary, thre
                 raise SweepError(f"chunk {i} failed on a worker ({type(e).__name__}: {e}); the finished chunks "
                                  f"are kept in {writer.kept}, --resume continues") from None
             if not checked_metrics:
-                seen = set(res["metrics"]) | set(res.get("reported", ()))
+                seen = set(res.get("reported", ()))  # not res["metrics"]: it holds the asked-for names too, NaN
                 known = set(getattr(getattr(sc, "batch", None), "metrics", ()) or ())
                 missing = [m for m in plan.metrics if m not in seen and m not in known]
                 if missing and np.any(res["status"] == STATUS["ok"]):
