@@ -954,7 +954,7 @@ def _client(cluster, workers):
         old = signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum)) if main else None
         lc = None
         try:
-            with _workers_ignore_ctrl_c():
+            with _workers_ignore_ctrl_c(), _main_file_only_if_it_exists():
                 lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address="127.0.0.1:0", worker_dashboard_address="127.0.0.1:0",
                                   silence_logs=logging.CRITICAL)
@@ -1007,6 +1007,25 @@ def _workers_ignore_ctrl_c():
     finally:
         mp_spawn.set_executable(before)
         shutil.rmtree(where, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _main_file_only_if_it_exists():
+    """A program read from standard input (`python - <<EOF`, a pipe) has the `__main__.__file__`
+    "<stdin>": the workers multiprocessing spawns meanwhile tried to run that file again on their
+    way in, and the sweep died with "FileNotFoundError: '<stdin>'" and "Nanny failed to start",
+    three tracebacks. While they start, such a name is hidden, as for `python -c` (which has none):
+    the workers run only theoria's code, which is all a sweep sends them."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if not isinstance(path, str) or os.path.isfile(path):
+        yield
+        return
+    del main.__file__
+    try:
+        yield
+    finally:
+        main.__file__ = path
 
 
 GUARD_ADVICE = "put the sweep under `if __name__ == \"__main__\":` in that script, so that it runs once, in the process you started"

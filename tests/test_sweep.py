@@ -934,6 +934,22 @@ def test_a_script_without_the_main_guard_is_told_to_add_it_and_leaves_no_half_st
     assert r.returncode == 0 and "swept" in r.stdout, r.stderr[-3000:]
 
 
+@pytest.mark.slow  # a program and its local cluster's worker, in processes of their own
+def test_a_sweep_read_from_standard_input_runs(tmp_path):
+    """`python - <<EOF` (a program piped in, as a notebook's %%bash or a heredoc in a shell does):
+    its __main__ is named "<stdin>", and the workers tried to run that file again on their way in:
+    FileNotFoundError, "Nanny failed to start", three tracebacks. It sweeps, and the program's own
+    __main__ keeps its name."""
+    out = tmp_path / "i.zarr"
+    program = GUARDLESS.format(out=str(out)) + "import __main__; print(__main__.__file__)\n"
+    r = subprocess.run([sys.executable, "-"], input=program, capture_output=True, text=True, timeout=300,
+                       cwd=tmp_path)
+    assert r.returncode == 0 and r.stdout.split() == ["swept", "<stdin>"], r.stderr[-3000:]
+    assert "Traceback" not in r.stderr
+    import xarray as xr
+    assert xr.open_zarr(out, consolidated=False)["status"].values.tolist() == [1, 1]  # 1: ok
+
+
 def test_a_sweep_started_by_a_workers_reimport_is_refused_there(tmp_path, monkeypatch):
     """Where the script's guard is missing but the check above cannot tell (a sweep at the top
     level of a script that also has a guard), the worker re-importing it refuses to sweep."""
