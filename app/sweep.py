@@ -885,7 +885,7 @@ class Summary:
     interrupted: bool = False
     signal: str = ""
     cluster: str = ""
-    kept: str = ""  # where an interrupted sweep's finished chunks are (OUT itself, OUT.parts/, OUT.new/)
+    kept: str | None = ""  # where an interrupted sweep's finished chunks are (OUT itself, OUT.parts/, OUT.new/); None: nothing kept
     complete: bool = False  # OUT holds the whole sweep (every chunk done), now or before
     found_complete: bool = False  # resumed, and found already finished: nothing was run or written
 
@@ -894,6 +894,10 @@ class Summary:
             return (f"sweep: {self.runs} runs in {self.chunks} chunks; computed 0 chunks now, "
                     f"{self.chunks_done_before} were done before: the sweep is complete, left as it is → {self.out}")
         st = ", ".join(f"{v} {k}" for k, v in self.statuses.items() if v)
+        if self.interrupted and self.kept is None:
+            return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); {self.seconds:.1f} s — interrupted "
+                    f"before any chunk finished: nothing written" + (
+                        f"; {self.out} is as it was" if os.path.exists(self.out) else ""))
         where = self.kept or self.out
         return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); computed {self.chunks_computed} chunks "
                 f"now, {self.chunks_done_before} were done before; {self.seconds:.1f} s"
@@ -1253,6 +1257,13 @@ def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, 
         summary.interrupted = interrupted
         summary.kept = writer.kept if interrupted else ""
         held = held or to_the_end.enter_context(signals_held())
+        if interrupted and summary.chunks_computed == 0 and writer.new:
+            # stopped before any chunk of a new sweep finished: nothing is worth keeping, and the
+            # same command run again starts afresh (it was told to add --resume to resume nothing)
+            writer.discard()
+            summary.kept = None
+            held.drop()
+            return summary, None
         writer.session({"started": started.isoformat(timespec="seconds"),  # when it started, not when it ended
                         "chunks_computed": summary.chunks_computed, "chunks_done_before": summary.chunks_done_before,
                         "path": summary.path, "seconds": round(summary.seconds, 3), "interrupted": interrupted,

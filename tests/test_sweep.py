@@ -428,6 +428,32 @@ def _tree(path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("kind", ["parquet", "zarr"])
+def test_a_new_sweep_stopped_before_its_first_chunk_leaves_nothing(tmp_path, kind):
+    """Ctrl-C once the new sweep's store was made but before any chunk finished: the store stayed,
+    "finished chunks kept in a.zarr (--resume continues)" was printed with none finished, and the
+    same command run again was refused ("add --resume … or --force"). Now nothing is left, the
+    line says so, and the command run again just runs."""
+    out = tmp_path / f"a.{kind}"
+    made = tmp_path / ("a.parquet.parts" if kind == "parquet" else "a.zarr")
+    args = ["sweep", "free-tumble", "--grid", "step=0.001:0.002:2", "--set", "duration=1e5", "--workers", "1",
+            "--max-steps", "none", "--out", str(out), "--quiet"]
+    p = subprocess.Popen([*THEORIA, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    t_end = time.monotonic() + 300
+    while time.monotonic() < t_end and p.poll() is None and not made.exists():
+        time.sleep(0.05)
+    time.sleep(0.5)  # the chunks are sent: each takes minutes
+    assert p.poll() is None, p.stderr.read()
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err
+    assert err.strip().endswith("interrupted before any chunk finished: nothing written"), err
+    assert sorted(f.name for f in tmp_path.iterdir()) == [], err
+    r = cli(*args[:4], "--set", "duration=2", "--out", str(out), "--quiet")
+    assert r.returncode == 0 and "2 ok" in r.stderr, r.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["parquet", "zarr"])
 def test_an_interrupted_sweep_with_force_leaves_the_older_result_as_it_was(tmp_path, kind):
     """--force replaces an older table or store only once the new one is whole: interrupted
     half-way, the older one is byte for byte as it was (it used to be deleted at the start); --resume
