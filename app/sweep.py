@@ -43,6 +43,7 @@ import numpy as np
 
 from ..physics.errors import ParameterError, show_value
 from ..physics.params import plain_number, read_number, whole_number
+from ..scenarios.budget import MAX_MEMORY, MAX_STEPS
 from .files import WriteError, mark_written, write_whole
 from .interrupt import signals_held
 
@@ -138,7 +139,23 @@ class Plan:
             "metrics": self.metrics,
             "dims": list(self.dims),
             "chunks": list(self.chunks),
+            # each run's budget: a sweep resumed with another would mix runs refused under one with
+            # runs made under the other
+            **{k: None if v is None else float(v) for k, v in (
+                ("max_steps", self.limits.get("max_steps", MAX_STEPS)),
+                ("max_memory", self.limits.get("max_memory", MAX_MEMORY)))},
         }
+
+
+def _differs(spec: dict, old: dict) -> list[str]:
+    """What a resumed sweep's description `spec` changes of the stored one's `old` (the chunking
+    aside, which the store decides; a budget only where the store recorded one: sweeps written
+    before budgets were recorded resume as they did)."""
+    return [k for k in spec if k != "chunks" and not (k in BUDGET_KEYS and k not in old)
+            and _jsonish(spec[k]) != _jsonish(old.get(k))]
+
+
+BUDGET_KEYS = ("max_steps", "max_memory")
 
 
 def _plain(v):
@@ -554,7 +571,7 @@ class ZarrWriter:
             # the chunking of the file decides; everything else must match
             plan.chunks = chunks
             spec = plan.spec()
-            diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
+            diff = _differs(spec, old)
             if diff:
                 raise ParameterError("--resume", shown, "was written by a different sweep (it differs in: "
                                      + ", ".join(diff) + "); give another --out, or --force to replace it")
@@ -729,7 +746,7 @@ class ParquetWriter:
             old = _read_json(specfile, "--resume")
             plan.chunks = tuple(old["chunks"])
             spec = plan.spec()
-            diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
+            diff = _differs(spec, old)
             if diff:
                 raise ParameterError("--resume", os.path.basename(self.parts), "was written by a different sweep "
                                      "(it differs in: " + ", ".join(diff) + "); give another --out, or --force to "
@@ -741,7 +758,7 @@ class ParquetWriter:
                 old = json.loads(pq.read_schema(path).metadata[b"theoria_sweep"])
             except Exception:  # noqa: BLE001 — not a table this writes
                 raise ParameterError("--resume", path, "is not a theoria sweep (no theoria_sweep in its metadata)") from None
-            diff = [k for k in spec if k != "chunks" and _jsonish(spec[k]) != _jsonish(old.get(k))]
+            diff = _differs(spec, old)
             if diff:
                 raise ParameterError("--resume", path, "was written by a different sweep (it differs in: "
                                      + ", ".join(diff) + "); give another --out, or --force to replace it")

@@ -747,6 +747,41 @@ def test_a_sweep_description_left_empty_is_one_line_on_resume(tmp_path):
     assert "_sweep.json" in str(e.value) and "--force" in str(e.value)
 
 
+@pytest.mark.parametrize("kind", ["parquet", "zarr"])
+def test_a_sweep_resumed_with_another_budget_is_refused(tmp_path, kind):
+    """Each run's budget (--max-steps, --max-memory) decides which runs are refused (status 3):
+    resumed with another, a sweep mixed runs refused under one with runs made under the other, and
+    nothing in the store told them apart. The budget is part of what identifies a sweep; a store
+    written before it was recorded resumes as before."""
+    sc = th.scenario("free-tumble")
+    out = str(tmp_path / f"s.{kind}")
+    writer = sw.ZarrWriter if kind == "zarr" else sw.ParquetWriter
+
+    def plan(**limits):
+        p = sw.make_plan(sc, grid={"step": (0.001, 0.01, 2)})
+        p.limits = limits
+        return p
+
+    writer(out, plan(), resume=False)
+    writer(out, plan(max_steps=sw.MAX_STEPS, max_memory=sw.MAX_MEMORY), resume=True)  # the defaults, said
+    for limits, named in (({"max_steps": 1e8}, "max_steps"), ({"max_memory": None}, "max_memory")):
+        with pytest.raises(th.ParameterError) as e:
+            writer(out, plan(**limits), resume=True)
+        assert f"it differs in: {named})" in str(e.value)
+    # a store from before budgets were recorded
+    if kind == "zarr":
+        import zarr
+
+        g = zarr.open_group(out, mode="r+")
+        old = dict(g.attrs["theoria_sweep"])
+        g.attrs["theoria_sweep"] = {k: v for k, v in old.items() if k not in sw.BUDGET_KEYS}
+    else:
+        spec = tmp_path / "s.parquet.parts" / "_sweep.json"
+        old = json.loads(spec.read_text())
+        spec.write_text(json.dumps({k: v for k, v in old.items() if k not in sw.BUDGET_KEYS}))
+    writer(out, plan(max_steps=1e8), resume=True)
+
+
 def test_a_table_that_cannot_be_joined_leaves_no_half_file_and_keeps_the_chunks(tmp_path, monkeypatch):
     """The last step of a Parquet sweep joins its finished chunks into one table; on a full disk it
     left a half-written OUT.tmp beside them, and a traceback. Now: one line naming the file, no
