@@ -4,6 +4,8 @@ overlays, presenter mode. The app keeps the browser's address bar on this link; 
 
     ?s=middle-axis-flip&p.spin=6&p.perturbation=0.001&t=12.5&play=0&cam=3,2.3,1.8,0,0,0
 
+A link typed by hand may name the scene as `?scenario=earth`, `?scene=earth` or just `?earth`.
+
 Parameters are written with their keys and exact values (what `Param.parse` reads back), time in
 the run's own unit. When the server listens on a network address, `class_link` gives the address
 students can open and `qr_svg_uri` its QR code (segno).
@@ -105,7 +107,7 @@ def from_address(address: str | None) -> LinkState:
             st.dropped.append((k, v, "a value of at most 400 characters"))
             continue
         try:
-            if k == "s":
+            if k in SCENARIO_KEYS:
                 st.scenario = v
             elif k.startswith("p."):
                 st.params[k[2:]] = v
@@ -131,9 +133,22 @@ def from_address(address: str | None) -> LinkState:
                 st.overlays[k[2:]] = v not in ("0", "false", "no")
             elif k == "present":
                 st.present = v not in ("0", "false", "no")
+            elif v == "" and st.scenario is None and _looks_like_a_name(k):  # `?earth`: the scene by its name
+                st.scenario = k
+            else:  # a key of no link of ours (a typo, `?scene=` from another app): said, not silently ignored
+                st.dropped.append((k, v, "not a key of a theoria link (" + KEYS_TAKEN + ")"))
         except ValueError:
             st.dropped.append((k, v, _TAKES.get(k, "a finite number")))
     return st
+
+
+# the scene: "s" as the app writes it; "scenario" and "scene" as a teacher writing a link by hand would
+SCENARIO_KEYS = ("s", "scenario", "scene")
+KEYS_TAKEN = "s=SCENE, p.PARAMETER=VALUE, t, play, speed, exag, cam, o.OPTION, v.OVERLAY, present"
+
+
+def _looks_like_a_name(k: str) -> bool:
+    return 0 < len(k) <= 64 and all(c.isalnum() or c == "-" for c in k)
 
 
 _TAKES = {"cam": "six numbers: where the camera is and where it looks (two different points), and "

@@ -204,6 +204,9 @@ class ClientSession:
                                                           f"of the panel); {self.spec.title} is shown"))
         for key, value, takes in self.link.dropped[:LINK_ERRORS_SHOWN]:
             self._notify_bad(ParameterError(key, value, takes), " (from the link: not used)")
+        if len(self.link.dropped) > LINK_ERRORS_SHOWN:
+            self.notify("Not allowed: more of the link",
+                        f"{len(self.link.dropped) - LINK_ERRORS_SHOWN} more parts of the link were not used")
         exag = self.link.exaggerate
         if exag is not None and not EXAGGERATE_RANGE[0] <= exag <= EXAGGERATE_RANGE[1]:
             self._notify_bad(ParameterError("exaggerate", exag, "allowed range [%g, %g]" % EXAGGERATE_RANGE),

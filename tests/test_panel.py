@@ -381,6 +381,28 @@ def test_a_link_to_a_scene_that_does_not_exist_says_so(monkeypatch):
             client.notes
 
 
+@pytest.mark.parametrize("query", ["scenario=moon", "scene=moon", "moon", "s=moon&zoom=3", "s=moon&" + "&".join(
+    f"utm{k}=x" for k in range(40))])
+def test_a_link_typed_by_hand_opens_its_scene_and_names_what_it_did_not_use(monkeypatch, query):
+    """A teacher writing the link on the board typed `?scenario=moon` (or `?scene=moon`, `?moon`):
+    the first scene opened, without a word; a key of no theoria link (`zoom`, a mailer's `utm_…`)
+    was ignored silently. The scene is opened, and each key not used is named, a few at most."""
+    from theoria.app import browser
+    from test_gallery import _session, _wait
+
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: f"http://127.0.0.1:1/?{query}")
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1, 300)
+        assert s.spec.name == "moon"
+        unused = [b for t, b in client.notes if t.startswith("Not allowed")]
+        if "zoom" in query:
+            assert len(unused) == 1 and unused[0].startswith("“3”") and "not a key of a theoria link" in unused[0]
+        elif "utm" in query:
+            assert len(unused) == 4 and unused[-1] == "37 more parts of the link were not used", unused
+        else:
+            assert unused == []
+
+
 def test_a_linked_time_is_the_full_runs_frame_after_a_quick_preview(monkeypatch):
     """A link to a heavy scene is first shown on its quick preview, whose frames are not the full
     run's: the link's time fell on the preview's frame, and the full run then showed the frame
