@@ -616,6 +616,18 @@ def omega_scale(traj) -> float:
     return float(k)
 
 
+SAME_DIRECTION_RAD = np.radians(1.0)  # two arrows closer than this are one line on screen
+
+
+def _one_direction(a: np.ndarray, b: np.ndarray) -> bool:
+    """Do the vectors a[k] and b[k] point the same way (within SAME_DIRECTION_RAD) at every frame?"""
+    na, nb = np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)
+    if not (np.all(na > 0) and np.all(nb > 0)):
+        return False
+    cos = np.einsum("ij,ij->i", a, b) / (na * nb)
+    return bool(np.all(cos > np.cos(SAME_DIRECTION_RAD)))
+
+
 def rigid_body(d: Drawing, run, view: View, shape: str = "ellipsoid") -> np.ndarray:
     """The body and Poinsot's construction (§805–808) in their overlay groups; returns the
     semi-axes drawn (scene units).
@@ -648,10 +660,14 @@ def rigid_body(d: Drawing, run, view: View, shape: str = "ellipsoid") -> np.ndar
     k_w = omega_scale(tr)
     Lm = np.asarray(tr.momentum_norm, float)[:, None]
     L_drawn = np.where(Lm > 0, 1.3 * tr.L_inertial / np.where(Lm > 0, Lm, 1.0), 0.0)
-    for key, vec, color, text in (("omega", k_w * tr.omega_inertial, OMEGA_COLOR, "ω"), ("L", L_drawn, L_COLOR, "L")):
+    # ω and L one line on screen for the whole run (the Earth: 10⁻⁶ rad apart): one letter for both,
+    # not "ω" and "L" printed over each other
+    together = _one_direction(tr.omega_inertial[f], tr.L_inertial[f])
+    for key, vec, color, text in (("omega", k_w * tr.omega_inertial, OMEGA_COLOR, "ω, L" if together else "ω"),
+                                  ("L", L_drawn, L_COLOR, None if together else "L")):
         v = np.asarray(vec, float)[f]
         d.add(Arrows(name=key, group="vectors", origins=np.zeros((1, 3)), vectors=v[:, None, :], colors=(color,),
-                     shaft_radius=0.025, head_radius=0.06, head_length=0.12, labels=(text,)))
+                     shaft_radius=0.025, head_radius=0.06, head_length=0.12, labels=(text,) if text else ()))
     # the polhode: the rotation axis meets the body's surface (ray/ellipsoid), drawn on the body
     w = tr.omega_body[f]
     nw = np.linalg.norm(w, axis=1, keepdims=True)

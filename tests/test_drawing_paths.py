@@ -352,6 +352,27 @@ def test_labels_on_a_turning_body_meet_in_no_frame_at_either_size(name):
                     assert not _overlap(b1, b2), (scale, k, p, q)
 
 
+@pytest.mark.parametrize("name, together", [("earth", True), ("precession-circular", True), ("free-tumble", False),
+                                            ("middle-axis-flip", False)])
+def test_omega_and_l_on_one_line_get_one_letter(name, together):
+    """The Earth's ω and L are 10⁻⁶ rad apart: their arrows are one line, and "ω", "L" and "C = 1"
+    were printed over each other at the pole. Where the two directions stay within a degree all
+    run long (the angle measured here from the run's own vectors, by arccos), one letter says both;
+    where they part (a tumbling body), each keeps its own."""
+    import theoria as th
+
+    spec = th.scenario(name)
+    run = spec.simulate()
+    tr = run.trajectory
+    w, L = tr.omega_inertial, tr.L_inertial
+    apart = np.degrees(np.arccos(np.clip(np.sum(w * L, 1) / np.linalg.norm(w, axis=1) / np.linalg.norm(L, axis=1),
+                                         -1, 1))).max()
+    assert (apart < 1.0) == together, apart
+    d = spec.drawing(run)
+    letters = {it.name: tuple(it.labels) for it in d.items if it.name in ("omega", "L")}
+    assert letters == ({"omega": ("ω, L",), "L": ()} if together else {"omega": ("ω",), "L": ("L",)})
+
+
 def test_a_label_near_the_edge_of_the_canvas_is_written_inward():
     """A label near the left edge of the canvas beside the panel, written to the left of its
     point, was cut by the edge (libration-circular's axes note in presenter mode): it is turned to
