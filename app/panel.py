@@ -63,6 +63,23 @@ def time_axis(x: np.ndarray, words: str) -> tuple[np.ndarray, str]:
     return x * 10.0 ** e, f"10{superscript(-e)} {words}".strip()
 
 
+def value_axis(series_values) -> tuple[list[np.ndarray], int]:
+    """A plot's values in a unit its ticks can show: uPlot labels ticks with at most three
+    decimals, so a drift from 10⁻¹² to 8 × 10⁻⁶ (a satellite leaving L2) read "0 0 0". Values all
+    under 0.05 in size are scaled by a power of ten (a multiple of three) that brings the largest
+    to 1–1000; the axis says "×10⁻⁶". Values that are nothing but rounding (under 10⁻¹²: a
+    libration locked at ζ = 0 to 10⁻¹⁴) are left as they are: scaled up, they would show noise as
+    a motion. Returns the values and the exponent e (the shown values are value × 10⁻ᵉ; 0: as given)."""
+    arrays = [np.asarray(a, float) for a in series_values]
+    v = np.concatenate([a.ravel() for a in arrays]) if arrays else np.zeros(0)
+    v = np.abs(v[np.isfinite(v)])
+    m = float(v.max()) if v.size else 0.0
+    if not 1e-12 <= m < 0.05:
+        return arrays, 0
+    e = int(3 * math.floor(math.log10(m) / 3))
+    return [a * 10.0 ** -e for a in arrays], e
+
+
 # ---- numbers as a person reads them ----------------------------------------------------------
 
 def percent(rel: float) -> str:

@@ -43,9 +43,9 @@ from . import browser, gallery, page, playback
 from . import link as linkmod
 from .controls import ParamControls, PerThread, format_value, number_param, on_typed
 from .export_html import configure_scene
-from .format import capitalised, human_number, human_size, readable
+from .format import capitalised, human_number, human_size, readable, superscript
 from .panel import (UPLOT_POINTS, compare_html, heading_markdown, metric_label, numbers_markdown,
-                    read_markdown, time_axis, y_axis_px)
+                    read_markdown, time_axis, value_axis, y_axis_px)
 from .scene import SceneView
 from .worker import SimulationWorker, drawing_of, limits_text, timing_log
 
@@ -1145,12 +1145,15 @@ class ClientSession:
         idx = np.unique(np.linspace(0, len(t) - 1, min(UPLOT_POINTS, len(t))).round().astype(int))
         c = d.clock
         x, words = time_axis(np.asarray(t)[idx] * c.scale, c.words)
-        data = (x,) + tuple(np.asarray(v, float)[idx] for v in series.values())
+        ys, e = value_axis([np.asarray(v, float)[idx] for v in series.values()])
+        data = (x,) + tuple(ys)
         ser = ({"label": f"{c.name} ({words})" if words else c.name},) + tuple(
             {"label": series_label(k), "stroke": "rgb(%d,%d,%d)" % palette(i), "width": 1.5}
             for i, k in enumerate(series))
         key = tuple(s["label"] for s in ser)
         axes = ({}, {"size": y_axis_px(data[1:])})  # the default 50 px cut "-" and leading digits off
+        if e:  # the values' power of ten, beside the axis
+            axes[1].update(label=f"×10{superscript(e)}", labelSize=18)
         if self.plot is not None and getattr(self, "_plot_key", None) == key:
             self.plot.data = data  # same series: update in place
             self.plot.axes = axes

@@ -792,6 +792,30 @@ def test_a_short_runs_time_axis_is_in_a_unit_its_ticks_can_show():
     assert words == "s" and x[-1] == 30.0
 
 
+def test_small_plotted_values_are_in_a_unit_their_ticks_can_show(monkeypatch):
+    """The satellite leaving Earth–Moon L2 drifts from 10⁻¹² to 8 × 10⁻⁶ distances: its plot's ticks
+    read "0" and "0" (uPlot writes at most three decimals). Such values are scaled by a power of
+    ten that the axis names; values that are only rounding (a locked libration's 10⁻¹⁴) are not."""
+    from theoria.app.panel import value_axis
+    from test_gallery import _session, _wait
+
+    drift = np.geomspace(1e-12, 8.4e-6, 50)
+    (y,), e = value_axis([drift])
+    assert e == -6 and y.max() == pytest.approx(8.4) and len({f"{v:.3f}" for v in np.linspace(0, y.max(), 6)}) == 6
+    assert value_axis([np.array([-3e-4, 2e-4]), np.array([1e-5])])[1] == -6  # the largest in size decides
+    assert value_axis([np.array([0.0, 0.02])])[1] == -3
+    for as_given in ([np.array([1e-14, -3e-14])], [np.array([0.0, 0.5])], [np.array([np.nan, 0.0])]):
+        assert value_axis(as_given)[1] == 0
+    from theoria.app import browser
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0:
+                        "http://127.0.0.1:1/?s=collinear&p.motion=restricted&p.lagrange_point=L2")
+    with _session("free-tumble") as (s, client):
+        # (a quick preview of a shorter run comes first, its drift ×10⁻¹²)
+        _wait(lambda: s.plot is not None and s.plot.axes[1].get("label") == "×10⁻⁶", 300)
+        shown = np.asarray(s.plot.data[1], float)
+        assert 1.0 <= np.nanmax(np.abs(shown)) < 1000.0
+
+
 def test_hyperions_table_and_tidal_captures_plot_are_in_words():
     """Hyperion's table said "(1966, to e^3)" and "−0.00%" beside the series' half-width;
     tidal-capture's legend read "Spin rate orbit mean", "Pseudo synchronous" (code names made
