@@ -238,6 +238,9 @@ def _lagrange_points(run) -> dict:
     return {k: (float(x), float(y)) for k, (x, y) in (pts or {}).items()}
 
 
+EARTH_MOON_NAMES = {"primary": "earth", "secondary": "moon"}
+
+
 def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
     """The line through the three bodies with a BC/AB read-out (rotating, collapse, expansion) or,
     for the restricted problem, L1–L5 (labelled) and the zero-velocity curves through L1, L2, L3
@@ -249,6 +252,10 @@ def _draw(run: Run, spec: Scenario, view: View) -> Drawing:
     restricted = "lagrange_points" in run.extras
     pts = _lagrange_points(run)
     bodies = tbd.body_positions(run, skip=L_POINTS, turn=corot)  # L-points: markers, not bodies with trails
+    if restricted and run.params.get("mass_ratio") == MOON_EARTH_MASS_RATIO:
+        # the Earth and the Moon themselves: drawn and named as in every other scene (the Earth
+        # was a yellow "primary", the Sun's colour)
+        bodies = {EARTH_MOON_NAMES.get(n, n): v for n, v in bodies.items()}
     span = tbd.largest_distance(bodies)
     if pts:
         span = max(span, 1.1 * max(np.hypot(x, y) for x, y in pts.values()))

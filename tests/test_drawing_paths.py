@@ -425,6 +425,29 @@ def test_a_star_name_that_covers_a_texts_place_on_every_side_gives_way():
                     assert not _overlap(b1, b2), (name, a.text, c.text)
 
 
+def test_the_earth_moon_lagrange_points_draw_the_earth_and_the_moon():
+    """Euler's restricted problem with the Moon/Earth mass ratio (the L1 and L2 presets): the Earth
+    was a yellow ball, the Sun's colour, and the key read "yellow: primary"; another ratio is
+    not the Earth and the Moon, and keeps the general names."""
+    import theoria as th
+    from theoria.physics.constants import MOON_EARTH_MASS_RATIO
+    from theoria.scenarios.drawing import BODY_COLOURS, Sphere
+
+    spec = th.scenario("collinear")
+    for ratio, names in ((MOON_EARTH_MASS_RATIO, ("earth", "moon")), (0.001, ("primary", "secondary"))):
+        run = spec.simulate(motion="restricted", lagrange_point="L2", mass_ratio=ratio)
+        d = spec.drawing(run)
+        balls = {it.name.split("/")[1]: it.color for it in d.items
+                 if isinstance(it, Sphere) and it.name.startswith("bodies/") and it.name.count("/") == 1}
+        assert set(balls) == {*names, "satellite"}, balls
+        key = next(it.text for it in d.items if it.name == "body_key")
+        if names[0] == "earth":
+            assert balls["earth"] == BODY_COLOURS["earth"] and balls["moon"] == BODY_COLOURS["moon"]
+            assert key.startswith("blue: Earth · white: Moon · "), key
+        else:
+            assert "primary" in key and "Earth" not in key
+
+
 @pytest.mark.parametrize("name", ["earth", "lunar-perturbation", "syzygy", "moon"])
 def test_the_sun_earth_and_moon_look_and_are_named_alike_in_every_scene(name):
     """The Moon was a large yellow ball in one scene and purple in another, the Earth green, and
