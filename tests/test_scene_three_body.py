@@ -100,7 +100,8 @@ def test_collinear_restricted_points_and_zero_velocity_curves():
     # the satellite starts on L1's label and the secondary sits between L1 and L2: the bodies are
     # named by their colours in a key instead
     assert not [n for n in names if n.startswith("bodies/") and n.endswith("/label")]
-    assert d.item("body_key").text == "yellow: primary · green: secondary · purple: satellite"
+    # (the Moon/Earth mass ratio: the Earth and the Moon, in their colours)
+    assert d.item("body_key").text == "blue: Earth · white: Moon · purple: satellite"
     # the zero-velocity curve through L1 passes through L1 (a saddle of 2Ω), to about a grid cell
     segs = d.item("turning/zero_velocity/L1").points / k
     zv = run.extras["zero_velocity"]
@@ -136,7 +137,7 @@ def test_collinear_corotating_view_draws_the_physics_corotating_satellite():
     assert np.allclose(sat[:, 0], k * tr.series["satellite_corotating_x"][f], atol=1e-9)
     assert np.allclose(sat[:, 1], k * tr.series["satellite_corotating_y"][f], atol=1e-9)
     # the primaries stand still on the x axis; the turning frame does not turn
-    for n in ("primary", "secondary"):
+    for n in ("earth", "moon"):  # the primary and the secondary, the Earth and the Moon here
         p = d.item(f"bodies/{n}").position
         assert np.allclose(p[:, 1], 0, atol=1e-9) and np.ptp(p[:, 0]) < 1e-9
     assert "wxyz" not in d.item("turning").animated() and tuple(d.item("turning").wxyz) == (1.0, 0.0, 0.0, 0.0)
