@@ -450,6 +450,12 @@ def _read_json(path: str, flag: str):
                              f"({type(e).__name__}); --force starts the sweep again") from None
 
 
+def ok_with_warnings(warnings) -> str:
+    """The message of a run that finished ok with warnings (what its numbers cannot be read as),
+    as a single run's and a batched run's are stored alike."""
+    return "ok, with warnings: " + "; ".join(warnings)
+
+
 def run_chunk(task: dict) -> dict:
     """One chunk, on a worker: the batched path, or single runs one after another. Returns metric
     arrays (name → (n,)), `status` codes and messages for the runs that did not finish ok."""
@@ -513,7 +519,7 @@ def run_chunk(task: dict) -> dict:
                 status[i] = STATUS["diverged"] if run.status == "diverged" else STATUS["flagged"]
                 messages[i] = f"{run.status}: " + "; ".join(run.warnings)
             elif run.warnings:  # ok, but a warning says what its numbers cannot be read as (a NaN's reason)
-                messages[i] = "ok, with warnings: " + "; ".join(run.warnings)
+                messages[i] = ok_with_warnings(run.warnings)
             reported.update(run.metrics)
             for k, v in run.metrics.items():
                 if metrics is not None and k not in metrics:

@@ -163,15 +163,21 @@ def _hyperion(values, progress=None):
     else:
         notes.append("ω₀ = 1 is Euler's resonance A² = 2N: his forced libration 2e/(1 − ω₀²)·sin M is "
                      "infinite there, so no Euler curve is drawn.")
-    # the step against the fastest period: the torque ∝ sin 2(θ − f) turns at 2|θ̇ − ḟ| (starts up to
-    # θ̇/n = 3, the probe's rate, f fastest at periapse), and the periapse passage itself
+    return Run("hyperion", values, traj, m, comps, notes, plot_series=series, extras=extras,
+               warnings=_warnings(values))
+
+
+def _warnings(values) -> list[str]:
+    """What a run with these values cannot be read as (a single run's and a sweep's alike): the
+    step against the fastest period, the torque ∝ sin 2(θ − f) turning at 2|θ̇ − ḟ| (starts up to
+    θ̇/n = 3, the probe's rate, f fastest at periapse), and the periapse passage itself."""
+    e = values["eccentricity"]
     fdot_max, fdot_min = (1 + e) ** 2 / (1 - e * e) ** 1.5, (1 - e) ** 2 / (1 - e * e) ** 1.5
     hi, lo = max(3.0, values["probe_rate"]), min(0.0, values["probe_rate"])
     T_fast = min(np.pi / max(hi - fdot_min, fdot_max - lo), 2 * np.pi / fdot_max)
-    warnings = _validity.add([], _validity.coarse_step(2 * np.pi / values["steps_per_orbit"], T_fast,
-                                                       "the torque on the spinning body, sin 2(θ − f)", "1/n",
-                                                       "steps_per_orbit"))
-    return Run("hyperion", values, traj, m, comps, notes, plot_series=series, extras=extras, warnings=warnings)
+    return _validity.add([], _validity.coarse_step(2 * np.pi / values["steps_per_orbit"], T_fast,
+                                                   "the torque on the spinning body, sin 2(θ − f)", "1/n",
+                                                   "steps_per_orbit"))
 
 
 CHAOTIC_PER_ORBIT = 0.05  # Lyapunov exponent per orbit above which a start counts as chaotic (chaotic_fraction)
@@ -257,6 +263,9 @@ def _batch(values, swept):
                                float(w0 * np.sqrt(abs(hansen.goldreich_peale_series(p, e)))))
             out[f"gp_half_width_{p:g}"][i], out[f"gp_series_half_width_{p:g}"][i] = widths[key]
         out["overlap_1_and_1.5"][i] = (out["gp_half_width_1"][i] + out["gp_half_width_1.5"][i]) / 0.5
+    from ..app.sweep import ok_with_warnings
+
+    out["_messages"] = {i: ok_with_warnings(w) for i, w in ((i, _warnings(v)) for i, v in enumerate(pts)) if w}
     return out
 
 

@@ -313,7 +313,7 @@ def _batch(values, swept):
     every point sharing an orbit (eccentricity, orbital rate, length, step) integrated together by
     the planar kernel (the same scheme and kick times as the rigid-body integrator: the samples
     agree with a single run to round-off), then each point's metrics exactly as a single run."""
-    from ..app.sweep import STATUS
+    from ..app.sweep import STATUS, ok_with_warnings
 
     n = len(next(iter(swept.values())))
     out = {k: np.full(n, np.nan) for k in BATCH_METRICS}
@@ -340,6 +340,8 @@ def _batch(values, swept):
             run = _finish(vals, s, t, L, q)
             if run.status != "ok":  # e.g. "tumbles": a finished run whose status says what it found
                 status[i], messages[i] = STATUS["flagged"], f"{run.status}: " + "; ".join(run.warnings)
+            elif run.warnings:  # as a single run's: what its numbers cannot be read as
+                messages[i] = ok_with_warnings(run.warnings)
             for k in BATCH_METRICS:
                 if k in run.metrics:
                     out[k][i] = run.metrics[k]

@@ -127,25 +127,10 @@ def _higher_order(final, q, max_denominator: int = 8):
     return None if best is None else best[1:]
 
 
-def _simulate(values, progress=None):
-    orb, k, th0, out = _integrate([values])
-    m, rate = _classify(values, out["theta_samples"][0], th0[0], k)
-    e, w0 = values["eccentricity"], values["omega0"]
-    t = np.concatenate([[0.0], out["t"]])
-    th = np.concatenate([th0, out["theta_samples"][0]])
-    wd = np.concatenate([[values["spin_rate"]], out["thetadot_samples"][0]])
-    orbits = int(round(values["orbits"]))
-    rest = orbits - k * (len(t) - 1)  # the orbits after the last whole stride: the run ends where it was asked to
-    if rest > 0:
-        t = np.append(t, 2 * np.pi * orbits)
-        th = np.append(th, out["theta"][0])
-        wd = np.append(wd, out["thetadot"][0])
-        rate = np.append(rate, (th[-1] - th[-2]) / (2 * np.pi * rest))
-    I = planar_moments(w0**2 / 3.0)
-    z = np.zeros_like(th)
-    traj = Trajectory(t, np.stack([np.cos(th / 2), z, z, np.sin(th / 2)], 1), np.stack([z, z, I[2] * wd], 1), I,
-                      time_unit="1/n·rad", bodies={"attractor": orb.position(t)}, moment_unit="C")
-    q = m["pseudo_synchronous_rate_n"]
+def _warnings(values, m) -> list[str]:
+    """What a run's metrics `m` cannot be read as (a single run's and a sweep's alike); adds the
+    tides' strength against the 3:2 resonance to `m`."""
+    e, w0, q = values["eccentricity"], values["omega0"], m["pseudo_synchronous_rate_n"]
     final, cap = m["final_spin_rate_n"], m["captured_resonance"]
     warnings = []
     if cap == 0.0 and abs(final - q) > 0.02:
@@ -163,6 +148,30 @@ def _simulate(values, progress=None):
         if ratio > 0.1 and depth > 0:  # no resonance at all (e = 0, a round body): nothing to be strong against
             warnings.append(f"tides strong against the {p:g} resonance (energy lost per libration {ratio:.2f} × its "
                             "depth): Goldreich & Peale's probability is the weak-tide limit")
+    return warnings
+
+
+def _simulate(values, progress=None):
+    orb, k, th0, out = _integrate([values])
+    m, rate = _classify(values, out["theta_samples"][0], th0[0], k)
+    w0 = values["omega0"]
+    t = np.concatenate([[0.0], out["t"]])
+    th = np.concatenate([th0, out["theta_samples"][0]])
+    wd = np.concatenate([[values["spin_rate"]], out["thetadot_samples"][0]])
+    orbits = int(round(values["orbits"]))
+    rest = orbits - k * (len(t) - 1)  # the orbits after the last whole stride: the run ends where it was asked to
+    if rest > 0:
+        t = np.append(t, 2 * np.pi * orbits)
+        th = np.append(th, out["theta"][0])
+        wd = np.append(wd, out["thetadot"][0])
+        rate = np.append(rate, (th[-1] - th[-2]) / (2 * np.pi * rest))
+    I = planar_moments(w0**2 / 3.0)
+    z = np.zeros_like(th)
+    traj = Trajectory(t, np.stack([np.cos(th / 2), z, z, np.sin(th / 2)], 1), np.stack([z, z, I[2] * wd], 1), I,
+                      time_unit="1/n·rad", bodies={"attractor": orb.position(t)}, moment_unit="C")
+    q = m["pseudo_synchronous_rate_n"]
+    final, cap = m["final_spin_rate_n"], m["captured_resonance"]
+    warnings = _warnings(values, m)
     held_in = _higher_order(final, q) if cap == 0.0 else None
     what = {1.5: "captured into the 3:2 resonance (Mercury's state)", 1.0: "captured into synchronous rotation (the Moon's state)",
             0.0: f"not in a first-order resonance at the end (θ̇/n = {final:.4f})"}.get(cap, f"captured into θ̇/n = {cap:g}")
@@ -200,18 +209,25 @@ BATCH_METRICS = ("final_spin_rate_n", "captured_resonance", "captured_3_2", "cap
 def _batch(values, swept):
     """All points sharing an orbit (eccentricity, orbits, steps per orbit) in one kernel call; each
     body's arithmetic is independent of the batch, so the metrics are those of single runs, bit for bit."""
+    from ..app.sweep import ok_with_warnings
+
     n = len(next(iter(swept.values())))
     pts = [{**values, **{k: (v[i].item() if hasattr(v[i], "item") else v[i]) for k, v in swept.items()}} for i in range(n)]
     out = {k: np.full(n, np.nan) for k in BATCH_METRICS}
     groups: dict[tuple, list[int]] = {}
     for i, v in enumerate(pts):
         groups.setdefault((v["eccentricity"], v["orbits"], v["steps_per_orbit"]), []).append(i)
+    messages = {}
     for idx in groups.values():
         _, k, th0, res = _integrate([pts[i] for i in idx])
         for j, i in enumerate(idx):
             m, _ = _classify(pts[i], res["theta_samples"][j], th0[j], k)
             for name in BATCH_METRICS:
                 out[name][i] = m[name]
+            warned = _warnings(pts[i], m)
+            if warned:  # as a single run's: what its numbers cannot be read as
+                messages[i] = ok_with_warnings(warned)
+    out["_messages"] = messages
     return out
 
 
