@@ -32,6 +32,8 @@ from . import _validity
 SEPARATRIX_DRIFT_FRACTION = 0.1
 
 
+NO_TORQUE = "no torque"  # A = B: Euler's classification (§826) has no case for it
+
 def circular_setup(gamma, rate, zeta0, spin_ratio):
     """Inertia, orbit, initial attitude and spin for Problem 93 (GM = δ²s³ with s = 1)."""
     I = planar_moments(gamma)
@@ -60,11 +62,13 @@ def _libration_circular(values, progress=None):
         spin = 1.0 - np.sign(phi0 or 1.0) * w0 * np.cos(phi0) / d  # moving away from ζ_eq
     phidot0 = d * (1.0 - spin)  # ζ̇ = δ − γ'
     I, orbit, q0, om0 = circular_setup(g, d, zeta0, spin)
-    case = lib.classify(phi0, phidot0, w0) if w0 > 0 else "circulating"
+    case = lib.classify(phi0, phidot0, w0) if w0 > 0 else NO_TORQUE
     T_small = lib.small_oscillation_period(g, gm, 1.0) if w0 > 0 else np.inf
     T_exact = lib.pendulum_period(phi0, phidot0, w0) if w0 > 0 else (np.pi / abs(phidot0) if phidot0 else np.inf)
-    if start == "separatrix":  # on it by construction: the period is infinite (1 − k² of 4e-16, the
-        T_exact = np.inf       # rounding of the start, gave a finite 197 at ζ₀ = 20°)
+    if case == "separatrix":  # the period is infinite: a start on it by construction (1 − k² of 4e-16,
+        T_exact = np.inf      # the rounding of the start, gave a finite 197 at ζ₀ = 20°) or at the
+        # unstable point itself (ζ₀ = 90° at rest relative to F: cos 90° rounds to 6e-17, and 1 − k² of
+        # 4e-33 gave a finite "exact" period of 400)
     T_ref = T_exact if (np.isfinite(T_exact) and case != "separatrix") else T_small
     if not np.isfinite(T_ref):
         T_ref = 2 * np.pi / d
@@ -84,7 +88,7 @@ def _libration_circular(values, progress=None):
     zdot = d - traj.omega_body[:, 2]
     phi = zeta - zeq
     phi -= np.pi * np.round((phi[0] - phi0) / np.pi)  # the same branch as φ₀
-    circ = case == "circulating"
+    circ = case in ("circulating", NO_TORQUE)  # without a torque the body turns relative to F at its start rate
     T_meas = lib.measured_period(t, phi, circulating=circ) if case not in ("locked", "separatrix") else np.nan
     # the first integral of §825, dζ² − N cos 2ζ dt² = C dt², conserved on a circular orbit
     Nn = lib.euler_N(g, gm, 1.0)
@@ -102,8 +106,9 @@ def _libration_circular(values, progress=None):
         "libration_amplitude_rad": amp_meas,
         "libration_amplitude_exact_rad": lib.libration_amplitude(phi0, phidot0, w0) if (w0 > 0 and not circ) else np.nan,
         "period_rel_error_vs_exact": abs(T_meas / T_exact - 1) if np.isfinite(T_exact) and np.isfinite(T_meas) else np.nan,
-        "modulus_k2": float(lib.pendulum_modulus_sq(phi0, phidot0, w0)) if w0 > 0 else np.inf,
-        "separatrix_gap_1_minus_k2": float(lib.pendulum_modulus_gap(phi0, phidot0, w0)) if w0 > 0 else -np.inf,
+        # no torque, no pendulum: its modulus is undefined (said in the notes)
+        "modulus_k2": float(lib.pendulum_modulus_sq(phi0, phidot0, w0)) if w0 > 0 else np.nan,
+        "separatrix_gap_1_minus_k2": float(lib.pendulum_modulus_gap(phi0, phidot0, w0)) if w0 > 0 else np.nan,
         "first_integral_abs_drift": float(np.max(np.abs(jac - jac[0]))),
     }
     if case == "circulating" and w0 > 0:
@@ -133,7 +138,9 @@ def _libration_circular(values, progress=None):
     if "separatrix_time_to_80deg" in m:
         comps.append(Comparison("time to creep to 80° on the separatrix, ln tan(45° + ζ/2)/√(2n) (§826 3rd)",
                                 m["separatrix_time_to_80deg_euler"], m["separatrix_time_to_80deg"], None, "unit"))
-    notes = [f"Euler's case: {case} (§826).",
+    notes = [f"Euler's case: {case} (§826)." if case != NO_TORQUE else
+             "No torque (A = B): none of Euler's cases (§826), which need B ≠ A; the body turns relative to F at "
+             "its starting rate, and the pendulum's modulus k² and the gap 1 − k² are undefined (NaN).",
              "Euler's √(2n) is in his units: his n is N = 3GM(B−A)/(2Cs³); the small-oscillation "
              "angular frequency is √(2N) = δ√(3(B−A)/C) on a Kepler circle, and his π/√(2n) is half "
              "a full period."]

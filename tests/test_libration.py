@@ -673,3 +673,22 @@ def test_near_the_resonance_the_forced_libration_found_is_periodic_and_stable(e,
     M = np.column_stack([(after_one_orbit(y0 + d * v) - after_one_orbit(y0 - d * v)) / (2 * d) for v in np.eye(2)])
     assert abs(0.5 * np.trace(M)) <= 1.0
     assert get("libration-eccentric").simulate(eccentricity=e, asymmetry=gamma, orbits=5).status == "ok"
+
+
+def test_a_start_at_the_unstable_point_has_an_infinite_period_and_no_torque_no_case():
+    """ζ₀ = 90° at rest relative to F is the unstable equilibrium, on the separatrix (§826 3rd):
+    its period is infinite, but cos 90° rounds to 6 × 10⁻¹⁷ and the "exact" period came out a
+    finite 400. With A = B there is no torque and none of Euler's cases: the notes said
+    "circulating" beside "nothing turns", and k² was +inf."""
+    import theoria as th
+
+    sc = th.scenario("libration-circular")
+    r = sc.simulate(zeta0_deg=90)
+    assert r.metrics["libration_period_exact"] == np.inf and np.isnan(r.metrics["libration_period"])
+    assert r.notes[0] == "Euler's case: separatrix (§826)."
+    r = sc.simulate(asymmetry=0)
+    assert np.isnan(r.metrics["modulus_k2"]) and np.isnan(r.metrics["separatrix_gap_1_minus_k2"])
+    assert r.notes[0].startswith("No torque (A = B): none of Euler's cases") and "circulating" not in " ".join(r.notes)
+    # without a torque the body turns relative to F at its starting rate: half a turn in π/|ζ̇₀|
+    r = sc.simulate(asymmetry=0, spin_ratio=2.0)  # ζ̇₀ = δ(1 − 2) = −1
+    assert r.metrics["libration_period"] == pytest.approx(np.pi, rel=1e-9)
