@@ -63,9 +63,16 @@ def _free_tumble(values, progress=None):
             m["polhode_period_euler_808_s"] = euler
         if measured is not None:
             m["polhode_period_measured_s"] = measured
-        comps.append(Comparison("polhode period", euler, measured, fm.polhode_period, "s",
-                                f"ω circulates about the {circ} axis; {how}; modern: 4K(k)/λ, k² = {fm.m:.6g}" +
-                                ("" if measured is not None else why)))
+        if np.isfinite(fm.polhode_period):
+            comps.append(Comparison("polhode period", euler, measured, fm.polhode_period, "s",
+                                    f"ω circulates about the {circ} axis; {how}; modern: 4K(k)/λ, k² = {fm.m:.6g}" +
+                                    ("" if measured is not None else why)))
+        else:  # ω exactly on the middle axis: 1 − k² = 0
+            comps.append(Comparison("polhode period", None, None, fm.polhode_period, "s",
+                                    "ω starts exactly on the middle axis: a permanent rotation, but unstable (§808); "
+                                    "it lies on the separatrix, whose period is infinite. The least nudge sets the "
+                                    "body flipping (the middle-axis-flip scene)",
+                                    missing="on the separatrix the period is infinite: none is measured"))
     except ValueError as e:  # a permanent rotation or a sphere has no polhode
         comps.append(Comparison("polhode", None, None, None, "", str(e)))
         warnings = free_body_warnings(traj, None, step=values["step"])

@@ -283,6 +283,18 @@ def _finish(values, s, t, L, q):
              "For B < A the forced libration is about ζ = 90° (the B axis toward F) and Euler's formula is used with |n|; "
              "his §837 remark that n < 0 makes the digressions smaller concerns the unstable state with A toward F.",
              "The translation prints ζ = AA/(AA−2n) sin At (α dropped) at the end of §833; §834 has it right."]
+    # a value the run could not measure says why (a sweep's NaN was otherwise unexplained)
+    if w0 <= 0:
+        why = "A = B: no torque, so no free libration to measure; Euler's free period 2π/√(2N) is infinite"
+        notes.append(why + ".")
+        comps[2] = dataclasses.replace(comps[2], missing=why)
+    elif dz == 0:
+        why = "no free swing was started (free_zeta0_deg = 0): the free period is not measured"
+        notes.append(why[0].upper() + why[1:] + ".")
+        comps[2] = dataclasses.replace(comps[2], missing=why)
+    if not np.isfinite(mt["forced_amplitude_rel_error"]) and not tumbles:
+        notes.append("A circular orbit (e = 0) forces nothing: the forced amplitude is 0, and its relative error "
+                     "is undefined (NaN).")
     series = {"zeta_rad": zeta, "zeta_euler_rad": z_euler, "zeta_forced_rad": z_forced, "zeta_free_rad": z_free}
     traj.series.update(series)
     if tumbles:  # the run's values are not libration values: leave them out of the table

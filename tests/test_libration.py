@@ -692,3 +692,24 @@ def test_a_start_at_the_unstable_point_has_an_infinite_period_and_no_torque_no_c
     # without a torque the body turns relative to F at its starting rate: half a turn in π/|ζ̇₀|
     r = sc.simulate(asymmetry=0, spin_ratio=2.0)  # ζ̇₀ = δ(1 − 2) = −1
     assert r.metrics["libration_period"] == pytest.approx(np.pi, rel=1e-9)
+
+
+def test_what_a_run_could_not_measure_says_why():
+    """A researcher's probe: `ok` runs gave NaN or infinite values without a word. ω started
+    exactly on the middle axis (a permanent but unstable rotation, §808) was said to "circulate
+    about the A axis" with an infinite period; a forced libration with no free swing, or with
+    A = B, left the free period NaN unexplained. Each now says why, in a note and on its row."""
+    import theoria as th
+
+    r = th.scenario("free-tumble").simulate(omega0=(0.0, 1.0, 0.0))
+    row = next(c for c in r.comparisons if c.label == "polhode period")
+    assert row.modern == np.inf and row.simulated is None and "middle axis" in row.note
+    assert "circulates" not in row.note and row.missing.startswith("on the separatrix")
+    sc = th.scenario("libration-eccentric")
+    for given, said in (({"free_zeta0_deg": 0}, "no free swing was started"), ({"asymmetry": 0}, "A = B: no torque")):
+        r = sc.simulate(**given)
+        assert np.isnan(r.metrics["free_period"])
+        assert any(n.lower().startswith(said.lower()) for n in r.notes), r.notes
+        assert r.comparisons[2].missing.lower().startswith(said.lower())
+    r = sc.simulate(eccentricity=0)
+    assert np.isnan(r.metrics["forced_amplitude_rel_error"]) and any("e = 0" in n for n in r.notes)
