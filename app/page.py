@@ -43,7 +43,18 @@ body:has(#theoria-loading) .mantine-Paper-root:has(.mantine-ScrollArea-root){vis
 .mantine-NumberInput-root{width:auto!important;min-width:3rem;max-width:8rem}
 .mantine-NumberInput-input{field-sizing:content;min-width:3rem;max-width:8rem}
 """
-LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div>'
+# A page that has not reached the server after CONNECT_HINT_S still says only "connecting…": a
+# student's eleventh tab (the server takes ten from one address, or a class's whole room behind one
+# address), a full server, a server stopped. The server cannot tell the page why (it refuses the
+# socket viser's client keeps retrying), so the line says what to try; it connects, and the line
+# goes, as soon as the server takes it.
+CONNECT_HINT_S = 10
+CONNECT_HINT = ("theoria — still connecting… The server may be busy or full, or this computer may already have as many "
+                "theoria tabs open as the server takes from one address: close one, and this tab connects.")
+CONNECT_HINT_JS = (f"setTimeout(function(){{var e=document.getElementById('theoria-loading');"
+                   f"if(e&&e.textContent=={json.dumps(LOADING)}){{e.textContent={json.dumps(CONNECT_HINT)};}}}},"
+                   f"{CONNECT_HINT_S * 1000});")
+LOADING_HTML = f'<div id="theoria-loading">{LOADING}</div><script>{CONNECT_HINT_JS}</script>'
 # Run before viser's client starts. In software WebGL (no GPU: SwiftShader, llvmpipe; the names
 # viser's own check looks for) multisampled antialiasing is the dearest part of each frame, so
 # the page asks for a canvas without it (with the savings of app/browser.py `lighten`,

@@ -183,3 +183,52 @@ def test_every_scenario_switch_shows_something_then_its_scene():
     print(f"\nfirst scene {out['first_scene_s']:.2f} s after the URL (load {os.getloadavg()[0]:.1f})")
     for name, something, full in out["switches"]:
         print(f"  {name:28s} something {something:5.2f} s  full scene {full:5.2f} s")
+
+
+def test_a_tab_over_the_limit_says_what_to_do_and_connects_when_one_closes():
+    """A student's eleventh tab (the server takes ten from one address) showed "theoria —
+    connecting…" for ever: the server refuses its socket, and the page never said why. After
+    CONNECT_HINT_S the line says what to try; closing a tab lets it in. Here with one tab per
+    address."""
+    from playwright.sync_api import sync_playwright
+
+    from theoria.app.page import CONNECT_HINT, CONNECT_HINT_S
+    from theoria.benchmarks.classroom import _free_port, start_server_process, wait_line
+
+    port = _free_port()
+    lines: list = []
+    srv = start_server_process(port, "free-tumble", ("--max-per-address", "1"), lines=lines)
+    try:
+        assert wait_line(lines, "open http", 120) is not None, lines
+        with sync_playwright() as p:
+            b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+            ctx = b.new_context(viewport={"width": 1280, "height": 800})
+            url = f"http://127.0.0.1:{port}/?fixedDpr=1"
+            first = ctx.new_page()
+            first.goto(url)
+            t_end = time.monotonic() + WAIT_S
+            while first.evaluate(STATE_JS)["loading"] or not first.evaluate(STATE_JS)["nodes"]:
+                assert time.monotonic() < t_end
+                time.sleep(0.2)
+            second = ctx.new_page()
+            t0 = time.monotonic()
+            second.goto(url)
+            while second.evaluate(STATE_JS)["loading"] != CONNECT_HINT:
+                assert time.monotonic() - t0 < CONNECT_HINT_S + 30, second.evaluate(STATE_JS)["loading"]
+                time.sleep(0.5)
+            assert time.monotonic() - t0 >= CONNECT_HINT_S - 1  # not before a slow start could have connected
+            first.close()  # the student closes a tab: the other one is let in
+            t_end = time.monotonic() + WAIT_S
+            while True:
+                st = second.evaluate(STATE_JS)
+                if st["nodes"] and not st["loading"]:
+                    break
+                assert time.monotonic() < t_end, st["loading"]
+                time.sleep(0.5)
+            b.close()
+    finally:
+        srv.terminate()
+        try:
+            srv.wait(20)
+        except Exception:
+            srv.kill()
