@@ -49,25 +49,30 @@ def configure_scene(scene) -> None:
     scene.add_light_ambient("/lights/ambient", intensity=1.2)
 
 
+PANEL_PX = 380  # the text's column; the scene takes the rest of a wide window
+
+
 def text_panel(drawing, run) -> str:
-    """The scenario's text as an HTML panel over the scene (top left, scrollable)."""
-    from .format import comparison_rows
+    """The scenario's text as a column left of the scene (over it, scrollable, in a narrow
+    window): its title, §, what to look for, Euler's formula and the Compare table as the app
+    writes it (the same words, units and verdicts; the run's warnings first). The scene's canvas
+    is moved right of the column, so that the column covers none of it (over the canvas, the
+    table was cut to 45 % of the window and a scene's inset plot sat on it)."""
+    from .panel import compare_html
 
     e = html_lib.escape
-    rows = "".join(f"<tr><td>{e(r[0])}</td><td>{e(r[1])}</td><td>{e(r[2])}</td><td>{e(r[3])}</td><td>{e(r[4])}</td></tr>"
-                   for r in comparison_rows(run.comparisons))
-    table = (f"<table><tr><th></th><th>Euler says</th><th>simulated</th><th>modern</th><th>unit</th></tr>{rows}</table>"
-             if rows else "")
     formula = "".join(f"<div class='f'>{e(line)}</div>" for line in drawing.formula.splitlines() if line.strip())
-    warns = "".join(f"<p class='w'>{e(w)}</p>" for w in run.warnings)
+    wide = f"@media (min-width:{2 * PANEL_PX + 120}px)"
     return (
-        "<div id='theoria-text' style='position:fixed;top:8px;left:8px;max-width:380px;max-height:45vh;overflow:auto;"
-        "background:rgba(255,255,255,0.88);font:13px/1.35 sans-serif;padding:8px 10px;border-radius:6px;z-index:10'>"
-        "<style>#theoria-text table{border-collapse:collapse;font-size:12px}#theoria-text td,#theoria-text th"
-        "{border-bottom:1px solid #ddd;padding:1px 4px;text-align:right}#theoria-text td:first-child{text-align:left}"
-        "#theoria-text .f{font-family:serif;font-style:italic}#theoria-text .w{color:#a40}</style>"
+        f"<div id='theoria-text' style='position:fixed;top:8px;left:8px;width:{PANEL_PX}px;max-width:calc(100vw - 40px);"
+        "max-height:45vh;overflow:auto;background:rgba(255,255,255,0.92);font:13px/1.35 sans-serif;"
+        "padding:8px 10px;border-radius:6px;z-index:10;box-sizing:border-box'>"
+        "<style>#theoria-text .f{font-family:serif;font-style:italic}"
+        f"{wide}{{#theoria-text{{max-height:calc(100vh - 72px)!important}}"
+        f"#root{{position:fixed!important;left:{PANEL_PX + 16}px!important;top:0;right:0;bottom:0;"
+        "width:auto!important}}</style>"
         f"<b>{e(drawing.title)}</b> <span style='color:#555'>({e(drawing.section)})</span>"
-        f"<p>{e(drawing.summary)}</p>{formula}{table}{warns}</div>")
+        f"<p>{e(drawing.summary)}</p>{formula}<div style='margin:0 -12px'>{compare_html(run)}</div></div>")
 
 
 def render_html(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:

@@ -495,7 +495,7 @@ class ClientSession:
             SAVE_PAGES_AT_ONCE.release()
         name = f"theoria-{self.spec.name}.html"
         try:
-            self.client.send_file_download(name, page)
+            self.client.send_file_download(name, page, save_immediately=True)  # one click saves it
         except Exception:  # the tab closed meanwhile
             return
         self.notify("Saved", f"{name} ({human_size(len(page))}): it plays in any browser, without a network.",

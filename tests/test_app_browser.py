@@ -392,6 +392,33 @@ def test_exported_html_plays_from_file(browser, tmp_path):
         p.close()
 
 
+def test_an_exported_pages_text_is_whole_and_beside_the_scene(browser, tmp_path):
+    """The saved page's table lay over the scene, cut to 45 % of the window half-way through its
+    second row, a scene's inset plot on top of it, and read "16.73 unit" where the app reads
+    orbits. At 1280×800 the text is a column left of the canvas, every row of the table is in
+    view, and the table is the app's (units, verdicts)."""
+    from theoria.app.export_html import export
+
+    out = tmp_path / "libration.html"
+    export("libration-circular", str(out))
+    p = Page(browser, out.as_uri())
+    try:
+        p.page.wait_for_function("window.__viserMutable && document.querySelector('canvas')", timeout=WAIT_MS)
+        box = p.page.evaluate("""() => {
+            const t = document.getElementById('theoria-text').getBoundingClientRect();
+            const c = document.querySelector('canvas').getBoundingClientRect();
+            const rows = Array.from(document.querySelectorAll('#theoria-text tr')).map(r => r.getBoundingClientRect());
+            return {text_right: t.right, text_bottom: t.bottom, canvas_left: c.left, canvas_width: c.width,
+                    last_row_bottom: Math.max(...rows.map(r => r.bottom)), words: document.getElementById('theoria-text').innerText};
+        }""")
+        assert box["canvas_left"] >= box["text_right"] and box["canvas_width"] > 600, box
+        assert box["last_row_bottom"] <= min(box["text_bottom"], 800), box
+        assert "(orbits)" in box["words"] and "largest digression" in box["words"] and " unit" not in box["words"]
+        assert "Euler and the simulation are within" in box["words"]  # the app's verdict
+    finally:
+        p.close()
+
+
 def test_a_failing_scenario_never_kills_the_server(browser):
     """A scenario whose simulation raises: the browser is told, the server keeps serving."""
     from theoria.scenarios import base

@@ -720,3 +720,22 @@ def test_the_letters_of_turning_arrows_sit_at_their_tips_in_a_paused_page(browse
                 tip = 1.1 * float(np.linalg.norm(np.asarray(arrows.vectors, float)[k, 0]))
                 pos = page.evaluate("(n) => window.__viserMutable.nodePoseData[n].position", f"/world/{name}/label")
                 assert np.allclose(pos, [0.0, 0.0, tip], atol=1e-4 * max(1.0, tip)), (t, name, pos, tip)
+
+
+def test_one_click_on_save_downloads_the_page(browser, app):
+    """"Save this scene as a web page" sent the file, and the browser showed a notice with a link
+    to click ("theoria-libration-circular." cut off): nothing was saved on the click a teacher
+    made. One click downloads the page, whole (its marker's digest checks), and it plays from a
+    file."""
+    from theoria.app.replay import check_html
+    from theoria.app.session import SAVE_PAGE_LABEL
+    from theoria.scenarios import get
+
+    with _scene(browser, app, get("libration-circular")) as (page, s):
+        _tab(page, "Read")
+        with page.expect_download(timeout=WAIT_MS) as got:
+            page.get_by_role("button", name=SAVE_PAGE_LABEL).click()
+        download = got.value
+        assert download.suggested_filename == "theoria-libration-circular.html"
+        path = download.path()
+        assert check_html(str(path))["scenario"] == "libration-circular"  # whole: it raises otherwise
