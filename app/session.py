@@ -151,6 +151,8 @@ class ClientSession:
         name = self.link.scenario or scenario
         self.spec = get(name) if name else self.scenarios.get("free-tumble") or next(iter(self.scenarios.values()))
         self.present = bool(self.link.present)
+        # the scene's root, hidden while a newly chosen scenario computes (`_hide_previous_scene`)
+        self._world = client.scene.add_frame("/world", show_axes=False)
         self.view = SceneView(client.scene, "/world")
         self.view.page_plays = self.page_plays
         self._server_moves = True  # the scene shown has something only the server can move
@@ -711,6 +713,22 @@ class ClientSession:
         self.good_values = None
         self.view_opts = View(exaggerate=self.view_opts.exaggerate, text_scale=self.view_opts.text_scale)
         self._restore = None
+        # until its run is drawn, nothing of the scene before reads as this one's: its numbers, its
+        # clock and its plot are taken down, its bodies hidden (on a loaded machine a class read
+        # the Moon's DE421 table and "t = 176 of 365.2 days" under "Hyperion" for seconds)
+        self.compare.content = compare_html(None)
+        self.time_md.content = f"*computing {self.spec.title}…*"
+        self._hide_previous_scene(True)
+
+    def _hide_previous_scene(self, hide: bool) -> None:
+        """The bodies and the plot of the scene shown, hidden (or shown again once this scenario's
+        own run is drawn)."""
+        for h in (self._world, self.plot):
+            if h is not None and h.visible == hide:
+                try:
+                    h.visible = not hide
+                except Exception:  # the tab closed meanwhile
+                    pass
 
     # ---- the sweep's map ------------------------------------------------------------------------
     def _build_sweep_tab(self) -> None:
@@ -945,7 +963,7 @@ class ClientSession:
         """Post (scenario, values) for simulation; only the newest request is kept."""
         given = self.controls.values() if given is None else given
         self._status("Computing the scene…")
-        self._tick_text(f"*simulating {self.spec.name}…*")
+        self._tick_text(f"*simulating {self.spec.title}…*")
         self.worker.submit(self.spec, given)
 
     @property
@@ -1050,6 +1068,7 @@ class ClientSession:
             preview = bool(getattr(req, "preview", False))
             self._show_result_text(result, preview)
             self._update_plot(result)
+            self._hide_previous_scene(False)
             if restore is not None:
                 self._restore = None
                 self._restore_view(restore, drawing)
@@ -1303,6 +1322,8 @@ class ClientSession:
             finally:
                 self._guard = False
             self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)
+        if self.drawing_spec != self.spec.name:  # the scene before a switch: its clock is not this scene's
+            return
         t = d.times
         now = t[min(self.view.frame, len(t) - 1)]
         self.time_md.content = d.clock.reading(now, t[-1], human_number)

@@ -323,7 +323,7 @@ def test_switching_scenario_in_the_session_updates_presets_camera_and_scene():
         assert client.camera.position is not None and client.camera.up_direction == (0.0, 0.0, 1.0)
         assert "(A+B)α⁵" in s.read.content and "$" not in s.read.content
         with s._view_lock:
-            assert set(s.view._h) == {n for n in _alive(client.scene) if n.startswith("/world")}
+            assert set(s.view._h) == {n for n in _alive(client.scene) if n.startswith("/world/")}  # (the root is the session's)
 
 
 def test_long_run_shows_throttled_progress_then_hides_it(monkeypatch):
@@ -597,3 +597,35 @@ def test_two_different_clicks_close_together_are_each_the_button_clicked():
         _wait(lambda: len(done) >= 2)
         time.sleep(0.2)
         assert done == ["play/pause", ("step", 1)] and not s.playing
+
+
+def test_a_scene_being_computed_shows_nothing_of_the_scene_before():
+    """A switch on a loaded machine: the panel said "Hyperion" while the clock read the Moon's
+    "t = 176 of 365.2 days", and the plot, the bodies and the Compare table were the Moon's, for
+    seconds. Until the new run is drawn, the old one's bodies and plot are hidden, its clock and
+    table taken down; then the new scene shows."""
+    from theoria.app import session as session_mod
+
+    with _session("free-tumble") as (s, client):
+        _wait(lambda: s.updates >= 1)
+        gate = threading.Event()
+        real = s.worker.on_result
+
+        def held(*a, **kw):  # the new run waits: the panel shows the switch in the meantime
+            gate.wait(60)
+            return real(*a, **kw)
+
+        s.worker.on_result = held
+        target = get("middle-axis-flip")
+        n = s.updates
+        s.dd.value = gallery.label(target)
+        _wait(lambda: s.spec.name == "middle-axis-flip")
+        assert s._world.visible is False and s.plot.visible is False
+        assert s.compare.content == session_mod.compare_html(None)
+        assert s.time_md.content == f"*computing {target.title}…*"
+        s._time_gui()  # the playback's tick: the old scene's clock is not written under the new title
+        assert s.time_md.content == f"*computing {target.title}…*"
+        gate.set()
+        _wait(lambda: s.updates > n and s.drawing_spec == "middle-axis-flip")
+        assert s._world.visible is True and s.plot.visible is True
+        assert s.time_md.content.startswith("t = ")

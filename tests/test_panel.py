@@ -812,8 +812,8 @@ def test_small_plotted_values_are_in_a_unit_their_ticks_can_show(monkeypatch):
     with _session("free-tumble") as (s, client):
         # (a quick preview of a shorter run comes first, its drift ×10⁻¹²)
         _wait(lambda: s.plot is not None and s.plot.axes[1].get("label") == "×10⁻⁶", 300)
-        shown = np.asarray(s.plot.data[1], float)
-        assert 1.0 <= np.nanmax(np.abs(shown)) < 1000.0
+        drift = np.asarray(next(iter(s.drawing.plot.values())), float)
+        assert 1.0 <= np.nanmax(np.abs(drift)) * 1e6 < 1000.0  # what the axis names: 10⁻⁶ of its values
 
 
 def test_hyperions_table_and_tidal_captures_plot_are_in_words():
