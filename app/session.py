@@ -1334,7 +1334,12 @@ class ClientSession:
         d, values = self.drawing, self.good_values
         if d is None or values is None or self.drawing_spec != self.spec.name:
             return None
-        params = {p.name: linkmod.param_text(p, values[p.name]) for p in self.spec.params if p.name in values}
+        # only what differs from the scene's defaults (the link fills in the rest): a class link of
+        # `?s=moon&p.years=2`, not 230 characters of every key, which no student types and whose QR
+        # code is too dense to read from the back of the room
+        defaults = self._defaults()
+        params = {p.name: linkmod.param_text(p, values[p.name]) for p in self.spec.params if p.name in values
+                  and (p.name not in defaults or linkmod.param_text(p, values[p.name]) != linkmod.param_text(p, defaults[p.name]))}
         cam = None
         c = self.client.camera
         try:
@@ -1353,6 +1358,13 @@ class ClientSession:
                                  playing=self.playing, camera=cam, options=options, overlays=overlays,
                                  present=self.present, speed=float(self.speed.value),
                                  exaggerate=float(self.view_opts.exaggerate))
+
+    def _defaults(self) -> dict:
+        """The scene's default values (cached per scenario)."""
+        cache = self.__dict__.setdefault("_defaults_of", {})
+        if self.spec.name not in cache:
+            cache[self.spec.name] = self.spec.resolve(None)
+        return cache[self.spec.name]
 
     def link_query(self) -> str | None:
         st = self.link_state()

@@ -972,3 +972,21 @@ def test_the_scene_shown_is_saved_as_a_web_page_from_the_panel():
         assert got["scenario"] == "middle-axis-flip" and got["digest"], got
     body = next(b for t, b in client.notes if t == "Saved")
     assert name in body and ("MB" in body or "KB" in body), body
+
+
+def test_a_link_holds_only_the_values_changed_from_the_scenes_defaults(monkeypatch):
+    """The class link of the Moon's scene with two years was 230 characters (every parameter's key
+    and value: `p.equator_inclination_deg=1.54242&p.core_fraction=0.0007…`), which no student types
+    and whose QR code is too dense to read across a room. It holds the changed value only, and
+    opened, gives the same values."""
+    from theoria.app import browser
+    from theoria.scenarios import get
+    from test_gallery import _session, _wait
+
+    monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: "http://127.0.0.1:1/?s=moon&p.years=2")
+    with _session("free-tumble") as (s, client):
+        # (after its quick preview, a run of one year)
+        _wait(lambda: s.drawing_spec == "moon" and s.good_values["years"] == 2, 300)
+        q = s.link_query()
+        assert [k for k in q.split("&") if k.startswith("p.")] == ["p.years=2"], q
+        assert s.good_values == get("moon").resolve({"years": 2})
