@@ -28,9 +28,9 @@ SLOWEST_RATE_RAD_PER_S = 1e-100
 def check_rate(name: str, given, rates, fastest: float = 50.0) -> None:
     """Refuse a body's starting rates that are all zero or too slow to compute with."""
     if not np.max(np.abs(np.asarray(rates, float))) >= SLOWEST_RATE_RAD_PER_S:
-        raise ParameterError(name, given, f"a rate of at least {SLOWEST_RATE_RAD_PER_S:g} rad/s in size (a body "
-                                          "at rest does not move; a slower one's periods overflow), allowed "
-                                          f"range [{-fastest:g}, {fastest:g}] rad/s")
+        raise ParameterError(name, given, f"a rate other than 0 (a body at rest does not move), from "
+                                          f"{-fastest:g} to {fastest:g} rad/s and at least "
+                                          f"{SLOWEST_RATE_RAD_PER_S:g} rad/s in size")
 
 
 def check_body(values):

@@ -57,9 +57,9 @@ def test_param_parse_errors():
     (["run", "no-such-scenario"], "scenario=no-such-scenario"),
     (["run", "middle-axis-flip", "--set", "inertia=1,1,2"], "three different moments"),
     # a rate too slow to compute with (its square underflows): named as given, not as "omega0"
-    (["run", "middle-axis-flip", "--set", "spin=1e-200"], "spin=1e-200: a rate of at least 1e-100 rad/s in size"),
-    (["run", "middle-axis-flip", "--set", "spin=0"], "spin=0: a rate of at least 1e-100 rad/s in size"),
-    (["run", "free-tumble", "--set", "omega0=1e-200,0,0"], "omega0=1e-200,0,0: a rate of at least 1e-100 rad/s"),
+    (["run", "middle-axis-flip", "--set", "spin=1e-200"], "spin=1e-200: a rate other than 0 (a body at rest does not move), from -50 to 50 rad/s and at least 1e-100 rad/s in size"),
+    (["run", "middle-axis-flip", "--set", "spin=0"], "spin=0: a rate other than 0 (a body at rest does not move), from -50 to 50 rad/s and at least 1e-100 rad/s in size"),
+    (["run", "free-tumble", "--set", "omega0=1e-200,0,0"], "omega0=1e-200,0,0: a rate other than 0 (a body at rest does not move)"),
     (["run", "initial-axis", "--set", "torque=0,0,0"], "torque=0,0,0"),
     (["run", "middle-axis-flip", "--preset", "no such preset"], '--preset=no such preset: one of "Brick: the flip"'),
     (["run", "middle-axis-flip", "--preset", "brick"], "more than one matches"),
