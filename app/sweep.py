@@ -186,6 +186,15 @@ def _match_param(sc, name: str, flag: str, spec: str):
     raise ParameterError(flag, spec, f"{what}; parameters of {sc.name}: {known}")  # the flag, the whole spec
 
 
+def _did_you_mean(name: str, sc) -> str:
+    """"; did you mean …?" for a metric name close to one the scenario declares, or ""."""
+    import difflib
+
+    names = [k for k in sc.metric_units if re.fullmatch(r"[\w.]+", k)]
+    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
+    return f"; did you mean {close[0]}?" if close else ""
+
+
 def parse_grid(sc, spec: str) -> Axis:
     """`name=start:stop:count` (count values from start to stop, both included) or `name=v1,v2,…`."""
     form = "name=start:stop:count (count ≥ 1 values, both ends included) or name=v1,v2,…"
@@ -300,6 +309,13 @@ def make_plan(sc, grid=None, random=None, samples=None, fixed=None, preset=None,
         metrics = [m.strip() for m in (metrics.split(",") if isinstance(metrics, str) else metrics) if m.strip()]
         if not metrics:
             raise ParameterError("--metrics", "", "one or more metric names, comma-separated")
+        # every metric of a scenario has a unit, declared or in its name (tests/test_metric_units.py):
+        # a name with neither is none of its metrics, refused before a cluster starts (a name that
+        # could be one is checked against what the first chunk's runs report)
+        for m in metrics:
+            if sc.metric_unit(m) is None:
+                raise ParameterError("--metrics", m, f"a metric of {sc.name} (`theoria run {sc.name} --json` "
+                                     "lists them)" + _did_you_mean(m, sc))
     plan = Plan(sc, fixed_values, axes, raxes, int(samples or 0), int(seed), metrics)
     if plan.size > 50_000_000:
         raise ParameterError("--grid", "x".join(map(str, plan.shape)), "at most 50,000,000 runs in one sweep")

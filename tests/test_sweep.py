@@ -95,6 +95,25 @@ def test_a_grid_runs_each_value_once_and_reads_ascii_numbers_only(spec, says):
     assert says in str(e.value), str(e.value)
 
 
+@pytest.mark.parametrize("name, metric, said", [
+    ("free-tumble", "nope", "--metrics=nope: a metric of free-tumble (`theoria run free-tumble --json` lists them)"),
+    ("libration-eccentric", "free_perod", "did you mean free_period?"),
+])
+def test_a_name_no_metric_could_have_is_refused_before_any_work(tmp_path, monkeypatch, name, metric, said):
+    """`--metrics nope` showed five seconds of a progress bar (a local cluster starting, the first
+    runs) before the error. Every metric has a unit, declared or in its name: a name with neither
+    is refused at once, before a cluster is asked for, and nothing is written."""
+    def no_cluster(*a, **kw):
+        raise AssertionError("a cluster was started")
+
+    monkeypatch.setattr(sw, "_client", no_cluster)
+    with pytest.raises(th.ParameterError) as e:
+        sw.run_sweep(th.scenario(name), grid={"orbits" if name != "free-tumble" else "duration": (1, 2, 2)},
+                     metrics=metric, out=str(tmp_path / "m.zarr"), progress=False)
+    assert said in str(e.value)
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.slow  # a local cluster starts before the first runs say which metrics there are
 @pytest.mark.parametrize("suffix", ["zarr", "parquet"])
 def test_a_metric_no_run_reports_names_the_metrics_and_leaves_nothing(tmp_path, suffix):
@@ -102,11 +121,13 @@ def test_a_metric_no_run_reports_names_the_metrics_and_leaves_nothing(tmp_path, 
     are back; one line naming the metrics they do report (the list was empty: it held only the
     asked-for ones), exit 2, and nothing of the sweep on disk (a partial result was left)."""
     out = tmp_path / f"m.{suffix}"
-    r = cli("sweep", "free-tumble", "--grid", "duration=1:2:3", "--workers", "1", "--metrics", "nosuch",
+    # (a name that could be a metric, a time in seconds: a name no metric could have is refused
+    # before the cluster starts, test_a_name_no_metric_could_have_is_refused_before_any_work)
+    r = cli("sweep", "free-tumble", "--grid", "duration=1:2:3", "--workers", "1", "--metrics", "nosuch_s",
             "--out", str(out), "--quiet", timeout=300)
     assert r.returncode == 2, r.stderr
     line = r.stderr.strip().splitlines()[-1]
-    assert line.startswith("theoria: error: --metrics=nosuch: not a metric of free-tumble; its metrics: "), line
+    assert line.startswith("theoria: error: --metrics=nosuch_s: not a metric of free-tumble; its metrics: "), line
     assert "energy_rel_drift" in line and "polhode_period_s" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
