@@ -870,7 +870,9 @@ class ParquetWriter:
         units.update({m: _unit_of_metric(sc, m) for m in metrics})
         meta = {"theoria_sweep": json.dumps(self.plan.spec()), "theoria_version": __version__,
                 "scenario": sc.name, "units": json.dumps(units),
-                "sessions": json.dumps(getattr(self, "sessions", []))}
+                "sessions": json.dumps(getattr(self, "sessions", [])),
+                # what pandas reads into DataFrame.attrs: the units as `run --out F.parquet` gives them
+                "PANDAS_ATTRS": json.dumps({"units": units, "scenario": sc.name})}
         table = table.replace_schema_metadata({**(table.schema.metadata or {}), **{k.encode(): v.encode() for k, v in meta.items()}})
         tmp = self.path + ".tmp"
         try:

@@ -395,6 +395,9 @@ def test_python_sweep_batched_to_zarr_and_parquet_and_the_map_replays_a_pixel(tm
         assert ds[name].attrs["units"] == table_units[name] == (sc.metric_unit(name) or "1"), name
     assert table_units["lyapunov_probe_per_orbit"] == "1/orbit" and table_units["lyapunov_probe_per_unit_time"] == "n"
     assert table_units["probe_rate"] == "n"
+    import pandas as pd
+    # as `run --out F.parquet` gives them: pandas reads the units into the frame's attrs
+    assert pd.read_parquet(tmp_path / "h.parquet").attrs["units"] == table_units
     # the flat table: one row per run, the same numbers
     assert len(df) == 12 and set(df.columns) >= {"eccentricity", "probe_rate", "status", "lyapunov_probe_per_orbit"}
     for _, row in df.iterrows():
