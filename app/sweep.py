@@ -41,7 +41,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..physics.errors import ParameterError, show_value
+from ..physics.errors import ParameterError, did_you_mean, show_value
 from ..physics.params import plain_number, read_number, whole_number
 from ..scenarios.budget import MAX_MEMORY, MAX_STEPS
 from .files import WriteError, mark_written, write_whole
@@ -187,12 +187,9 @@ def _match_param(sc, name: str, flag: str, spec: str):
 
 
 def _did_you_mean(name: str, sc) -> str:
-    """"; did you mean …?" for a metric name close to one the scenario declares, or ""."""
-    import difflib
-
+    """"; did you mean 'free_period'?" for a metric name close to one the scenario declares, or ""."""
     names = [k for k in sc.metric_units if re.fullmatch(r"[\w.]+", k)]
-    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
-    return f"; did you mean {close[0]}?" if close else ""
+    return did_you_mean(name, names).replace(" (", "; ", 1).rstrip(")")
 
 
 def parse_grid(sc, spec: str) -> Axis:
@@ -275,7 +272,7 @@ def make_plan(sc, grid=None, random=None, samples=None, fixed=None, preset=None,
     grid = _as_specs(grid, "--grid")
     random = _as_specs(random, "--random")
     if random and samples is None:
-        raise ParameterError("--samples", None, "a number of samples ≥ 1 with --random")
+        raise ParameterError("--samples", "(not given)", "a number of samples ≥ 1 with --random")
     if samples is not None:
         samples = _count(samples, "--samples", 10_000_000, "a whole number from 1 to 10,000,000")
         if not random:

@@ -50,8 +50,9 @@ class StepTooLarge(ValueError):
 
 
 def did_you_mean(word: Any, choices) -> str:
-    """The hint for a name typed wrong, " (did you mean 'spin'?)": the one choice it begins, or the
-    nearest spelling (difflib); "" when there is none or `word` is not text."""
+    """The hint for a name typed wrong, " (did you mean 'spin'?)": the one choice it begins, else the
+    one it is a part of ("flip" of "middle-axis-flip"), or the nearest spelling (difflib); "" when
+    there is none or `word` is not text."""
     import difflib
 
     if not isinstance(word, str) or not word.strip():
@@ -59,6 +60,8 @@ def did_you_mean(word: Any, choices) -> str:
     choices = [c for c in choices if isinstance(c, str)]
     w = word.strip().lower()
     starts = [c for c in choices if c.lower().startswith(w)]
+    if not starts and len(w) >= 3:
+        starts = [c for c in choices if w in c.lower()]
     near = starts if len(starts) == 1 else difflib.get_close_matches(w, [c.lower() for c in choices], n=1, cutoff=0.6)
     if not near:
         return ""

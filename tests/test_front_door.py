@@ -443,3 +443,15 @@ def test_every_metric_is_a_python_number():
     for name in ("middle-axis-flip", "free-tumble", "libration-circular"):
         run = th.scenario(name).simulate(**th.scenario(name).preview)
         assert {type(v) for v in run.metrics.values()} <= {float, int, bool, str}, name
+
+
+def test_a_scene_named_by_a_part_of_its_name_gets_a_suggestion():
+    """`th.scenario("flip")` listed every scene without a suggestion, though "flip" is a part of one
+    name only; a beginning ("tumble" of nothing, "free" of "free-tumble") was already suggested."""
+    for part, meant in (("flip", "middle-axis-flip"), ("tumble", "free-tumble"), ("long-view", "earth-long-view")):
+        with pytest.raises(th.ParameterError) as e:
+            th.scenario(part)
+        assert str(e.value).endswith(f"did you mean '{meant}'?"), str(e.value)
+    with pytest.raises(th.ParameterError) as e:
+        th.scenario("axis")  # a part of two names: no guess
+    assert "did you mean" not in str(e.value)

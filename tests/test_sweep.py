@@ -97,7 +97,7 @@ def test_a_grid_runs_each_value_once_and_reads_ascii_numbers_only(spec, says):
 
 @pytest.mark.parametrize("name, metric, said", [
     ("free-tumble", "nope", "--metrics=nope: a metric of free-tumble (`theoria run free-tumble --json` lists them)"),
-    ("libration-eccentric", "free_perod", "did you mean free_period?"),
+    ("libration-eccentric", "free_perod", "did you mean 'free_period'?"),
 ])
 def test_a_name_no_metric_could_have_is_refused_before_any_work(tmp_path, monkeypatch, name, metric, said):
     """`--metrics nope` showed five seconds of a progress bar (a local cluster starting, the first
