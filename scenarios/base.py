@@ -225,8 +225,9 @@ class Run:
         for src in (tr.series, self.plot_series):
             for name, v in src.items():
                 v = np.asarray(v)
-                if v.shape == (n,) and name not in cols:
-                    cols[name] = v
+                if v.shape == (n,) and name not in cols and not (src is self.plot_series and any(
+                        c is v or (c.dtype == v.dtype and np.array_equal(c, v)) for c in cols.values())):
+                    cols[name] = v  # (a plot's curve that is a column already, ω on an axis, is not repeated)
         return cols
 
     # ---- the app's writers: the Run hands itself over (physics stays free of viser and rerun) ----

@@ -455,3 +455,14 @@ def test_a_scene_named_by_a_part_of_its_name_gets_a_suggestion():
     with pytest.raises(th.ParameterError) as e:
         th.scenario("axis")  # a part of two names: no guess
     assert "did you mean" not in str(e.value)
+
+
+def test_a_runs_table_has_no_column_twice():
+    """`to_dataframe()` held ω on each body axis twice: as `omega_body_x` and again as the plot's
+    curve "ω on middle axis" (the same numbers, a name with spaces that changes per scene)."""
+    df = th.scenario("middle-axis-flip").simulate(duration=5).to_dataframe()
+    cols = [df[c].to_numpy() for c in df.columns]
+    twice = [(a, b) for i, a in enumerate(df.columns) for j, b in enumerate(df.columns)
+             if i < j and np.array_equal(cols[i], cols[j])]
+    assert twice == [] and "omega_body_y" in df.columns
+    assert "obliquity of date (deg)" in th.scenario("earth-long-view").simulate(years=2000).to_dataframe().columns
