@@ -187,6 +187,7 @@ class ClientSession:
         self._settling: dict[str, threading.Timer] = {}  # a dragged slider's last value, when the drag pauses
         self._moved_at: dict[str, float] = {}  # when each slider last moved (perf_counter)
         self._link_sent = None
+        self._defaults_of: dict[str, dict] = {}  # each scenario's default values (`_defaults`)
         self._link_time = 0.0
         self._class_key = None
         self.updates = 0  # scene rebuilds done (tests and bench read it)
@@ -1338,8 +1339,9 @@ class ClientSession:
         # `?s=moon&p.years=2`, not 230 characters of every key, which no student types and whose QR
         # code is too dense to read from the back of the room
         defaults = self._defaults()
-        params = {p.name: linkmod.param_text(p, values[p.name]) for p in self.spec.params if p.name in values
-                  and (p.name not in defaults or linkmod.param_text(p, values[p.name]) != linkmod.param_text(p, defaults[p.name]))}
+        texts = {p.name: linkmod.param_text(p, values[p.name]) for p in self.spec.params if p.name in values}
+        params = {k: v for k, v in texts.items()
+                  if k not in defaults or v != linkmod.param_text(self.spec.param(k), defaults[k])}
         cam = None
         c = self.client.camera
         try:
@@ -1361,10 +1363,9 @@ class ClientSession:
 
     def _defaults(self) -> dict:
         """The scene's default values (cached per scenario)."""
-        cache = self.__dict__.setdefault("_defaults_of", {})
-        if self.spec.name not in cache:
-            cache[self.spec.name] = self.spec.resolve(None)
-        return cache[self.spec.name]
+        if self.spec.name not in self._defaults_of:
+            self._defaults_of[self.spec.name] = self.spec.resolve(None)
+        return self._defaults_of[self.spec.name]
 
     def link_query(self) -> str | None:
         st = self.link_state()
