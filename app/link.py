@@ -37,6 +37,7 @@ class LinkState:
     speed: float | None = None
     exaggerate: float | None = None  # the body's shape exaggerated (the panel's "Exaggerate the shape")
     dropped: list = field(default_factory=list)  # (key, value, what it takes) of values not taken
+    unread: int = 0  # parts of a link beyond MAX_LINK_PARTS, not read
 
 
 def _finite(text: str) -> float:
@@ -103,7 +104,10 @@ def from_address(address: str | None) -> LinkState:
     if not address or not isinstance(address, str):
         return st
     query = urlsplit(address).query if ("?" in address or "://" in address) else address
-    for k, v in parse_qsl(query, keep_blank_values=True):
+    parts = query.split("&", MAX_LINK_PARTS)
+    if len(parts) > MAX_LINK_PARTS:  # the rest is counted, not read (see MAX_LINK_PARTS)
+        st.unread = parts.pop().count("&") + 1
+    for k, v in parse_qsl("&".join(parts), keep_blank_values=True):
         if len(v) > 400:  # nothing in a link of ours is this long
             st.dropped.append((k, v, "a value of at most 400 characters"))
             continue
@@ -143,6 +147,11 @@ def from_address(address: str | None) -> LinkState:
     return st
 
 
+# A link of ours has a part per parameter, option and overlay and a few more (under a hundred).
+# A hand-made one of 90,000 unknown keys cost the server 1.7 s of CPU each time a page opened it
+# (a refusal made for every key, three of them shown): five tabs reopening it held the class's
+# redraws at 1-4 s. Parts beyond these are counted, not read.
+MAX_LINK_PARTS = 200
 # the scene: "s" as the app writes it; "scenario" and "scene" as a teacher writing a link by hand would
 SCENARIO_KEYS = ("s", "scenario", "scene")
 KEYS_TAKEN = "s=SCENE, p.PARAMETER=VALUE, t, play, speed, exag, cam, o.OPTION, v.OVERLAY, present"

@@ -125,10 +125,17 @@ class Gate:
 
     def backlog(self) -> int:
         """Messages queued for this browser and not sent yet (pushed since the last one sent)."""
+        return self.pushed() - self.sent()
+
+    def pushed(self) -> int:
+        """The index of the last message queued for this browser (-1: none)."""
         buf = getattr(self, "buffer", None)
-        if buf is None:
-            return 0
-        return buf.message_counter - 1 - buf.generator_cursors.get(self.client_id, -1)
+        return -1 if buf is None else buf.message_counter - 1
+
+    def sent(self) -> int:
+        """The index of the last message sent to this browser (-1: none)."""
+        buf = getattr(self, "buffer", None)
+        return -1 if buf is None else buf.generator_cursors.get(self.client_id, -1)
 
     async def __call__(self, client_id, message) -> None:
         self.seen += 1
@@ -344,6 +351,12 @@ def _bad_update(message) -> str | None:
             return None
         return "a list that is not a short list of numbers"
     return f"a value of type {type(v).__name__}"
+
+
+def gate_of(server, client_id) -> "Gate | None":
+    """The gate of a browser of a theoria server (None for another server, a test's fake one)."""
+    door = getattr(server, "_theoria_door", None)
+    return None if door is None else door.gates.get(client_id)
 
 
 class Door:

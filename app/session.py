@@ -58,6 +58,11 @@ SPEED_LABEL = f"Playback speed (1: the run in {RUN_SECONDS:g} s)"
 # the scene shown, as the standalone web page `theoria export` writes (~1 MB, 0.1-0.2 s to make).
 SAVE_PAGE_LABEL = "Save this scene as a web page"
 SAVE_PAGES_AT_ONCE = threading.BoundedSemaphore(2)  # pages made at once for the whole class
+# one browser's pages: at most one every SAVE_PAGE_EVERY_S, and none while the one before is still
+# being sent (each is ~1 MB held for that browser until it reads it: a tab clicking Save twelve
+# times a second and reading slowly took the server from 0.3 to 0.7 GB in 30 s, and three such
+# tabs kept a core making pages while the class's saves were refused)
+SAVE_PAGE_EVERY_S = 5.0
 CLOCK_TEXT_EVERY = 0.5  # s between updates of the time read-out and the scrubber while playing
 # s the scrubber is left to the browser after it moved it: its number field sends each keystroke,
 # and the scrubber following playback rewrote the field under a teacher typing "90" (lost)
@@ -188,6 +193,7 @@ class ClientSession:
         self._moved_at: dict[str, float] = {}  # when each slider last moved (perf_counter)
         self._link_sent = None
         self._defaults_of: dict[str, dict] = {}  # each scenario's default values (`_defaults`)
+        self._saved_at, self._saved_upto = -1e9, -1  # the last page saved: when, and its last message
         self._link_time = 0.0
         self._class_key = None
         self.updates = 0  # scene rebuilds done (tests and bench read it)
@@ -207,9 +213,8 @@ class ClientSession:
                                                           f"of the panel); {self.spec.title} is shown"))
         for key, value, takes in self.link.dropped[:LINK_ERRORS_SHOWN]:
             self._notify_bad(ParameterError(key, value, takes), " (from the link: not used)")
-        if len(self.link.dropped) > LINK_ERRORS_SHOWN:
-            self.notify("Not allowed: more of the link",
-                        f"{len(self.link.dropped) - LINK_ERRORS_SHOWN} more parts of the link were not used")
+        # what was not used beyond the notices shown: one count for the whole link, said last
+        more = max(0, len(self.link.dropped) - LINK_ERRORS_SHOWN) + self.link.unread
         exag = self.link.exaggerate
         if exag is not None and not EXAGGERATE_RANGE[0] <= exag <= EXAGGERATE_RANGE[1]:
             self._notify_bad(ParameterError("exaggerate", exag, "allowed range [%g, %g]" % EXAGGERATE_RANGE),
@@ -226,14 +231,14 @@ class ClientSession:
             values, errors = linkmod.link_values(self.spec, self._restore)
             for e in errors[:LINK_ERRORS_SHOWN]:
                 self._notify_bad(e, " (from the link: the default is used)")
-            if len(errors) > LINK_ERRORS_SHOWN:  # a link of thousands of keys is not thousands of notices
-                self.notify("Not allowed: more values of the link",
-                            f"{len(errors) - LINK_ERRORS_SHOWN} more values of the link were not used")
+            more += max(0, len(errors) - LINK_ERRORS_SHOWN)  # a link of thousands of keys: not thousands of notices
             self.controls.set_values(values)
             self._set_preset_for(values)
             self.request(values)
         else:
             self.request()
+        if more:
+            self.notify("Not allowed: more of the link", f"{more} more parts of the link were not used")
 
     # ---- GUI -------------------------------------------------------------------------------
     def _build_gui(self) -> None:
@@ -484,10 +489,17 @@ class ClientSession:
     def _save_page(self) -> None:
         """The scene shown, as a standalone web page, downloaded by this browser."""
         from .export_html import render_html
+        from .server import gate_of  # (the server module imports this one)
 
         d, result = self.drawing, self.result
         if d is None or result is None or self.drawing_spec != self.spec.name:
             self.notify("Nothing to save yet", "The scene is still being computed.", color="yellow")
+            return
+        gate = gate_of(self.server, self.client.client_id)
+        if (time.monotonic() - self._saved_at < SAVE_PAGE_EVERY_S
+                or (gate is not None and gate.sent() < self._saved_upto)):
+            self.notify("Not saved again yet", "The page saved a moment ago is still on its way: try again in a few "
+                        "seconds.", color="yellow")
             return
         if not SAVE_PAGES_AT_ONCE.acquire(blocking=False):
             self.notify("Not saved", "Other pages are being made for the class: try again in a moment.", color="yellow")
@@ -501,6 +513,8 @@ class ClientSession:
             self.client.send_file_download(name, page, save_immediately=True)  # one click saves it
         except Exception:  # the tab closed meanwhile
             return
+        self._saved_at = time.monotonic()
+        self._saved_upto = gate.pushed() if gate is not None else -1
         self.notify("Saved", f"{name} ({human_size(len(page))}): it plays in any browser, without a network.",
                     color="green")
 
