@@ -553,18 +553,19 @@ def _moon(values, progress=None):
 
 
 def _check_moon(values):
-    """Runs that read DE421 must lie within its span."""
-    if not uses_de421(values):
-        return
+    """Every run lies within DE421's span: each is compared with DE421's Moon, whichever Earth,
+    Sun and start it runs with (with the lunar theory and a uniform start, a run past 2200 ended in
+    jplephem's DateError and a traceback)."""
     from ._real_sky import de421
 
     sky = de421()
     lo, hi = sky.first_year, sky.last_year
+    why = "" if uses_de421(values) else ", and every run is compared with it"
     if values["start_year"] < lo:
-        raise ParameterError("start_year", values["start_year"], f"{lo:.2f} ≤ start_year (DE421 begins {lo:.2f})")
+        raise ParameterError("start_year", values["start_year"], f"{lo:.2f} ≤ start_year (DE421 begins {lo:.2f}{why})")
     if values["start_year"] + values["years"] > hi:
-        raise ParameterError("years", values["years"],
-                             f"start_year + years ≤ {hi:.2f} (DE421 ends there): years ≤ {hi - values['start_year']:.4g}")
+        raise ParameterError("years", values["years"], f"start_year + years ≤ {hi:.2f} (DE421 ends there{why}): "
+                                                       f"years ≤ {hi - values['start_year']:.4g}")
 
 
 EYE_RADII = 2.3  # the Earth-view camera's distance in Moon radii (drawn 1): the disc spans ~52° of the view

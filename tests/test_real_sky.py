@@ -233,3 +233,17 @@ def test_an_observed_value_is_compared_only_with_a_run_of_that_body():
     moon = get("moon").simulate(years=3, gamma=3e-4)
     assert all(c.modern is None for c in moon.comparisons if "physical libration" in c.label)
     assert all(c.modern is not None for c in moon.comparisons if c.label.startswith("optical libration"))
+
+
+@pytest.mark.parametrize("start", ["uniform", "forced"])
+def test_a_moon_run_past_de421_is_refused_whatever_it_runs_with(start):
+    """Every Moon run is compared with DE421's Moon. With the lunar theory's Earth and a start of
+    its own, the date check was skipped and a run to 2210 ended in jplephem's DateError (a
+    traceback; "Error: DateError" in the app). It is refused as a DE421 run is, naming `years`
+    and what fits (DE421's span: 1899-07-29 to 2200-02-01, JPL's header of the file)."""
+    import theoria as th
+
+    sc = th.scenario("moon")
+    with pytest.raises(th.ParameterError) as e:
+        sc.simulate(ephemeris="lunar-theory", start=start, start_year=2190, years=20)
+    assert e.value.name == "years" and "DE421 ends there" in str(e.value) and "years ≤ 10.0" in str(e.value)
