@@ -241,8 +241,7 @@ class ParamControls:
             return
         p = self.spec.param(name)
         self._values[name] = p.choice_of(shown) if p.kind == "choice" else shown
-        if p.kind == "choice":
-            self.show_applicable()
+        self.show_applicable()  # a choice, or a number another control needs above zero (a zoom's length)
         if self.on_change is not None:
             self.on_change(name, debounce)
 

@@ -15,6 +15,8 @@ import numpy as np
 from .errors import ParameterError, did_you_mean
 
 MAX_TEXT_CHARS = 200  # a value given as longer text is refused before it is parsed (a pasted paragraph)
+POSITIVE = ">0"  # `Param.applies`: the condition "this number parameter is above zero"
+
 
 @dataclass(frozen=True)
 class Param:
@@ -40,8 +42,9 @@ class Param:
     label: str = ""
     choice_labels: tuple = field(default_factory=tuple)
     advanced: bool = False
-    # used only with these values of choice parameters: {"motion": ("rotating", "restricted")},
-    # kept as ((name, values), ...); elsewhere the app hides the control and a run says it is unused
+    # used only with these values of choice parameters: {"motion": ("rotating", "restricted")}, or
+    # with a number parameter above zero: {"zoom_years": POSITIVE}; every condition must hold.
+    # Kept as ((name, values), ...); elsewhere the app hides the control and a run says it is unused
     applies: Any = ()
 
     def __post_init__(self):
@@ -51,11 +54,17 @@ class Param:
 
     def applies_to(self, values: dict[str, Any]) -> bool:
         """Whether these values (all of a scenario's) use this parameter."""
-        return all(str(values.get(k)) in map(str, allowed) for k, allowed in self.applies)
+        def holds(k, allowed):
+            v = values.get(k)
+            if allowed == (POSITIVE,):
+                return isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0
+            return str(v) in map(str, allowed)
+        return all(holds(k, allowed) for k, allowed in self.applies)
 
     def applies_text(self) -> str:
-        """Where it is used, in words: "with motion = rotating or restricted"."""
-        return " and ".join(f"with {k} = {' or '.join(map(str, allowed))}" for k, allowed in self.applies)
+        """Where it is used, in words: "with motion = rotating or restricted", "with zoom_years > 0"."""
+        return " and ".join(f"with {k} > 0" if allowed == (POSITIVE,) else f"with {k} = {' or '.join(map(str, allowed))}"
+                            for k, allowed in self.applies)
 
     def title(self) -> str:
         """The human name: `label`, else the key with its underscores as spaces."""

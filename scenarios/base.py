@@ -24,7 +24,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..physics.errors import Diverged, ParameterError, did_you_mean, show_value
-from ..physics.params import Param, pretty_unit, resolve
+from ..physics.params import POSITIVE, Param, pretty_unit, resolve
 from ..physics.trajectory import Trajectory
 from .budget import MAX_MEMORY, MAX_STEPS, Cost, check_budget, default_cost
 from .drawing import Camera, Drawing, Option, View, declutter_labels, standard
@@ -459,6 +459,8 @@ class Scenario:
             if p.name in RESERVED:
                 raise ValueError(f"scenario {self.name}: a parameter may not be called {p.name!r}")
             for k, allowed in p.applies:
+                if allowed == (POSITIVE,) and any(q.name == k and q.kind in ("float", "int") for q in self.params):
+                    continue
                 choice = next((q for q in self.params if q.name == k and q.kind == "choice"), None)
                 if choice is None or not set(map(str, allowed)) <= set(map(str, choice.choices)):
                     raise ValueError(f"scenario {self.name}: {p.name} applies with {k} = {allowed}, "

@@ -28,7 +28,7 @@ from ..physics import quaternion as quat
 from ..physics.constants import (ARCSEC_RAD, EARTH_DYNAMICAL_ELLIPTICITY, GENERAL_PRECESSION_IAU2006_ARCSEC_PER_CY,
                                  GM_SUN_AU3_DAY2, LUNISOLAR_PRECESSION_IAU2006_ARCSEC_PER_CY, OBLIQUITY_J2000_RAD,
                                  SIDEREAL_MONTH_DAYS)
-from ..physics.params import Param, ParameterError
+from ..physics.params import POSITIVE, Param, ParameterError
 from ..physics.precession import pole_angles
 from ..physics.trajectory import Trajectory
 from .base import Comparison, Run, Scenario, register
@@ -436,9 +436,9 @@ register(Scenario(
         Param("sample_years", 5.0, 0.0, 1000.0, "yr", "spacing of the stored states", exclusive_min=True,
               label="Spacing of the stored states", advanced=True),
         Param("zoom_year", J2000_YEAR, -28000.0, MAX_END_YEAR, "yr", "start of the zoom window (secular model)", step=100.0,
-              label="Zoom window starts", advanced=True),
+              label="Zoom window starts", advanced=True, applies={"model": "secular", "zoom_years": POSITIVE}),
         Param("zoom_years", 0.0, 0.0, 40.0, "yr", "length of the zoom window with the full torque (0: none)",
-              label="Zoom window length (full torque)", advanced=True),
+              label="Zoom window length (full torque)", advanced=True, applies={"model": "secular"}),
     ),
     camera=Camera((3.6, -3.2, 4.4), (0.0, 0.0, 0.6)),  # the pole's circle near the top of the sphere
     # the first picture: the secular sky alone, sparsely stored; a zoom window with the full torque

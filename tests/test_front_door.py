@@ -466,3 +466,16 @@ def test_a_runs_table_has_no_column_twice():
              if i < j and np.array_equal(cols[i], cols[j])]
     assert twice == [] and "omega_body_y" in df.columns
     assert "obliquity of date (deg)" in th.scenario("earth-long-view").simulate(years=2000).to_dataframe().columns
+
+
+def test_earth_long_views_zoom_is_said_unused_where_it_is():
+    """earth-long-view took `zoom_year=-5000` with no zoom, and a zoom with the full model, with
+    `warnings == []` though neither was used (docs/python.md: an unused value is said in
+    `run.warnings`). The zoom is the secular model's; its start needs a length above zero."""
+    sc = th.scenario("earth-long-view")
+    r = sc.simulate(zoom_year=-5000, years=1000)
+    assert r.warnings == ["zoom_year = -5000 is not used here: it applies only with model = secular and with "
+                          "zoom_years > 0"]
+    r = sc.simulate(model="full", zoom_years=5, zoom_year=2010, years=100)
+    assert [w.split(" is not used")[0] for w in r.warnings] == ["zoom_year = 2010", "zoom_years = 5"]
+    assert sc.simulate(zoom_years=5, zoom_year=2010, years=100).warnings == []
