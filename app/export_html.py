@@ -52,16 +52,23 @@ def configure_scene(scene) -> None:
 PANEL_PX = 380  # the text's column; the scene takes the rest of a wide window
 
 
-def text_panel(drawing, run) -> str:
+def text_panel(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
     """The scenario's text as a column left of the scene (over it, scrollable, in a narrow
     window): its title, §, what to look for, Euler's formula and the Compare table as the app
     writes it (the same words, units and verdicts; the run's warnings first). The scene's canvas
     is moved right of the column, so that the column covers none of it (over the canvas, the
     table was cut to 45 % of the window and a scene's inset plot sat on it)."""
+    from .format import human_number
     from .panel import compare_html
 
     e = html_lib.escape
     formula = "".join(f"<div class='f'>{e(line)}</div>" for line in drawing.formula.splitlines() if line.strip())
+    # the bar below counts the replay's own seconds ("3.2"), not the run's time (a 200-s run)
+    t, c = np.asarray(drawing.times, float), drawing.clock
+    replay_s = min(frames, drawing.n_frames) / fps
+    clock = (f"<p style='color:#555'>The bar below plays the whole run ({e(c.name)} = "
+             f"{e(human_number(t[0] * c.scale))} to {e(human_number(t[-1] * c.scale))}{' ' + e(c.words) if c.words else ''}) "
+             f"in {replay_s:.0f} s; its box counts those seconds of replay.</p>") if len(t) > 1 else ""
     wide = f"@media (min-width:{2 * PANEL_PX + 120}px)"
     return (
         f"<div id='theoria-text' style='position:fixed;top:8px;left:8px;width:{PANEL_PX}px;max-width:calc(100vw - 40px);"
@@ -72,7 +79,7 @@ def text_panel(drawing, run) -> str:
         f"#root{{position:fixed!important;left:{PANEL_PX + 16}px!important;top:0;right:0;bottom:0;"
         "width:auto!important}}</style>"
         f"<b>{e(drawing.title)}</b> <span style='color:#555'>({e(drawing.section)})</span>"
-        f"<p>{e(drawing.summary)}</p>{formula}<div style='margin:0 -12px'>{compare_html(run)}</div></div>")
+        f"<p>{e(drawing.summary)}</p>{clock}{formula}<div style='margin:0 -12px'>{compare_html(run)}</div></div>")
 
 
 def render_html(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
@@ -109,8 +116,8 @@ def render_html(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
     page = page.replace("<head>", "<head>\n    " + marker +
                         f"\n    <title>theoria — {html_lib.escape(drawing.title)}</title>"
                         f"\n    <script>{SOFTWARE_GL_JS}</script>", 1)
-    page = page.replace("<body>", "<body>\n" + text_panel(drawing, run), 1) if "<body>" in page else \
-        page.replace("</body>", text_panel(drawing, run) + "</body>", 1)
+    text = text_panel(drawing, run, frames, fps)
+    page = page.replace("<body>", "<body>\n" + text, 1) if "<body>" in page else page.replace("</body>", text + "</body>", 1)
     # the digest of the whole page goes into its marker: `theoria replay` finds a damaged copy
     return page.replace(f'data-sha256="{HTML_DIGEST_BLANK}"', f'data-sha256="{html_digest(page)}"', 1)
 

@@ -415,6 +415,8 @@ def test_an_exported_pages_text_is_whole_and_beside_the_scene(browser, tmp_path)
         assert box["last_row_bottom"] <= min(box["text_bottom"], 800), box
         assert "(orbits)" in box["words"] and "largest digression" in box["words"] and " unit" not in box["words"]
         assert "Euler and the simulation are within" in box["words"]  # the app's verdict
+        # the bar's box counts the replay's seconds: the run's own time is said beside it
+        assert "The bar below plays the whole run (t = 0 to 10.65 orbits) in 8 s" in box["words"], box["words"]
     finally:
         p.close()
 
