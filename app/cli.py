@@ -478,7 +478,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.set_defaults(fn=fn)
 
     s = sub.add_parser("replay", help="open a theoria .rrd (rerun viewer) or .html export; refuses other files")
-    s.add_argument("file")
+    s.add_argument("file", help="a recording written by theoria record (.rrd) or a replay by theoria export (.html)")
     s.add_argument("--check", action="store_true", help="only validate the file: exit 0 if it is theoria's and whole, 2 if "
                    "not, 3 for a recording or export too old to carry a digest")
     s.add_argument("--web-viewer", action="store_true", help="rerun's web viewer instead of the native one "
@@ -497,7 +497,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=whole_number, default=0, help="seed of the random draws (default 0)")
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="a fixed parameter")
     s.add_argument("--preset", default=None, metavar="NAME", help="fixed parameters from a preset")
-    s.add_argument("--out", required=True, metavar="FILE.zarr|FILE.parquet")
+    s.add_argument("--out", required=True, metavar="FILE.zarr|FILE.parquet",
+                   help="where the results go: a Zarr store (an xarray Dataset) or a Parquet table")
     s.add_argument("--cluster", default=None, metavar="ADDRESS",
                    help="an existing Dask scheduler (tcp://host:8786); default: a local cluster on this machine's cores")
     s.add_argument("--workers", default=None, type=whole_number, help="workers of the local cluster (default: one per core)")

@@ -166,7 +166,7 @@ class Run:
 
     def to_dataframe(self):
         """One row per sample: t, the attitude, ω and L on the body axes, the other bodies'
-        positions and every per-sample series of the run (pandas; `pip install theoria-motus[pandas]`).
+        positions and every per-sample series of the run (a pandas DataFrame).
         `df.attrs["units"]` holds the unit of each column that has one (`column_units`)."""
         try:
             import pandas as pd
