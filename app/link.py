@@ -140,6 +140,8 @@ def from_address(address: str | None) -> LinkState:
                 st.present = v not in ("0", "false", "no")
             elif v == "" and st.scenario is None and _looks_like_a_name(k):  # `?earth`: the scene by its name
                 st.scenario = k
+            elif k in VISER_KEYS:  # the page's own settings, read by viser's client
+                pass
             else:  # a key of no link of ours (a typo, `?scene=` from another app): said, not silently ignored
                 st.dropped.append((k, v, "not a key of a theoria link (" + KEYS_TAKEN + ")"))
         except ValueError:
@@ -154,6 +156,9 @@ def from_address(address: str | None) -> LinkState:
 MAX_LINK_PARTS = 200
 # the scene: "s" as the app writes it; "scenario" and "scene" as a teacher writing a link by hand would
 SCENARIO_KEYS = ("s", "scenario", "scene")
+# keys viser's client reads from the address itself (its SearchParamsUtils and App): not ours to name
+VISER_KEYS = frozenset({"websocket", "fixedDpr", "darkMode", "showStats", "logCamera", "hideViserLogo",
+                        "playbackPath", "forceOrbitOriginTool", "dummyWindowDimensions", "dummyWindowTitle"})
 KEYS_TAKEN = "s=SCENE, p.PARAMETER=VALUE, t, play, speed, exag, cam, o.OPTION, v.OVERLAY, present"
 
 

@@ -388,7 +388,7 @@ def test_a_link_to_a_scene_that_does_not_exist_says_so(monkeypatch):
 
 
 @pytest.mark.parametrize("query", ["scenario=moon", "scene=moon", "moon", "s=moon&zoom=3", "s=moon&" + "&".join(
-    f"utm{k}=x" for k in range(40))])
+    f"utm{k}=x" for k in range(40)), "s=moon&fixedDpr=1&darkMode=1"])  # (the last two: viser's own settings)
 def test_a_link_typed_by_hand_opens_its_scene_and_names_what_it_did_not_use(monkeypatch, query):
     """A teacher writing the link on the board typed `?scenario=moon` (or `?scene=moon`, `?moon`):
     the first scene opened, without a word; a key of no theoria link (`zoom`, a mailer's `utm_…`)
