@@ -450,7 +450,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=cmd_serve)
 
     s = sub.add_parser("list", help="scenarios, one line each")
-    s.add_argument("--json", action="store_true", help="each scenario's parameters (range, unit, default) and presets as JSON (its metrics: theoria run NAME --json)")
+    s.add_argument("--json", action="store_true",
+                   help="each scenario's parameters (range, unit, default) and presets as JSON (its metrics: "
+                        "theoria run NAME --json)")
     s.set_defaults(fn=cmd_list)
 
     for name, fn, hlp in (("run", cmd_run, "headless run; prints metrics"),

@@ -66,9 +66,9 @@ def text_panel(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
     # the bar below counts the replay's own seconds ("3.2"), not the run's time (a 200-s run)
     t, c = np.asarray(drawing.times, float), drawing.clock
     replay_s = min(frames, drawing.n_frames) / fps
-    clock = (f"<p style='color:#555'>The bar below plays the whole run ({e(c.name)} = "
-             f"{e(human_number(t[0] * c.scale))} to {e(human_number(t[-1] * c.scale))}{' ' + e(c.words) if c.words else ''}) "
-             f"in {replay_s:.0f} s; its box counts those seconds of replay.</p>") if len(t) > 1 else ""
+    span = f"{human_number(t[0] * c.scale)} to {human_number(t[-1] * c.scale)}" + (f" {c.words}" if c.words else "")
+    clock = (f"<p style='color:#555'>The bar below plays the whole run ({e(c.name)} = {e(span)}) in {replay_s:.0f} s; "
+             "its box counts those seconds of replay.</p>") if len(t) > 1 else ""
     wide = f"@media (min-width:{2 * PANEL_PX + 120}px)"
     return (
         f"<div id='theoria-text' style='position:fixed;top:8px;left:8px;width:{PANEL_PX}px;max-width:calc(100vw - 40px);"
@@ -117,7 +117,8 @@ def render_html(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
                         f"\n    <title>theoria — {html_lib.escape(drawing.title)}</title>"
                         f"\n    <script>{SOFTWARE_GL_JS}</script>", 1)
     text = text_panel(drawing, run, frames, fps)
-    page = page.replace("<body>", "<body>\n" + text, 1) if "<body>" in page else page.replace("</body>", text + "</body>", 1)
+    page = (page.replace("<body>", "<body>\n" + text, 1) if "<body>" in page
+            else page.replace("</body>", text + "</body>", 1))
     # the digest of the whole page goes into its marker: `theoria replay` finds a damaged copy
     return page.replace(f'data-sha256="{HTML_DIGEST_BLANK}"', f'data-sha256="{html_digest(page)}"', 1)
 

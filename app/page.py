@@ -49,8 +49,8 @@ body:has(#theoria-loading) .mantine-Paper-root:has(.mantine-ScrollArea-root){vis
 # socket viser's client keeps retrying), so the line says what to try; it connects, and the line
 # goes, as soon as the server takes it.
 CONNECT_HINT_S = 10
-CONNECT_HINT = ("theoria — still connecting… The server may be busy or full, or this computer may already have as many "
-                "theoria tabs open as the server takes from one address: close one, and this tab connects.")
+CONNECT_HINT = ("theoria — still connecting… The server may be busy or full, or this computer may already have "
+                "as many theoria tabs open as the server takes from one address: close one, and this tab connects.")
 CONNECT_HINT_JS = (f"setTimeout(function(){{var e=document.getElementById('theoria-loading');"
                    f"if(e&&e.textContent=={json.dumps(LOADING)}){{e.textContent={json.dumps(CONNECT_HINT)};}}}},"
                    f"{CONNECT_HINT_S * 1000});")

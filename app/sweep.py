@@ -923,7 +923,8 @@ class Summary:
     interrupted: bool = False
     signal: str = ""
     cluster: str = ""
-    kept: str | None = ""  # where an interrupted sweep's finished chunks are (OUT itself, OUT.parts/, OUT.new/); None: nothing kept
+    # where an interrupted sweep's finished chunks are (OUT itself, OUT.parts/, OUT.new/); None: nothing kept
+    kept: str | None = ""
     complete: bool = False  # OUT holds the whole sweep (every chunk done), now or before
     found_complete: bool = False  # resumed, and found already finished: nothing was run or written
 
@@ -933,8 +934,8 @@ class Summary:
                     f"{self.chunks_done_before} were done before: the sweep is complete, left as it is → {self.out}")
         st = ", ".join(f"{v} {k}" for k, v in self.statuses.items() if v)
         if self.interrupted and self.kept is None:
-            return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); {self.seconds:.1f} s — interrupted "
-                    f"before any chunk finished: nothing written" + (
+            return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); {self.seconds:.1f} s — "
+                    "interrupted before any chunk finished: nothing written" + (
                         f"; {self.out} is as it was" if os.path.exists(self.out) else ""))
         where = self.kept or self.out
         return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); computed {self.chunks_computed} chunks "
