@@ -194,6 +194,7 @@ class ClientSession:
         self._link_sent = None
         self._defaults_of: dict[str, dict] = {}  # each scenario's default values (`_defaults`)
         self._saved_at, self._saved_upto = -1e9, -1  # the last page saved: when, and its last message
+        self._preview_shown = False  # the run shown is a quick preview of a longer one
         self._link_time = 0.0
         self._class_key = None
         self.updates = 0  # scene rebuilds done (tests and bench read it)
@@ -1080,7 +1081,7 @@ class ClientSession:
                 self._set_camera(drawing)
             self._sync_scene_options()
             self.result, self.good_values = result, values
-            preview = bool(getattr(req, "preview", False))
+            preview = self._preview_shown = bool(getattr(req, "preview", False))
             self._show_result_text(result, preview)
             self._update_plot(result)
             self._hide_previous_scene(False)
@@ -1326,7 +1327,8 @@ class ClientSession:
     def _time_gui(self, scrub: bool = True) -> None:
         """The scrubber and the time read-out follow the clock (playing or not)."""
         d = self.drawing
-        if d is None:
+        # none while a newly chosen scenario computes: the scene before's clock is not this one's
+        if d is None or self.drawing_spec != self.spec.name:
             return
         # not over a browser's scrub whose callback has yet to run (viser sets the value as the
         # message arrives, and runs the callback later on a thread of its pool)
@@ -1337,8 +1339,6 @@ class ClientSession:
             finally:
                 self._guard = False
             self._scrub_taken = getattr(self.scrub, "update_timestamp", 0.0)
-        if self.drawing_spec != self.spec.name:  # the scene before a switch: its clock is not this scene's
-            return
         t = d.times
         now = t[min(self.view.frame, len(t) - 1)]
         self.time_md.content = d.clock.reading(now, t[-1], human_number)
@@ -1348,7 +1348,10 @@ class ClientSession:
         """The view now: what the address bar holds."""
         d, values = self.drawing, self.good_values
         if d is None or values is None or self.drawing_spec != self.spec.name:
-            return None
+            # a scenario chosen and still computing: the link names it already (it named the one before)
+            return linkmod.LinkState(scenario=self.spec.name, present=self.present) if d is not None else None
+        if self._preview_shown:  # a quick preview's shorter run stands in: the link holds the values asked for
+            values = {**values, **self.controls.values()}
         # only what differs from the scene's defaults (the link fills in the rest): a class link of
         # `?s=moon&p.years=2`, not 230 characters of every key, which no student types and whose QR
         # code is too dense to read from the back of the room

@@ -623,8 +623,12 @@ def test_a_scene_being_computed_shows_nothing_of_the_scene_before():
         assert s._world.visible is False and s.plot.visible is False
         assert s.compare.content == session_mod.compare_html(None)
         assert s.time_md.content == f"*computing {target.title}…*"
+        before = s.scrub.value
+        with s._clock_lock:
+            s.clock = 0.5 if before != 50.0 else 0.25
         s._time_gui()  # the playback's tick: the old scene's clock is not written under the new title
-        assert s.time_md.content == f"*computing {target.title}…*"
+        assert s.time_md.content == f"*computing {target.title}…*" and s.scrub.value == before
+        assert s.link_query() == "s=middle-axis-flip"  # the address names the scene chosen, at once
         gate.set()
         _wait(lambda: s.updates > n and s.drawing_spec == "middle-axis-flip")
         assert s._world.visible is True and s.plot.visible is True

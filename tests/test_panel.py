@@ -991,8 +991,12 @@ def test_a_link_holds_only_the_values_changed_from_the_scenes_defaults(monkeypat
 
     monkeypatch.setattr(browser, "read_address", lambda client, timeout=3.0: "http://127.0.0.1:1/?s=moon&p.years=2")
     with _session("free-tumble") as (s, client):
-        # (after its quick preview, a run of one year)
-        _wait(lambda: s.drawing_spec == "moon" and s.good_values["years"] == 2, 300)
+        # a quick preview of one year stands in first: its link holds the two years asked for, not
+        # the preview's one (a link copied then opened a one-year run)
+        _wait(lambda: s.drawing_spec == "moon", 300)
+        q = s.link_query()
+        assert [k for k in q.split("&") if k.startswith("p.")] == ["p.years=2"], q
+        _wait(lambda: s.good_values["years"] == 2, 300)
         q = s.link_query()
         assert [k for k in q.split("&") if k.startswith("p.")] == ["p.years=2"], q
         assert s.good_values == get("moon").resolve({"years": 2})
