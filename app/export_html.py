@@ -70,6 +70,7 @@ def text_panel(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
     clock = (f"<p style='color:#555'>The bar below plays the whole run ({e(c.name)} = {e(span)}) in {replay_s:.0f} s; "
              "its box counts those seconds of replay.</p>") if len(t) > 1 else ""
     wide = f"@media (min-width:{2 * PANEL_PX + 120}px)"
+    narrow = f"@media (max-width:{2 * PANEL_PX + 119}px)"  # a phone, a small window: the text above the scene
     return (
         f"<div id='theoria-text' style='position:fixed;top:8px;left:8px;width:{PANEL_PX}px;max-width:calc(100vw - 40px);"
         "max-height:45vh;overflow:auto;background:rgba(255,255,255,0.92);font:13px/1.35 sans-serif;"
@@ -77,7 +78,11 @@ def text_panel(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
         "<style>#theoria-text .f{font-family:serif;font-style:italic}"
         f"{wide}{{#theoria-text{{max-height:calc(100vh - 72px)!important}}"
         f"#root{{position:fixed!important;left:{PANEL_PX + 16}px!important;top:0;right:0;bottom:0;"
-        "width:auto!important}}</style>"
+        "width:auto!important}}"
+        f"{narrow}"  # (plain strings from here: their braces are the CSS's own)
+        "{#theoria-text{left:0!important;top:0!important;width:100vw!important;max-width:none!important;"
+        "max-height:38vh!important;border-radius:0!important}"
+        "#root{position:fixed!important;top:38vh!important;left:0;right:0;bottom:0;height:auto!important}}</style>"
         f"<b>{e(drawing.title)}</b> <span style='color:#555'>({e(drawing.section)})</span>"
         f"<p>{e(drawing.summary)}</p>{clock}{formula}<div style='margin:0 -12px'>{compare_html(run)}</div></div>")
 

@@ -417,6 +417,12 @@ def test_an_exported_pages_text_is_whole_and_beside_the_scene(browser, tmp_path)
         assert "Euler and the simulation are within" in box["words"]  # the app's verdict
         # the bar's box counts the replay's seconds: the run's own time is said beside it
         assert "The bar below plays the whole run (t = 0 to 10.65 orbits) in 8 s" in box["words"], box["words"]
+        # a small window (800×600): the text above the scene, not over it
+        p.page.set_viewport_size({"width": 800, "height": 600})
+        time.sleep(1.0)
+        small = p.page.evaluate("""() => ({text: document.getElementById('theoria-text').getBoundingClientRect().bottom,
+            canvas: document.querySelector('canvas').getBoundingClientRect().top})""")
+        assert small["canvas"] >= small["text"] - 1, small
     finally:
         p.close()
 
