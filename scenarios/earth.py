@@ -428,7 +428,9 @@ register(Scenario(
             "regressing in 18.6 years). The pole turns westward around the pole of the ecliptic at "
             "about 50.4″ a year (a whole cycle in ~25,700 years) and nods: 17″ in longitude and 9″ in "
             "obliquity with the Moon's node, 1.3″ twice a year, 0.2″ twice a month. The table puts "
-            "each term beside the IAU value and Euler's."),
+            "each term beside the IAU value and Euler's. Euler's curves in the plot stay near zero: his "
+            "Moon moves in the ecliptic (§844), so his nutation has no 18.6-year term, only the half-year "
+            "and half-month nods."),
     params=(
         Param("years", 100.0, MIN_YEARS, 400.0, "yr", "length of the run from J2000", step=1.0,
               label="Length of the run"),
