@@ -25,7 +25,13 @@ def coarse_step(step: float, period: float, what: str, unit: str = "", param: st
     u = f" {unit}" if unit else ""
     return (f"The step ({step:.3g}{u}) is too coarse for the fastest period of the motion, {what} "
             f"({period:.3g}{u}): {per:.2g} steps per period, fewer than {MIN_STEPS_PER_PERIOD}; that period "
-            f"aliases and the results are not to be trusted. Lower {param}.")
+            f"aliases and the results are not to be trusted. {_finer(param)}.")
+
+
+def _finer(param: str) -> str:
+    """What makes the step finer: a step is lowered, a count of steps per orbit or turn raised
+    (the warning said "Lower steps_per_turn", the opposite of what helps)."""
+    return f"Raise {param}" if param.startswith("steps_per") else f"Lower {param}"
 
 
 def sparse_samples(spacing: float, period: float, what: str, unit: str = "", param: str = "step",

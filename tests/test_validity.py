@@ -98,7 +98,8 @@ def test_coarse_step_aliases_the_flip_and_says_so():
 def test_coarse_step_warning_in_each_scenario_that_can_reach_it(name, values, param):
     r = th.scenario(name).simulate(**values)
     hits = [w for w in r.warnings if "too coarse for the fastest period" in w]
-    assert len(hits) == 1 and f"Lower {param}" in hits[0], r.warnings
+    finer = "Raise" if param.startswith("steps_per") else "Lower"  # a count of steps per period is raised
+    assert len(hits) == 1 and f"{finer} {param}" in hits[0], r.warnings
 
 
 def test_coarse_step_threshold():
