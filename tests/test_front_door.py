@@ -484,10 +484,10 @@ def test_earth_long_views_zoom_is_said_unused_where_it_is():
 @pytest.mark.parametrize("name, given, says", [
     ("pole-near-axis", {"steps_per_turn": 4}, "Raise steps_per_turn."),
     ("precession-circular", {"steps_per_orbit": 8}, "Raise steps_per_orbit."),
-    ("earth", {"years": 1, "step_days": 3.0}, "Lower step_days."),
+    ("hyperion", {"steps_per_orbit": 16, "n_starts": 4, "n_orbits": 20}, "Raise steps_per_orbit."),
 ])
 def test_a_coarse_step_warning_says_which_way_helps(name, given, says):
     """"Lower steps_per_turn" was the advice when a turn had 2 steps: a count of steps per turn,
-    orbit or period is raised to make the step finer, a step is lowered."""
+    orbit or period is raised to make the step finer (a step itself is lowered: test_validity)."""
     r = th.scenario(name).simulate(**given)
     assert any("too coarse" in w and w.endswith(says) for w in r.warnings), r.warnings
