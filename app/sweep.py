@@ -902,6 +902,16 @@ def _is_sweep_store(path):
         return False
 
 
+def _is_sweep_table(path) -> bool:
+    """A Parquet table a theoria sweep wrote (its schema metadata says so)."""
+    try:
+        import pyarrow.parquet as pq
+
+        return b"theoria_sweep" in (pq.read_schema(path).metadata or {})
+    except Exception:  # noqa: BLE001 — not Parquet, unreadable, a folder
+        return False
+
+
 def _unit_of_metric(sc, name: str) -> str:
     """A metric's unit as the stores write units ("1" for a pure number, as CF conventions do)."""
     unit = sc.metric_unit(name)
@@ -1221,14 +1231,14 @@ def _one_sweep_writes(out: str):
 def _run_locked(sc, plan, out, kind, cluster, resume, force, workers, progress, on_chunk):
     """`run_sweep` once OUT is this sweep's alone."""
     earlier = os.path.exists(out) or os.path.exists(out + ".parts" if kind == "parquet" else out.rstrip("/") + ".new")
+    if os.path.exists(out) and not (_is_sweep_store(out) if kind == "zarr" else _is_sweep_table(out)):
+        # a file of the user's (a run's table, anything): a sweep replaces only a sweep, even with
+        # --force (a Parquet file that was no sweep was said to hold one, and --force overwrote it)
+        raise ParameterError("--out", out, "a new path: it exists and is not a theoria sweep, which a sweep "
+                             "does not replace; choose another name")
     if earlier and not (resume or force):  # hours of runs are not replaced by a command repeated by mistake
-        ours = (_is_sweep_store(out) or os.path.isdir(out.rstrip("/") + ".new")) if kind == "zarr" else \
-            os.path.isdir(out + ".parts") or (os.path.isfile(out) and out.endswith(".parquet"))
-        if ours:
-            raise ParameterError("--out", out, "a new path: it holds a sweep; add --resume to complete it or "
-                                 "--force to replace it")
-        raise ParameterError("--out", out, "a new path: it exists and is not a theoria sweep (choose another "
-                             "name, or --force to replace it)")
+        raise ParameterError("--out", out, "a new path: it holds a sweep; add --resume to complete it or "
+                             "--force to replace it")
     # an older table or store at `out` stays as it is until the new one replaces it whole
     # (`finish`): an interrupted sweep leaves it, and its own finished chunks (OUT.parts/, OUT.new/)
     # for --resume. The writer only checks here; a new sweep's store is made (`create`) once the

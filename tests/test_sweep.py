@@ -1246,15 +1246,23 @@ def test_a_metric_asked_for_is_in_the_store_even_where_every_run_was_refused(tmp
     assert "libration_period" in table.column_names
 
 
-@pytest.mark.parametrize("what", ["empty folder", "text file"])
+@pytest.mark.parametrize("what", ["empty folder", "text file", "text file.parquet", "run table.parquet"])
 def test_a_path_that_is_not_a_sweep_is_not_called_one(tmp_path, what):
     """An empty folder or a text file named like the output was refused as "it holds a sweep; add
-    --resume": it says what it is."""
-    out = tmp_path / "x.zarr"
+    --resume": it says what it is. Any file named F.parquet was said to hold a sweep, and --force
+    then overwrote it (a run's own table, say); a Zarr refusal offered --force, which was then
+    refused. A sweep replaces only a sweep: refused with and without --force, the file untouched."""
+    out = tmp_path / ("x.parquet" if what.endswith(".parquet") else "x.zarr")
     if what == "empty folder":
         out.mkdir()
+    elif what == "run table.parquet":
+        th.scenario("free-tumble").simulate(duration=1).to_dataframe().to_parquet(out)
     else:
         out.write_text("hi")
-    with pytest.raises(th.ParameterError) as e:
-        sw.run_sweep(th.scenario("free-tumble"), out=out, progress=False, **TINY)
-    assert "is not a theoria sweep" in str(e.value) and "holds a sweep" not in str(e.value), str(e.value)
+    before = out.read_bytes() if out.is_file() else None
+    for force in (False, True):
+        with pytest.raises(th.ParameterError) as e:
+            sw.run_sweep(th.scenario("free-tumble"), out=out, force=force, progress=False, **TINY)
+        assert "is not a theoria sweep" in str(e.value) and "holds a sweep" not in str(e.value), str(e.value)
+        assert "--force" not in str(e.value)
+    assert (out.read_bytes() if out.is_file() else None) == before
