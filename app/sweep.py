@@ -311,7 +311,7 @@ def make_plan(sc, grid=None, random=None, samples=None, fixed=None, preset=None,
         # could be one is checked against what the first chunk's runs report)
         for m in metrics:
             if sc.metric_unit(m) is None:
-                raise ParameterError("--metrics", m, f"a metric of {sc.name} (`theoria run {sc.name} --json` "
+                raise ParameterError("--metrics", m, f"not a metric of {sc.name} (`theoria run {sc.name} --json` "
                                      "lists them)" + _did_you_mean(m, sc))
     plan = Plan(sc, fixed_values, axes, raxes, int(samples or 0), int(seed), metrics)
     if plan.size > 50_000_000:

@@ -130,7 +130,8 @@ def _libration_circular(values, progress=None):
     comps = [
         Comparison("libration period (small oscillation §831: 2π/√(2N))", T_small, T_meas, T_exact, "unit",
                    "modern: finite-amplitude pendulum in 2ζ, 4K(sin ζₘₐₓ)/√(2N)"),
-        Comparison("largest digression ζₘₐₓ", None, amp_meas, m["libration_amplitude_exact_rad"], "rad"),
+        Comparison("largest digression ζₘₐₓ", None, amp_meas, m["libration_amplitude_exact_rad"], "rad",
+                   missing="the body turns round relative to F: there is no largest digression" if circ else ""),
     ]
     if "circulation_period_euler" in m:
         comps.append(Comparison("half turn relative to F, π/(m√n) (§826 4th)", m["circulation_period_euler"], T_meas,

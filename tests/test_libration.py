@@ -692,6 +692,11 @@ def test_a_start_at_the_unstable_point_has_an_infinite_period_and_no_torque_no_c
     # without a torque the body turns relative to F at its starting rate: half a turn in π/|ζ̇₀|
     r = sc.simulate(asymmetry=0, spin_ratio=2.0)  # ζ̇₀ = δ(1 − 2) = −1
     assert r.metrics["libration_period"] == pytest.approx(np.pi, rel=1e-9)
+    # turning round relative to F, it has no largest digression, and its row says so
+    for given in ({"asymmetry": 0, "spin_ratio": 2.0}, {"spin_ratio": 2.0}):
+        row = next(c for c in sc.simulate(**given).comparisons if c.label.startswith("largest digression"))
+        assert row.simulated is None or np.isnan(row.simulated)
+        assert row.missing.startswith("the body turns round relative to F"), given
 
 
 def test_what_a_run_could_not_measure_says_why():

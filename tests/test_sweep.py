@@ -96,7 +96,7 @@ def test_a_grid_runs_each_value_once_and_reads_ascii_numbers_only(spec, says):
 
 
 @pytest.mark.parametrize("name, metric, said", [
-    ("free-tumble", "nope", "--metrics=nope: a metric of free-tumble (`theoria run free-tumble --json` lists them)"),
+    ("free-tumble", "nope", "--metrics=nope: not a metric of free-tumble (`theoria run free-tumble --json` lists them)"),
     ("libration-eccentric", "free_perod", "did you mean 'free_period'?"),
 ])
 def test_a_name_no_metric_could_have_is_refused_before_any_work(tmp_path, monkeypatch, name, metric, said):
