@@ -1441,8 +1441,14 @@ class _progress:
         self.p = None
 
     def __enter__(self):
+        console = None
         if self.enabled:
             from rich.console import Console
+
+            console = Console(stderr=True)
+        # a terminal or a notebook: with stderr in a file or a pipe the bar's last frame was written
+        # there before the summary line (docs/sweeps.md: only the summary)
+        if console is not None and (console.is_terminal or console.is_jupyter):
             from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TaskProgressColumn, TextColumn,
                                        TimeElapsedColumn, TimeRemainingColumn)
 
@@ -1455,7 +1461,7 @@ class _progress:
 
             self.p = Progress(TextColumn(f"sweep {self.label}"), BarColumn(), MofNCompleteColumn(),
                               TaskProgressColumn(), Rate(""), TimeElapsedColumn(), TextColumn("left"),
-                              TimeRemainingColumn(), console=Console(stderr=True), transient=False)
+                              TimeRemainingColumn(), console=console, transient=False)
             self.p.__enter__()
             self.task = self.p.add_task("runs", total=self.total, completed=self.done)
         return self
