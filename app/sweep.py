@@ -940,20 +940,26 @@ class Summary:
 
     def line(self) -> str:
         if self.found_complete:
-            return (f"sweep: {self.runs} runs in {self.chunks} chunks; computed 0 chunks now, "
+            return (f"sweep: {_n(self.runs, 'run')} in {_n(self.chunks, 'chunk')}; computed 0 chunks now, "
                     f"{self.chunks_done_before} were done before: the sweep is complete, left as it is → {self.out}")
         st = ", ".join(f"{v} {k}" for k, v in self.statuses.items() if v)
         if self.interrupted and self.kept is None:
-            return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); {self.seconds:.1f} s — "
-                    "interrupted before any chunk finished: nothing written" + (
+            return (f"sweep: {_n(self.runs, 'run')} in {_n(self.chunks, 'chunk')} ({self.path}); "
+                    f"{self.seconds:.1f} s — interrupted before any chunk finished: nothing written" + (
                         f"; {self.out} is as it was" if os.path.exists(self.out) else ""))
         where = self.kept or self.out
-        return (f"sweep: {self.runs} runs in {self.chunks} chunks ({self.path}); computed {self.chunks_computed} chunks "
+        return (f"sweep: {_n(self.runs, 'run')} in {_n(self.chunks, 'chunk')} ({self.path}); "
+                f"computed {_n(self.chunks_computed, 'chunk')} "
                 f"now, {self.chunks_done_before} were done before; {self.seconds:.1f} s"
                 + (f"; {st}" if st else "")
                 + (f" — interrupted, finished chunks kept in {where} (--resume continues)" + (
                     f"; {self.out} is as it was" if where != self.out and os.path.exists(self.out) else "")
                    if self.interrupted else f" → {self.out}"))
+
+
+def _n(n: int, word: str) -> str:
+    """"1 chunk", "2 chunks"."""
+    return f"{n} {word}" + ("" if n == 1 else "s")
 
 
 class _Stop:

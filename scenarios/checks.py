@@ -10,6 +10,7 @@ with the error in its note, never a crash.
 from __future__ import annotations
 
 import math
+import re
 import traceback
 from dataclasses import dataclass
 from typing import Callable
@@ -62,7 +63,7 @@ def select(ids: list[str] | None) -> list[Check]:
     wanted = []
     for i in ids:
         if not isinstance(i, str) or i.strip().lower() not in spelt:
-            raise ParameterError("check", i, "one of " + ", ".join(sorted(known, key=lambda s: (len(s), s))))
+            raise ParameterError("check", i, "one of " + ", ".join(sorted(known, key=_in_order)))
         wanted.append(spelt[i.strip().lower()])
     return [c for c in checks if c.id in wanted or c.id.split(".")[0] in wanted]
 
@@ -79,6 +80,12 @@ def run_check(c: Check) -> Comparison:
         where = traceback.format_exc(limit=1).strip().splitlines()[-1]
         return Comparison(c.title, None, None, None, note=f"error: {type(e).__name__}: {e}; {where}",
                           id=c.id, section=c.section, tolerance=0.0, passed=False)
+
+
+def _in_order(check_id: str) -> tuple:
+    """E1, E1.x, E2, …, E13, then the others: as the table reads (not E1, E10, E11, …, E2)."""
+    m = re.match(r"E(\d+)(.*)", check_id)
+    return (0, int(m.group(1)), m.group(2)) if m else (1, 0, check_id)
 
 
 def run_checks(ids: list[str] | None = None, progress: Callable[[str], None] | None = None) -> list[Comparison]:

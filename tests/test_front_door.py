@@ -491,3 +491,17 @@ def test_a_coarse_step_warning_says_which_way_helps(name, given, says):
     orbit or period is raised to make the step finer (a step itself is lowered: test_validity)."""
     r = th.scenario(name).simulate(**given)
     assert any("too coarse" in w and w.endswith(says) for w in r.warnings), r.warnings
+
+
+def test_ids_and_counts_read_as_written():
+    """`check("E99")` listed the ids by length (E1, E10, E11, …, E2); a one-point sweep said "1 runs
+    in 1 chunks"."""
+    from theoria.app import sweep as sw
+
+    with pytest.raises(th.ParameterError) as e:
+        th.check("E99")
+    ids = str(e.value).split("one of ")[1].split(", ")
+    assert ids[:4] == ["E1", "E2", "E2.aliasing", "E2.separatrix"] and ids.index("E9") < ids.index("E10")
+    line = sw.Summary(out="x.zarr", runs=1, chunks=1, chunks_done_before=0, chunks_computed=1, path="single runs",
+                      seconds=1.0).line()
+    assert line.startswith("sweep: 1 run in 1 chunk (single runs); computed 1 chunk now"), line
