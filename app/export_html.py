@@ -53,11 +53,12 @@ PANEL_PX = 380  # the text's column; the scene takes the rest of a wide window
 
 
 def text_panel(drawing, run, frames: int = FRAMES, fps: float = FPS) -> str:
-    """The scenario's text as a column left of the scene (over it, scrollable, in a narrow
-    window): its title, §, what to look for, Euler's formula and the Compare table as the app
-    writes it (the same words, units and verdicts; the run's warnings first). The scene's canvas
-    is moved right of the column, so that the column covers none of it (over the canvas, the
-    table was cut to 45 % of the window and a scene's inset plot sat on it)."""
+    """The scenario's text as a column left of the scene (above it in a small window, both
+    scrolling): its title, §, what to look for, the run's time span, Euler's formula and the
+    Compare table as the app writes it (the same words, units and verdicts; the run's warnings
+    first). The scene's canvas is moved beside (or below) the column, so that the column covers
+    none of it (over the canvas, the table was cut to 45 % of the window and a scene's inset plot
+    sat on it)."""
     from .format import human_number
     from .panel import compare_html
 

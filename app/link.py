@@ -8,8 +8,8 @@ A link typed by hand may name the scene as `?scenario=earth`, `?scene=earth` or 
 
 Parameters are written with their keys and exact values (what `Param.parse` reads back), only
 those that differ from the scene's defaults (the session leaves the others out; opening the link
-fills them in); time in the run's own unit. When the server listens on a network address, `class_link` gives the address
-students can open and `qr_svg_uri` its QR code (segno).
+fills them in); time in the run's own unit. When the server listens on a network address,
+`class_link` gives the address students can open and `qr_svg_uri` its QR code (segno).
 """
 from __future__ import annotations
 
