@@ -445,7 +445,14 @@ def test_a_narrow_window_shows_every_body_of_the_scene(browser, app):
     try:
         _session_for(sessions, before, spec.name)
         page.wait_for_function(f"Object.keys(({BODIES_ON_CANVAS_JS})()).length >= 3", timeout=WAIT_MS)
-        time.sleep(1.0)  # the page frames the camera every half second
+        # the page frames the camera every half second, once the scene's own camera has come (on a
+        # loaded machine, seconds after its bodies: CI once looked 1 s after and found C far off)
+        try:
+            page.wait_for_function(f"""() => {{ const v = Object.values(({BODIES_ON_CANVAS_JS})());
+                return v.length >= 3 && v.every(([x, y]) => Math.abs(x) < 1 && Math.abs(y) < 1); }}""",
+                                   timeout=30_000)
+        except Exception:  # noqa: BLE001 — said below, with where each body is
+            pass
         where = page.evaluate(BODIES_ON_CANVAS_JS)
         assert len(where) >= 3 and all(abs(x) < 1 and abs(y) < 1 for x, y in where.values()), where
     finally:
