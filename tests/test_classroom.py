@@ -732,7 +732,10 @@ def test_a_run_is_sized_by_its_cpu_time_not_by_a_loaded_machine():
         wall, values, cpu = run({"spin": 5.5, "duration": 60.0})
         expected = pool.expected_seconds(spec, values)
         # learnt from a child's CPU time (this run's, or an earlier one's of the same size)
-        assert cpu is not None and expected is not None and expected <= 2 * cpu, (expected, cpu, wall)
+        # (the expectation may come from an earlier run of the same size, whose CPU time carried some
+        # first-use cost: 0.102 s against this run's 0.049 s in one CI run, where the wall time was
+        # 0.589 s; a wall-time judgement is what this tells apart)
+        assert cpu is not None and expected is not None and expected <= 4 * cpu, (expected, cpu, wall)
         if wall > 4 * cpu:  # the load took its share: judged by the wall time it would look slow
             assert expected < 0.5 * wall, (expected, wall)
     finally:
