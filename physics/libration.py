@@ -561,9 +561,11 @@ def spin_orbit_section_scipy(theta0, thetadot0, e, omega0, n_orbits, rtol=1e-10,
     return sol.y[:N], sol.y[N:]
 
 
-def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256, iters=60):
+def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256, iters=60, winding=None):
     """A fixed point of the periapse map (θ mod π, θ̇): Newton on one orbit's map with central
-    differences. Returns (θ, θ̇) or raises ParameterError if Newton does not converge."""
+    differences. `winding`: the half-turns k that θ makes in one orbit (k = 2p for the p
+    resonance, mean rate θ̇/n = p); without it any k is accepted (θ mod π), so Newton may end on
+    another resonance's orbit. Returns (θ, θ̇) or raises ParameterError if Newton does not converge."""
     y = np.array([theta_guess, dot_guess], float)
     d = 1e-6
     shifts = np.array([[0, 0], [d, 0], [-d, 0], [0, d], [0, -d]], float)
@@ -574,7 +576,8 @@ def periapse_fixed_point(theta_guess, dot_guess, e, omega0, steps_per_orbit=256,
         pts = y + shifts
         t, w = spin_orbit_section(pts[:, 0], pts[:, 1], e, omega0, 1, steps_per_orbit)
         dt = t[:, 0] - pts[:, 0]
-        F = np.stack([dt - np.pi * np.round(dt / np.pi), w[:, 0] - pts[:, 1]], axis=1)
+        k = np.round(dt / np.pi) if winding is None else winding
+        F = np.stack([dt - np.pi * k, w[:, 0] - pts[:, 1]], axis=1)
         r = F[0]
         if np.max(np.abs(r)) < 1e-10:
             return float(np.remainder(y[0] + 0.5 * np.pi, np.pi) - 0.5 * np.pi), float(y[1])
@@ -593,11 +596,32 @@ def periapse_map_trace(theta, thetadot, e, omega0, steps_per_orbit=128, d=1e-6):
 
 
 @kept(64)  # moving a slider other than e or ω₀ reuses it
-def continue_resonance(p, e, omega0, dw=0.05, steps_per_orbit=128):
+def continue_resonance(p, e, omega0, dw=0.05, steps_per_orbit=128, min_dw=0.05 / 64):
     """Follow the p resonance's fixed point of the periapse map from small ω₀ (where it sits at
     Goldreich & Peale's centre: θ = 0 or π/2, θ̇ = p) up to `omega0`, in steps of dw.
-    Returns (θ, θ̇, trace) at omega0; raises ParameterError if the branch is lost."""
-    th, wd = resonance_centre_angle(p, e), float(p)
-    for w in list(np.arange(dw, omega0, dw)) + [omega0]:
-        th, wd = periapse_fixed_point(th, wd, e, w, steps_per_orbit=steps_per_orbit)
+    The orbit keeps its winding (θ advances 2πp per orbit) and its symmetry line (θ = 0 or π/2
+    at periapse); θ̇ is predicted by the secant through the last two points, and a step whose
+    Newton has not converged in 12 iterations is halved (down to min_dw; it grows back after a
+    success). At e = 0.5 the periapse rate of the 2:1 orbit falls by ~3.5 per unit ω₀: from the
+    last point alone, at a fixed 0.05 step, Newton lost the 2:1 orbit at ω₀ = 1.35, and the 1:1
+    and 3:2 searches, which accepted any winding, ended on the 2:1 orbit (checked against a
+    scipy solve: tests/test_islands_independent.py). Returns (θ, θ̇, trace) at omega0; raises ParameterError if the branch is lost."""
+    th_c = resonance_centre_angle(p, e)
+    k = round(2 * p)
+    w, th, wd, prev = 0.0, th_c, float(p), None
+    step = dw
+    while w < omega0:
+        w1 = omega0 if omega0 - w < step * (1 + 1e-9) else w + step
+        guess = wd if prev is None else wd + (wd - prev[1]) * (w1 - w) / (w - prev[0])
+        try:
+            th1, wd1 = periapse_fixed_point(th, guess, e, w1, steps_per_orbit=steps_per_orbit, iters=12, winding=k)
+            if abs(np.remainder(th1 - th_c + 0.5 * np.pi, np.pi) - 0.5 * np.pi) > 1e-6:
+                raise ParameterError("omega0", w1, "the periodic orbit left its symmetry line")
+        except ParameterError:
+            step *= 0.5
+            if step < min_dw:
+                raise ParameterError("omega0", omega0, f"the {p:g} resonance's periodic orbit lost near ω₀ = {w:.3g}")
+            continue
+        prev, (w, th, wd) = (w, wd), (w1, th1, wd1)
+        step = min(dw, 2 * step)
     return th, wd, periapse_map_trace(th, wd, e, omega0, steps_per_orbit)

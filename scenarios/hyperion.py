@@ -120,8 +120,9 @@ def _hyperion(values, progress=None):
     for p in (RESONANCES[:4] if values["islands"] == "on" else ()):
         try:
             th_i, wd_i, tr = lib.continue_resonance(p, e, w0)
-        except Exception:  # noqa: BLE001 — a lost branch is reported as NaN
+        except Exception as exc:  # noqa: BLE001 — a lost branch is reported as NaN, and in words
             th_i, wd_i, tr = np.nan, np.nan, np.nan
+            islands.append(f"{p:g}: not followed to this ω₀ ({getattr(exc, 'allowed', exc)})")
         m[f"island_rate_{p:g}"] = float(wd_i)
         m[f"island_angle_{p:g}_rad"] = float(th_i)
         m[f"island_trace_{p:g}"] = float(tr)
