@@ -135,8 +135,9 @@ def _param_json(p) -> dict:
            "exclusive_min": p.exclusive_min, "allowed": p.allowed(), "unit": p.unit, "kind": p.kind, "help": p.help}
     if p.kind == "choice":
         out["choices"] = list(p.choices)
-    if p.applies:
-        out["applies"] = {k: list(v) for k, v in p.applies}
+    if p.applies:  # one set of conditions, or a list of sets of which any one will do
+        alts = [{k: list(v) for k, v in alt} for alt in p.applies]
+        out["applies"] = alts[0] if len(alts) == 1 else alts
     return out
 
 

@@ -43,14 +43,19 @@ class Param:
     choice_labels: tuple = field(default_factory=tuple)
     advanced: bool = False
     # used only with these values of choice parameters: {"motion": ("rotating", "restricted")}, or
-    # with a number parameter above zero: {"zoom_years": POSITIVE}; every condition must hold.
-    # Kept as ((name, values), ...); elsewhere the app hides the control and a run says it is unused
+    # with a number parameter above zero: {"zoom_years": POSITIVE}; every condition must hold. A
+    # list of such dicts: any one of them ([{"model": "full"}, {"model": "secular", "zoom_years":
+    # POSITIVE}]). Kept as alternatives, each ((name, values), ...); elsewhere the app hides the
+    # control and a run says it is unused
     applies: Any = ()
 
     def __post_init__(self):
-        if isinstance(self.applies, dict):
-            pairs = tuple((k, tuple(v) if isinstance(v, (tuple, list)) else (v,)) for k, v in self.applies.items())
-            object.__setattr__(self, "applies", pairs)
+        a = self.applies
+        if isinstance(a, dict):
+            a = [a]
+        if a and isinstance(a[0], dict):
+            a = tuple(tuple((k, tuple(v) if isinstance(v, (tuple, list)) else (v,)) for k, v in d.items()) for d in a)
+        object.__setattr__(self, "applies", tuple(a))
 
     def applies_to(self, values: dict[str, Any]) -> bool:
         """Whether these values (all of a scenario's) use this parameter."""
@@ -59,12 +64,14 @@ class Param:
             if allowed == (POSITIVE,):
                 return isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0
             return str(v) in map(str, allowed)
-        return all(holds(k, allowed) for k, allowed in self.applies)
+        return not self.applies or any(all(holds(k, allowed) for k, allowed in alt) for alt in self.applies)
 
     def applies_text(self) -> str:
-        """Where it is used, in words: "with motion = rotating or restricted", "with zoom_years > 0"."""
-        return " and ".join(f"with {k} > 0" if allowed == (POSITIVE,) else f"with {k} = {' or '.join(map(str, allowed))}"
-                            for k, allowed in self.applies)
+        """Where it is used, in words: "with motion = rotating or restricted", "with zoom_years > 0",
+        "with model = full, or with model = secular and with zoom_years > 0"."""
+        return ", or ".join(" and ".join(f"with {k} > 0" if allowed == (POSITIVE,) else
+                                         f"with {k} = {' or '.join(map(str, allowed))}" for k, allowed in alt)
+                            for alt in self.applies)
 
     def title(self) -> str:
         """The human name: `label`, else the key with its underscores as spaces."""

@@ -458,7 +458,7 @@ class Scenario:
         for p in self.params:
             if p.name in RESERVED:
                 raise ValueError(f"scenario {self.name}: a parameter may not be called {p.name!r}")
-            for k, allowed in p.applies:
+            for k, allowed in (pair for alt in p.applies for pair in alt):
                 if allowed == (POSITIVE,) and any(q.name == k and q.kind in ("float", "int") for q in self.params):
                     continue
                 choice = next((q for q in self.params if q.name == k and q.kind == "choice"), None)

@@ -175,6 +175,8 @@ def test_list_json_has_every_scenario(cli_process):
             assert got.get("choices") == (list(p.choices) if p.kind == "choice" else None)
     assert listed["gravity-start"]["distance"]["exclusive_min"] is True
     assert listed["collinear"]["energy"]["applies"] == {"motion": ["expansion"]}
+    assert listed["earth-long-view"]["step_days"]["applies"] == [{"model": ["full"]},
+                                                                 {"model": ["secular"], "zoom_years": [">0"]}]
 
 
 def test_preset_flag_gives_the_preset_values_and_set_overrides_them(cli):

@@ -481,6 +481,18 @@ def test_earth_long_views_zoom_is_said_unused_where_it_is():
     assert sc.simulate(zoom_years=5, zoom_year=2010, years=100).warnings == []
 
 
+def test_earth_long_views_step_is_said_unused_by_the_averaged_torque_alone():
+    """The averaged (secular) torque takes no step: `step_days` is the full model's and the zoom's,
+    either of two conditions, and was taken silently by the default secular run."""
+    sc = th.scenario("earth-long-view")
+    assert sc.simulate(step_days=1.0, years=200).warnings == [
+        "step_days = 1 is not used here: it applies only with model = full, or with model = secular and with "
+        "zoom_years > 0"]
+    assert sc.simulate(step_days=1.0, years=200, zoom_years=1).warnings == []
+    assert sc.simulate(step_days=1.0, years=200, model="full").warnings == []
+    assert not sc.param("step_days").applies_to(sc.resolve({}))  # the panel hides it at the defaults
+
+
 @pytest.mark.parametrize("name, given, says", [
     ("pole-near-axis", {"steps_per_turn": 4}, "Raise steps_per_turn."),
     ("precession-circular", {"steps_per_orbit": 8}, "Raise steps_per_orbit."),
